@@ -1,0 +1,64 @@
+"""Exceptions and warnings raised by the identification package."""
+
+from __future__ import annotations
+
+__all__ = [
+    "IdentificationError",
+    "InsufficientDataError",
+    "RankDeficiencyWarning",
+    "IllConditionedWarning",
+    "SimulationDivergedError",
+]
+
+
+class IdentificationError(ValueError):
+    """Bad input to an identification function (shape, values, structure or option)."""
+
+
+class InsufficientDataError(IdentificationError):
+    """Fewer usable samples than model terms."""
+
+
+class RankDeficiencyWarning(UserWarning):
+    """The regression matrix is rank deficient; a minimum-norm solution was returned."""
+
+
+class IllConditionedWarning(UserWarning):
+    """The normal equations are ill-conditioned; accuracy is lost (use a QR-type solver)."""
+
+
+class SimulationDivergedError(ArithmeticError):
+    """A free-run simulation left the bounded region or produced a non-finite value.
+
+    Attributes
+    ----------
+    channel : int
+        Zero-based index of the output channel that diverged.
+    channel_name : str
+        Name of that channel.
+    sample : int
+        Zero-based sample index at which it diverged.
+    value : float
+        The offending value (may be inf or nan).
+    bound : float
+        The magnitude bound that was in force.
+    """
+
+    def __init__(self, channel: int, channel_name: str, sample: int, value: float, bound: float):
+        self.channel = int(channel)
+        self.channel_name = str(channel_name)
+        self.sample = int(sample)
+        self.value = float(value)
+        self.bound = float(bound)
+        super().__init__(
+            f"free-run simulation diverged on output channel {self.channel} "
+            f"({self.channel_name!r}) at sample {self.sample}: value {self.value:.6g} "
+            f"is {'not finite' if not _isfinite(self.value) else f'beyond the bound {self.bound:.6g}'}. "
+            "The model is unstable for this input: check the input amplitude against the "
+            "identification data, lower the model order/degree, or raise `bound` if the growth "
+            "is genuine."
+        )
+
+
+def _isfinite(x: float) -> bool:
+    return x == x and x not in (float("inf"), float("-inf"))

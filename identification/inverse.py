@@ -1,0 +1,116 @@
+"""Inverse models for response reconstruction: the roles of drive and response swapped.
+
+An inverse model maps a (desired) response to the drive that produces it (Section 1.6). It is
+an ordinary :class:`~identification.models.Narx`/:class:`~identification.models.Arx` fitted with
+the response as input and the drive as output. A rig with pure delay d makes the inverse
+non-causal; a *lead* of d samples (the drive at t is computed from responses up to t + d)
+restores causality.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ._validation import as_signal, check_same_length
+from .errors import IdentificationError
+from .models import Narx
+
+__all__ = ["InverseModel", "estimate_delay"]
+
+
+def estimate_delay(u, y, *, max_lag: int = 32, threshold: float = 0.1) -> int:
+    """Pure delay (samples) from input(s) ``u`` to output(s) ``y``.
+
+    The impulse responses are estimated by least squares (a FIR model with lags 0..max_lag for
+    each output on all inputs: the cross-correlation of prewhitened signals); the delay of a pair
+    is the first lag whose coefficient magnitude reaches ``threshold`` times that pair's peak.
+    The earliest delay over all (output, input) pairs is returned.
+    """
+    u = as_signal(u, "u")
+    y = as_signal(y, "y")
+    check_same_length(u, y, "u", "y")
+    if not isinstance(max_lag, (int, np.integer)) or max_lag < 0:
+        raise IdentificationError(f"max_lag must be a non-negative integer, got {max_lag!r}")
+    if not 0 < threshold < 1:
+        raise IdentificationError(f"threshold must be in (0, 1), got {threshold!r}")
+    N, nu = u.shape
+    if N <= 4 * nu * (max_lag + 1):
+        raise IdentificationError(
+            f"need more than {4 * nu * (max_lag + 1)} samples to estimate a delay up to "
+            f"{max_lag} samples; got {N}"
+        )
+    uc = u - u.mean(axis=0)
+    yc = y - y.mean(axis=0)
+    cols = [uc[max_lag - lag : N - lag, j] for j in range(nu) for lag in range(max_lag + 1)]
+    X = np.column_stack(cols)
+    h, *_ = np.linalg.lstsq(X, yc[max_lag:], rcond=None)
+    h = np.abs(h).reshape(nu, max_lag + 1, -1)  # (input, lag, output)
+    delays = []
+    for j in range(nu):
+        for k in range(h.shape[2]):
+            peak = h[j, :, k].max()
+            if peak > 0:
+                delays.append(int(np.argmax(h[j, :, k] >= threshold * peak)))
+    if not delays:
+        raise IdentificationError("no input-output relation found (all impulse responses zero)")
+    return min(delays)
+
+
+class InverseModel:
+    """A model fitted from response to drive, with a lead for rig delay.
+
+    Parameters
+    ----------
+    model : Narx or Arx (unfitted)
+        The structure of the inverse model (its inputs are the responses, its outputs the drives).
+    lead : int or "auto"
+        Time shift in samples: the drive at t is modelled from responses up to t + lead.
+        ``"auto"`` estimates the rig delay with :func:`estimate_delay`.
+    max_lead : int
+        Largest delay considered by ``lead="auto"``.
+
+    Examples
+    --------
+    >>> inv = InverseModel(Arx(order=4), lead="auto").fit(drive, response)   # doctest: +SKIP
+    >>> first_drive = inv.simulate(desired_response)                          # doctest: +SKIP
+    """
+
+    def __init__(self, model: Narx, *, lead: int | str = 0, max_lead: int = 32):
+        if not isinstance(model, Narx):
+            raise IdentificationError(f"model must be a Narx or Arx instance, got {type(model).__name__}")
+        if lead != "auto" and (not isinstance(lead, (int, np.integer)) or lead < 0):
+            raise IdentificationError(f"lead must be a non-negative integer or 'auto', got {lead!r}")
+        self.model = model
+        self.lead = lead
+        self.max_lead = max_lead
+
+    def fit(self, drive, response, *, drive_names=None, response_names=None):
+        """Fit the inverse from an identification drive (N, n_drives) and response (N, n_resp)."""
+        drive = as_signal(drive, "drive")
+        response = as_signal(response, "response")
+        check_same_length(drive, response, "drive", "response")
+        if self.lead == "auto":
+            lead = estimate_delay(drive, response, max_lag=self.max_lead)
+        else:
+            lead = int(self.lead)
+        N = drive.shape[0]
+        if lead >= N // 2:
+            raise IdentificationError(f"lead {lead} is too long for a record of {N} samples")
+        self.lead_ = lead
+        self.model.fit(
+            response[lead:], drive[: N - lead], input_names=response_names, output_names=drive_names
+        )
+        return self
+
+    def simulate(self, response, *, bound=None) -> np.ndarray:
+        """Drive (N, n_drives) that the inverse model predicts for ``response`` (N, n_resp).
+
+        The response is advanced by ``lead_`` samples; the last ``lead_`` drive samples are
+        computed with zero response beyond the record's end.
+        """
+        if not hasattr(self, "lead_"):
+            raise IdentificationError("this InverseModel is not fitted yet; call fit(drive, response)")
+        r = as_signal(response, "response", n_channels=self.model.n_inputs_)
+        shifted = np.zeros_like(r)
+        shifted[: r.shape[0] - self.lead_] = r[self.lead_ :]
+        return self.model.simulate(shifted, bound=bound)

@@ -1,0 +1,499 @@
+"""ARX and polynomial NARX models (Chapters 4 and 5), MIMO and non-square.
+
+Each output channel k is a MISO model (eq. 5-2) with its own order n_k and degree L_k; the fitted
+model holds the condensed structure (:class:`~identification.structure.ChannelStructure`, the
+thesis's ``Mpar_k`` generalised to any degree) and one coefficient vector per channel.
+"""
+
+from __future__ import annotations
+
+import json
+import time
+from pathlib import Path
+
+import numpy as np
+
+from ._validation import as_signal, check_same_length, per_channel_int
+from .errors import IdentificationError, InsufficientDataError
+from .regression import regression_matrix
+from .selection import forward_regression
+from .simulation import compile_plan, simulate_plan
+from .solvers import get_solver
+from .structure import (
+    TERM_KINDS,
+    ChannelStructure,
+    explicit_regressors,
+    full_order_regressors,
+    polynomial_terms,
+)
+
+__all__ = ["Arx", "Narx"]
+
+_FORMAT_VERSION = 1
+
+
+def _names(given, n: int, prefix: str, what: str) -> tuple[str, ...]:
+    if given is None:
+        return tuple(f"{prefix}{i + 1}" for i in range(n))
+    names = tuple(str(s) for s in given)
+    if len(names) != n:
+        raise IdentificationError(f"{what} has {len(names)} names for {n} channels")
+    if len(set(names)) != n:
+        raise IdentificationError(f"{what} must be unique, got {names}")
+    return names
+
+
+def _lag_table(value, ny: int, n_src: int, name: str, minimum: int) -> np.ndarray:
+    """Explicit order argument -> (ny, n_src) int table (scalar, per source, or full matrix)."""
+    a = np.asarray(value)
+    if a.dtype.kind not in "iu" or a.ndim > 2:
+        raise IdentificationError(
+            f"{name} must be an int, one int per {'output' if name == 'na' else 'input'} "
+            f"channel, or an (outputs x sources) integer table; got {value!r}"
+        )
+    if a.ndim == 0:
+        a = np.full((ny, n_src), int(a))
+    elif a.ndim == 1:
+        if a.shape[0] != n_src:
+            raise IdentificationError(f"{name} has {a.shape[0]} values for {n_src} channels")
+        a = np.tile(a, (ny, 1))
+    elif a.shape != (ny, n_src):
+        raise IdentificationError(f"{name} table must have shape {(ny, n_src)}, got {a.shape}")
+    if np.any(a < minimum):
+        raise IdentificationError(f"{name} values must be >= {minimum}, got {value!r}")
+    return a.astype(np.int64)
+
+
+class Narx:
+    """Polynomial NARX model, full-order MIMO structure (eq. 5-3 / 5-4, any degree).
+
+    Parameters
+    ----------
+    order : int or sequence of int, optional
+        Full-order dynamic model order n_k per output channel (na = n_k for every output,
+        nb = n_k + 1 terms for every input, nk = 0). Give either ``order`` or ``na``/``nb``/``nk``.
+    degree : int or sequence of int
+        Polynomial degree L_k >= 1 per output channel (1 = linear ARX).
+    na, nb, nk : int, sequence or 2-D table, optional
+        Explicit ARX orders instead of ``order``: output lags 1..na of each output, input lags
+        nk .. nk + nb - 1 of each input (MATLAB ``arx`` convention); an int applies to every
+        channel, a sequence gives one value per source channel, a 2-D table one per
+        (output channel, source channel). ``nk`` defaults to 0.
+    kind : {"full", "pure", "quasi-static"}
+        Term set: all monomials (eq. 5-8), pure powers without cross products (purely
+        quadratic NARX, eq. 5-24), or linear plus pure powers of the lag-0 inputs
+        (quasi-static NARX, eq. 5-25).
+    constant : bool
+        Include a constant term (the full-order NARX of the reference text has none).
+    solver : str or callable
+        ``"qr"`` (default), ``"householder"``, ``"mgs"``, ``"cgs"``, ``"svd"``, ``"normal"`` or a
+        function ``solver(X, Y, *, rcond=None)``.
+    rcond : float, optional
+        Relative singular-value threshold for rank decisions (default ``max(N, M) * eps``).
+    n_terms : int, optional
+        Select at most this many terms per channel by orthogonal forward regression (FROLS).
+    err_tol : float, optional
+        With forward regression, stop when the unexplained output fraction drops below this.
+    bound_factor : float
+        Free-run divergence bound: ``bound_factor * max|y|`` of the identification output per
+        channel (see :meth:`simulate`).
+
+    Attributes (after fit)
+    ----------------------
+    channels_ : tuple of ChannelStructure
+    coef_ : tuple of ndarray, one coefficient vector per output channel
+    n_terms_ : ndarray of int, terms per output channel
+    err_ : tuple of ndarray or None, error-reduction ratios with forward selection
+    max_lag_ : int
+    input_names_, output_names_ : tuple of str
+    bound_ : ndarray, free-run bound per output channel
+    fit_time_ : float, seconds spent in fit
+    """
+
+    _linear_only = False
+
+    def __init__(
+        self,
+        order=None,
+        degree=2,
+        *,
+        na=None,
+        nb=None,
+        nk=None,
+        kind: str = "full",
+        constant: bool = False,
+        solver="qr",
+        rcond: float | None = None,
+        n_terms: int | None = None,
+        err_tol: float | None = None,
+        bound_factor: float = 1e3,
+    ):
+        explicit = na is not None or nb is not None or nk is not None
+        if order is None and not explicit:
+            raise IdentificationError(
+                "give the model order (e.g. Narx(order=4, degree=2)) or explicit na/nb/nk"
+            )
+        if order is not None and explicit:
+            raise IdentificationError("give either order or na/nb/nk, not both")
+        if explicit and (na is None or nb is None):
+            raise IdentificationError("explicit orders need both na and nb (nk defaults to 0)")
+        if order is not None:
+            per_channel_int(order, 1 if np.ndim(order) == 0 else len(order), "order", minimum=0)
+        per_channel_int(degree, 1 if np.ndim(degree) == 0 else len(degree), "degree", minimum=1)
+        if kind not in TERM_KINDS:
+            raise IdentificationError(f"unknown term kind {kind!r}; choose one of {TERM_KINDS}")
+        get_solver(solver)
+        if n_terms is not None and (not isinstance(n_terms, (int, np.integer)) or n_terms < 1):
+            raise IdentificationError(f"n_terms must be a positive integer, got {n_terms!r}")
+        if err_tol is not None and not 0.0 <= err_tol < 1.0:
+            raise IdentificationError(f"err_tol must be in [0, 1), got {err_tol!r}")
+        if not bound_factor > 0:
+            raise IdentificationError(f"bound_factor must be > 0, got {bound_factor!r}")
+        self.order = order
+        self.degree = degree
+        self.na, self.nb, self.nk = na, nb, nk
+        self.kind = kind
+        self.constant = bool(constant)
+        self.solver = solver
+        self.rcond = rcond
+        self.n_terms = n_terms
+        self.err_tol = err_tol
+        self.bound_factor = float(bound_factor)
+
+    # ------------------------------------------------------------------ structure
+    def _structure(self, ny: int, nu: int) -> tuple[ChannelStructure, ...]:
+        degrees = per_channel_int(self.degree, ny, "degree", minimum=1)
+        if self.order is not None:
+            orders = per_channel_int(self.order, ny, "order", minimum=0)
+            regs = [full_order_regressors(ny, nu, n) for n in orders]
+        else:
+            orders = (None,) * ny
+            na = _lag_table(self.na, ny, ny, "na", 0)
+            nb = _lag_table(self.nb, ny, nu, "nb", 0)
+            nk = _lag_table(0 if self.nk is None else self.nk, ny, nu, "nk", 0)
+            regs = [explicit_regressors(ny, nu, na[k], nb[k], nk[k]) for k in range(ny)]
+        channels = []
+        for k in range(ny):
+            if regs[k].shape[0] == 0 and not self.constant:
+                raise IdentificationError(
+                    f"output channel {k} has no regressors (order 0 with no inputs, or na = nb = 0)"
+                )
+            terms = polynomial_terms(
+                regs[k], degrees[k], kind=self.kind, constant=self.constant, ny=ny
+            )
+            channels.append(ChannelStructure(regs[k], terms, orders[k]))
+        return tuple(channels)
+
+    # ------------------------------------------------------------------ fitting
+    def fit(self, u, y, *, input_names=None, output_names=None):
+        """Identify the model from input ``u`` (N, nu) and output ``y`` (N, ny); returns self.
+
+        Channels that share a structure share one regression matrix, factorised once for all
+        of them. With ``n_terms``/``err_tol`` each channel's terms are chosen by forward
+        regression and then re-estimated with ``solver``.
+        """
+        t0 = time.perf_counter()
+        u = as_signal(u, "u")
+        y = as_signal(y, "y")
+        check_same_length(u, y, "u", "y")
+        N, nu = u.shape
+        ny = y.shape[1]
+        channels = self._structure(ny, nu)
+        start = max(ch.max_lag for ch in channels)
+        rows = N - start
+        for k, ch in enumerate(channels):
+            if rows < ch.n_terms:
+                raise InsufficientDataError(
+                    f"output channel {k}: {ch.n_terms} terms but only {max(rows, 0)} usable samples "
+                    f"({N} samples minus the largest lag {start}). Provide at least "
+                    f"{ch.n_terms + start} samples, or lower the order/degree."
+                )
+        solve = get_solver(self.solver)
+        coefs: list[np.ndarray | None] = [None] * ny
+        errs: list[np.ndarray | None] = [None] * ny
+        final_channels = list(channels)
+        groups: list[list[int]] = []
+        for k in range(ny):
+            for g in groups:
+                if channels[g[0]].same_as(channels[k]):
+                    g.append(k)
+                    break
+            else:
+                groups.append([k])
+        select = self.n_terms is not None or self.err_tol is not None
+        for g in groups:
+            X = regression_matrix(u, y, channels[g[0]], start)
+            if not select:
+                coef = solve(X, y[start:, g], rcond=self.rcond)
+                for j, k in enumerate(g):
+                    coefs[k] = np.ascontiguousarray(coef[:, j])
+                continue
+            for k in g:
+                sel = forward_regression(X, y[start:, k], n_terms=self.n_terms, err_tol=self.err_tol)
+                idx = sel.selected
+                coefs[k] = np.ascontiguousarray(solve(X[:, idx], y[start:, k], rcond=self.rcond))
+                errs[k] = sel.err
+                final_channels[k] = ChannelStructure(
+                    channels[k].regressors, channels[k].terms[idx], channels[k].order
+                )
+        self.channels_ = tuple(final_channels)
+        self.coef_ = tuple(coefs)
+        self.err_ = tuple(errs) if select else None
+        self.n_terms_ = np.array([ch.n_terms for ch in self.channels_])
+        self.max_lag_ = start
+        self.n_inputs_, self.n_outputs_ = nu, ny
+        self.input_names_ = _names(input_names, nu, "u", "input_names")
+        self.output_names_ = _names(output_names, ny, "y", "output_names")
+        scale = np.max(np.abs(y), axis=0)
+        self.bound_ = self.bound_factor * np.where(scale > 0, scale, 1.0)
+        self._plan = None
+        self.fit_time_ = time.perf_counter() - t0
+        return self
+
+    # ------------------------------------------------------------------ use
+    def _check_fitted(self):
+        if not hasattr(self, "coef_"):
+            raise IdentificationError(f"this {type(self).__name__} is not fitted yet; call fit(u, y)")
+
+    @property
+    def plan_(self):
+        """Compiled free-run plan (built on first use)."""
+        self._check_fitted()
+        if self._plan is None:
+            self._plan = compile_plan(self.channels_, self.coef_, self.n_outputs_, self.n_inputs_)
+        return self._plan
+
+    def simulate(self, u, y0=None, *, bound=None) -> np.ndarray:
+        """Free-run simulation (Algorithm 5.2): outputs fed back, shape (N, ny).
+
+        Parameters
+        ----------
+        u : array (N, nu) or (N,)
+            Input record.
+        y0 : array (max_lag_, ny), optional
+            Initial outputs: the first ``max_lag_`` samples are set to ``y0`` and simulation
+            starts at sample ``max_lag_``. Default: zero past (inputs and outputs before sample
+            0 are zero) and every sample is simulated.
+        bound : float or array (ny,), optional
+            Magnitude bound per channel; default ``bound_``. ``np.inf`` checks finiteness only.
+
+        Raises
+        ------
+        SimulationDivergedError
+            when an output leaves the bound or becomes non-finite (names channel and sample).
+        """
+        self._check_fitted()
+        u = as_signal(u, "u", n_channels=self.n_inputs_)
+        if y0 is not None:
+            y0 = np.asarray(y0, dtype=np.float64)
+            if y0.ndim == 1 and self.n_outputs_ == 1:
+                y0 = y0[:, None]
+            if y0.shape != (self.max_lag_, self.n_outputs_):
+                raise IdentificationError(
+                    f"y0 must have shape (max_lag_, ny) = {(self.max_lag_, self.n_outputs_)}, "
+                    f"got {y0.shape}"
+                )
+            if not np.all(np.isfinite(y0)):
+                raise IdentificationError("y0 contains NaN or inf")
+            if u.shape[0] < self.max_lag_:
+                raise IdentificationError(
+                    f"u has {u.shape[0]} samples, fewer than the {self.max_lag_} initial outputs y0"
+                )
+        if bound is None:
+            bound = self.bound_
+        bound = np.broadcast_to(np.asarray(bound, dtype=np.float64), (self.n_outputs_,)).copy()
+        if np.any(np.isnan(bound)) or np.any(bound <= 0):
+            raise IdentificationError(f"bound must be positive, got {bound}")
+        return simulate_plan(self.plan_, u, y0, bound, self.output_names_)
+
+    def predict(self, u, y) -> np.ndarray:
+        """One-step-ahead prediction from measured inputs and outputs, shape (N, ny).
+
+        The first ``max_lag_`` samples cannot be predicted and are copies of ``y``.
+        """
+        self._check_fitted()
+        u = as_signal(u, "u", n_channels=self.n_inputs_)
+        y = as_signal(y, "y", n_channels=self.n_outputs_)
+        check_same_length(u, y, "u", "y")
+        p = self.max_lag_
+        if u.shape[0] <= p:
+            raise IdentificationError(f"need more than max_lag_ = {p} samples to predict")
+        out = y.copy()
+        for k, ch in enumerate(self.channels_):
+            out[p:, k] = regression_matrix(u, y, ch, p) @ self.coef_[k]
+        return out
+
+    def term_names(self) -> list[list[str]]:
+        """Term names per output channel, e.g. ``['y1(t-1)', 'u1(t)', 'y1(t-1)*u2(t)', ...]``."""
+        self._check_fitted()
+        return [ch.term_names(self.output_names_, self.input_names_) for ch in self.channels_]
+
+    def describe(self) -> str:
+        """Multi-line summary: per channel order, degree, number of terms."""
+        self._check_fitted()
+        lines = [
+            f"{type(self).__name__}: {self.n_inputs_} input(s) {self.input_names_}, "
+            f"{self.n_outputs_} output(s) {self.output_names_}, kind={self.kind!r}"
+        ]
+        for k, ch in enumerate(self.channels_):
+            lines.append(
+                f"  {self.output_names_[k]}: order {ch.order}, degree {ch.degree}, "
+                f"{ch.n_regressors} regressors, {ch.n_terms} terms, max lag {ch.max_lag}"
+            )
+        return "\n".join(lines)
+
+    # ------------------------------------------------------------------ persistence
+    def _params(self) -> dict:
+        def plain(v):
+            if isinstance(v, np.ndarray):
+                return v.tolist()
+            if isinstance(v, (tuple, list)):
+                return [plain(x) for x in v]
+            if isinstance(v, np.integer):
+                return int(v)
+            return v
+
+        if callable(self.solver):
+            solver = getattr(self.solver, "__name__", "qr")
+        else:
+            solver = self.solver
+        return {
+            "order": plain(self.order),
+            "degree": plain(self.degree),
+            "na": plain(self.na),
+            "nb": plain(self.nb),
+            "nk": plain(self.nk),
+            "kind": self.kind,
+            "constant": self.constant,
+            "solver": solver,
+            "rcond": self.rcond,
+            "n_terms": plain(self.n_terms),
+            "err_tol": self.err_tol,
+            "bound_factor": self.bound_factor,
+        }
+
+    def save(self, path) -> Path:
+        """Save the fitted model to a single ``.npz`` file (exact round trip); returns the path."""
+        self._check_fitted()
+        path = Path(path)
+        if path.suffix != ".npz":
+            path = path.with_suffix(path.suffix + ".npz") if path.suffix else path.with_suffix(".npz")
+        meta = {
+            "format": "vrig-identification-model",
+            "version": _FORMAT_VERSION,
+            "class": type(self).__name__,
+            "params": self._params(),
+            "ny": self.n_outputs_,
+            "nu": self.n_inputs_,
+            "input_names": list(self.input_names_),
+            "output_names": list(self.output_names_),
+            "max_lag": self.max_lag_,
+            "orders": [ch.order for ch in self.channels_],
+        }
+        arrays = {"meta": np.array(json.dumps(meta)), "bound": self.bound_}
+        for k, ch in enumerate(self.channels_):
+            arrays[f"regressors_{k}"] = ch.regressors
+            arrays[f"terms_{k}"] = ch.terms
+            arrays[f"coef_{k}"] = self.coef_[k]
+            if self.err_ is not None:
+                arrays[f"err_{k}"] = self.err_[k]
+        np.savez(path, **arrays)
+        return path
+
+    @classmethod
+    def load(cls, path):
+        """Load a model written by :meth:`save`."""
+        path = Path(path)
+        if not path.exists():
+            raise FileNotFoundError(f"no model file at {path}")
+        with np.load(path, allow_pickle=False) as f:
+            try:
+                meta = json.loads(str(f["meta"]))
+            except KeyError:
+                raise IdentificationError(f"{path} is not a vrig identification model") from None
+            if meta.get("format") != "vrig-identification-model":
+                raise IdentificationError(f"{path} is not a vrig identification model")
+            target = {"Narx": Narx, "Arx": Arx}.get(meta["class"])
+            if target is None:
+                raise IdentificationError(f"unknown model class {meta['class']!r} in {path}")
+            params = dict(meta["params"])
+            if target is Arx:
+                params.pop("degree", None)
+                params.pop("kind", None)
+            model = target(**params)
+            ny = meta["ny"]
+            model.channels_ = tuple(
+                ChannelStructure(f[f"regressors_{k}"], f[f"terms_{k}"], meta["orders"][k])
+                for k in range(ny)
+            )
+            model.coef_ = tuple(np.array(f[f"coef_{k}"]) for k in range(ny))
+            has_err = "err_0" in f.files
+            model.err_ = tuple(np.array(f[f"err_{k}"]) for k in range(ny)) if has_err else None
+            model.bound_ = np.array(f["bound"])
+        model.n_terms_ = np.array([ch.n_terms for ch in model.channels_])
+        model.max_lag_ = meta["max_lag"]
+        model.n_inputs_, model.n_outputs_ = meta["nu"], ny
+        model.input_names_ = tuple(meta["input_names"])
+        model.output_names_ = tuple(meta["output_names"])
+        model._plan = None
+        model.fit_time_ = float("nan")
+        return model
+
+    def __repr__(self) -> str:
+        p = self._params()
+        shown = {k: v for k, v in p.items() if v is not None and k != "bound_factor"}
+        return f"{type(self).__name__}({', '.join(f'{k}={v!r}' for k, v in shown.items())})"
+
+
+class Arx(Narx):
+    """Linear ARX model (eq. 4-8 / 4-13), full-order MIMO structure: ``Narx(degree=1)``.
+
+    Adds :meth:`to_statespace`, the MIMO discrete state-space form of eq. 4-14.
+    """
+
+    def __init__(self, order=None, *, na=None, nb=None, nk=None, constant: bool = False,
+                 solver="qr", rcond=None, n_terms=None, err_tol=None, bound_factor: float = 1e3):
+        super().__init__(
+            order, 1, na=na, nb=nb, nk=nk, kind="full", constant=constant, solver=solver,
+            rcond=rcond, n_terms=n_terms, err_tol=err_tol, bound_factor=bound_factor,
+        )
+
+    def to_statespace(self, dt: float = 1.0):
+        """Discrete MIMO state-space model (eq. 4-14) as a ``control.StateSpace``.
+
+        State ``x(t) = [y(t-1); ...; y(t-p); u(t-1); ...; u(t-p)]`` with p the largest lag
+        (a non-minimal but exact realisation): ``x(t+1) = A x(t) + B u(t)``,
+        ``y(t) = C x(t) + D u(t)``. Simulating it from ``x = 0`` equals :meth:`simulate`.
+        """
+        import control
+
+        self._check_fitted()
+        if self.constant:
+            raise IdentificationError("a model with a constant term has no linear state-space form")
+        if not dt > 0:
+            raise IdentificationError(f"dt must be > 0, got {dt!r}")
+        ny, nu, p = self.n_outputs_, self.n_inputs_, self.max_lag_
+        n = p * (ny + nu)
+        C = np.zeros((ny, n))
+        D = np.zeros((ny, nu))
+        for k, (ch, coef) in enumerate(zip(self.channels_, self.coef_, strict=True)):
+            for row, c in zip(ch.terms, coef, strict=True):
+                src, lag = ch.regressors[row[-1] - 1]
+                if src < ny:
+                    C[k, (lag - 1) * ny + src] += c
+                elif lag == 0:
+                    D[k, src - ny] += c
+                else:
+                    C[k, p * ny + (lag - 1) * nu + (src - ny)] += c
+        A = np.zeros((n, n))
+        B = np.zeros((n, nu))
+        if p:
+            A[:ny] = C
+            B[:ny] = D
+            A[ny : p * ny, : (p - 1) * ny] = np.eye((p - 1) * ny)
+            B[p * ny : p * ny + nu] = np.eye(nu)
+            A[p * ny + nu :, p * ny : p * ny + (p - 1) * nu] = np.eye((p - 1) * nu)
+        return control.ss(
+            A, B, C, D, dt,
+            inputs=list(self.input_names_), outputs=list(self.output_names_),
+        )

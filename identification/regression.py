@@ -1,0 +1,59 @@
+"""Regression matrices of (N)ARX models, built column-wise with index tables (Appendix B).
+
+The linear regressors are lagged copies of the data columns (Algorithm B.2, no loop over samples);
+the polynomial terms are products of those columns chosen by the term index table (Algorithm B.5,
+generalised to any degree) and computed by a compiled kernel.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ._kernels import expand_terms
+from .structure import ChannelStructure
+
+__all__ = ["lagged_regressors", "regression_matrix"]
+
+
+def lagged_regressors(u: np.ndarray, y: np.ndarray, regressors: np.ndarray, start: int) -> np.ndarray:
+    """Return ``Z`` (N - start, R + 1), Fortran-ordered: a column of ones, then each regressor.
+
+    Row ``i`` corresponds to time ``t = start + i``; regressor (source, lag) is
+    ``y[t - lag, source]`` for outputs and ``u[t - lag, source - ny]`` for inputs.
+    """
+    N = u.shape[0]
+    ny = y.shape[1]
+    rows = N - start
+    Z = np.empty((rows, regressors.shape[0] + 1), order="F")
+    Z[:, 0] = 1.0
+    for r, (src, lag) in enumerate(regressors):
+        data = y[:, src] if src < ny else u[:, src - ny]
+        Z[:, r + 1] = data[start - lag : N - lag]
+    return Z
+
+
+def regression_matrix(
+    u: np.ndarray, y: np.ndarray, channel: ChannelStructure, start: int, *, extra_columns: int = 0
+) -> np.ndarray:
+    """Regression matrix ``X_k`` (eq. 5-12) of one output channel for times ``start .. N-1``.
+
+    Parameters
+    ----------
+    u, y : ndarray (N, nu), (N, ny)
+        Inputs and outputs, time on axis 0.
+    channel : ChannelStructure
+        Regressors and term table of the channel.
+    start : int
+        First time index used (>= the channel's largest lag).
+    extra_columns : int
+        Allocate this many trailing, uninitialised columns (e.g. for an augmented ``[X | Y]``
+        factorisation without a copy).
+
+    Returns
+    -------
+    ndarray (N - start, n_terms + extra_columns), Fortran-ordered.
+    """
+    Z = lagged_regressors(u, y, channel.regressors, start)
+    out = np.empty((Z.shape[0], channel.n_terms + extra_columns), order="F")
+    expand_terms(Z, channel.terms, out)
+    return out

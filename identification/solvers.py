@@ -1,0 +1,281 @@
+"""Least-squares estimators for linear-in-the-parameters models (Section 5.3, Appendix C).
+
+Every estimator is a plain function with one signature::
+
+    coef = solver(X, Y, *, rcond=None)
+
+``X`` is the regression matrix (N, M), ``Y`` the targets (N,) or (N, k) — several output channels
+that share ``X`` are solved together with a single factorisation. The result has shape (M,) or
+(M, k). Columns are scaled to unit norm before factorising (the solution is unchanged; rank
+decisions become scale-free). A rank-deficient problem (relative singular value below ``rcond``,
+default ``max(N, M) * eps``) gives a :class:`~identification.errors.RankDeficiencyWarning` naming
+the effective rank, and the minimum-norm solution.
+
+* ``qr``          LAPACK Householder QR of the augmented matrix ``[X | Y]`` (default; Q never formed)
+* ``householder`` Householder triangularisation written out as Algorithm C.8
+* ``mgs``         modified Gram-Schmidt, Algorithms C.5 / C.6
+* ``cgs``         classical Gram-Schmidt, Algorithm C.4, with one re-orthogonalisation (CGS2)
+* ``svd``         SVD pseudo-inverse, eq. C-3..C-7 (LAPACK gelsd)
+* ``normal``      normal equations by Cholesky, eq. 5-17; warns when ill-conditioned
+"""
+
+from __future__ import annotations
+
+import functools
+import warnings
+
+import numpy as np
+import scipy.linalg as sla
+from scipy.linalg import lapack
+
+from .errors import IdentificationError, IllConditionedWarning, RankDeficiencyWarning
+
+__all__ = ["SOLVERS", "cgs", "get_solver", "householder", "mgs", "normal", "qr", "svd"]
+
+_EPS = np.finfo(np.float64).eps
+
+
+def _default_rcond(N: int, M: int, rcond: float | None) -> float:
+    if rcond is None:
+        return max(N, M) * _EPS
+    if not (0 <= rcond < 1):
+        raise IdentificationError(f"rcond must be in [0, 1), got {rcond}")
+    return float(rcond)
+
+
+def _warn_rank(rank: int, M: int, name: str) -> None:
+    warnings.warn(
+        f"{name}: regression matrix is rank deficient (effective rank {rank} of {M} terms); "
+        "returning the minimum-norm solution. Reduce the model order/degree, remove constant or "
+        "duplicated channels, or use a richer identification signal.",
+        RankDeficiencyWarning,
+        stacklevel=4,
+    )
+
+
+def _solver(func):
+    """Validate, scale columns to unit norm, call the core, unscale (shared by all solvers)."""
+
+    @functools.wraps(func)
+    def wrapper(X, Y, *, rcond: float | None = None):
+        X = np.asarray(X, dtype=np.float64)
+        Y = np.asarray(Y, dtype=np.float64)
+        if X.ndim != 2:
+            raise IdentificationError(f"X must be 2-D (N, M), got shape {X.shape}")
+        vector = Y.ndim == 1
+        if vector:
+            Y = Y[:, None]
+        if Y.ndim != 2 or Y.shape[0] != X.shape[0]:
+            raise IdentificationError(
+                f"Y must have shape (N,) or (N, k) with N = {X.shape[0]}, got {Y.shape}"
+            )
+        N, M = X.shape
+        if N < M:
+            raise IdentificationError(
+                f"{N} equations for {M} unknowns: need at least as many samples as terms"
+            )
+        if not (np.all(np.isfinite(X)) and np.all(np.isfinite(Y))):
+            raise IdentificationError("X and Y must be finite (NaN or inf found)")
+        tol = _default_rcond(N, M, rcond)
+        norms = np.sqrt(np.einsum("ij,ij->j", X, X))
+        live = norms > 0
+        if not np.all(live):
+            _warn_rank(int(live.sum()), M, func.__name__)
+        Xs = np.asfortranarray(X[:, live] / norms[live])
+        coef = np.zeros((M, Y.shape[1]))
+        if Xs.shape[1]:
+            coef[live] = func(Xs, Y, tol) / norms[live, None]
+        return coef[:, 0] if vector else coef
+
+    return wrapper
+
+
+def _solve_triangular_checked(R: np.ndarray, QtY: np.ndarray, tol: float, name: str) -> np.ndarray:
+    """Solve ``R theta = Q^T Y``; if R is (nearly) singular fall back to its SVD (minimum norm).
+
+    The minimum-norm least-squares solution of ``R theta = Q^T Y`` is that of ``X theta = Y``
+    because ``||X theta - Y||^2 = ||R theta - Q^T Y||^2 + const``.
+    """
+    M = R.shape[0]
+    diag = np.abs(np.diag(R))
+    cheap_ok = diag.min() > tol * diag.max() if M else True
+    if cheap_ok:
+        rc, info = lapack.dtrcon(R, norm="1", uplo="U", diag="N")
+        cheap_ok = info == 0 and rc > tol
+    if cheap_ok:
+        return sla.solve_triangular(R, QtY, lower=False, check_finite=False)
+    U, s, Vt = sla.svd(R, check_finite=False)
+    rank = int(np.sum(s > tol * s[0])) if s.size and s[0] > 0 else 0
+    if rank < M:
+        _warn_rank(rank, M, name)
+    return Vt[:rank].T @ ((U[:, :rank].T @ QtY) / s[:rank, None])
+
+
+@_solver
+def qr(X, Y, tol):
+    """Least squares by LAPACK Householder QR of the augmented matrix ``[X | Y]``.
+
+    One ``dgeqrf`` call triangularises ``[X | Y]``: its leading M x M block is R and the first M
+    rows of the last columns are ``Q^T Y`` (the augmentation of Algorithm C.8), so Q is never
+    formed and all output channels are solved with one factorisation.
+    """
+    M = X.shape[1]
+    A = np.empty((X.shape[0], M + Y.shape[1]), order="F")
+    A[:, :M] = X
+    A[:, M:] = Y
+    qr_a, _tau, _work, info = lapack.dgeqrf(A, overwrite_a=True)
+    if info != 0:  # pragma: no cover - LAPACK argument error
+        raise RuntimeError(f"dgeqrf failed with info={info}")
+    R = np.triu(qr_a[:M, :M])
+    return _solve_triangular_checked(R, qr_a[:M, M:], tol, "qr")
+
+
+@_solver
+def householder(X, Y, tol):
+    """Least squares by explicit Householder reflections on ``[X | Y]`` (Algorithm C.8)."""
+    N, M = X.shape
+    A = np.hstack([X, Y])
+    for j in range(M):
+        col = A[j:, j]
+        s = np.linalg.norm(col)
+        if s == 0.0:
+            continue
+        sign = 1.0 if col[0] >= 0 else -1.0
+        v = col.copy()
+        v[0] += sign * s
+        beta = 1.0 / (s * (s + abs(col[0])))
+        A[j:, j:] -= np.outer(v, beta * (v @ A[j:, j:]))
+    R = np.triu(A[:M, :M])
+    return _solve_triangular_checked(R, A[:M, M:], tol, "householder")
+
+
+def _gram_schmidt_to_r(W_norms_sq, Amat, g):
+    # X = W A (A unit upper triangular), D = W^T W = diag(d): R = sqrt(D) A, Q^T Y = sqrt(D) g.
+    sd = np.sqrt(W_norms_sq)
+    return sd[:, None] * Amat, sd[:, None] * g
+
+
+@_solver
+def mgs(X, Y, tol):
+    """Least squares by modified Gram-Schmidt orthogonalisation (Algorithms C.5 and C.6)."""
+    N, M = X.shape
+    Xk = X.copy()
+    Yk = Y.copy()
+    Amat = np.eye(M)
+    d = np.zeros(M)
+    g = np.zeros((M, Y.shape[1]))
+    for k in range(M):
+        w = Xk[:, k]
+        d[k] = w @ w
+        if d[k] <= (tol * tol):  # dependent column: leave its row zero (rank-deficient path)
+            d[k] = 0.0
+            continue
+        Amat[k, k + 1 :] = (w @ Xk[:, k + 1 :]) / d[k]
+        Xk[:, k + 1 :] -= np.outer(w, Amat[k, k + 1 :])
+        g[k] = (w @ Yk) / d[k]
+        Yk -= np.outer(w, g[k])
+    R, QtY = _gram_schmidt_to_r(d, Amat, g)
+    return _solve_triangular_checked(R, QtY, tol, "mgs")
+
+
+@_solver
+def cgs(X, Y, tol):
+    """Least squares by classical Gram-Schmidt orthogonalisation (Algorithm C.4, eq. C-17/C-18).
+
+    Plain classical Gram-Schmidt loses orthogonality in proportion to the condition number
+    (the reference text notes its sensitivity to round-off); here each column is orthogonalised
+    twice ("twice is enough", CGS2: Giraud, Langou & Rozloznik 2005), which makes it as accurate
+    as modified Gram-Schmidt while keeping the classical, matrix-vector form of Algorithm C.4.
+    """
+    N, M = X.shape
+    W = np.empty_like(X)
+    Amat = np.eye(M)
+    d = np.zeros(M)
+    for k in range(M):
+        w = X[:, k].copy()
+        if k:
+            live = d[:k] > 0
+            Wl = W[:, :k][:, live]
+            for _pass in range(2):
+                alpha = (Wl.T @ w) / d[:k][live]
+                w -= Wl @ alpha
+                Amat[np.flatnonzero(live), k] += alpha
+        W[:, k] = w
+        d[k] = w @ w
+        if d[k] <= (tol * tol):
+            d[k] = 0.0
+    g = np.zeros((M, Y.shape[1]))
+    live = d > 0
+    g[live] = (W[:, live].T @ Y) / d[live, None]
+    R, QtY = _gram_schmidt_to_r(d, Amat, g)
+    return _solve_triangular_checked(R, QtY, tol, "cgs")
+
+
+@_solver
+def svd(X, Y, tol):
+    """Minimum-norm least squares by the SVD pseudo-inverse (eq. C-3 to C-7; LAPACK gelsd).
+
+    Singular values below ``rcond * s_max`` are treated as zero (eq. C-5).
+    """
+    coef, _res, rank, _s = sla.lstsq(X, Y, cond=tol, lapack_driver="gelsd", check_finite=False)
+    if rank < X.shape[1]:
+        _warn_rank(int(rank), X.shape[1], "svd")
+    return coef
+
+
+# normal equations lose about log10(cond(X^T X)) digits; warn beyond half the available precision
+_NORMAL_WARN_COND = 1.0 / np.sqrt(_EPS)
+
+
+@_solver
+def normal(X, Y, tol):
+    """Least squares by the normal equations ``X^T X theta = X^T Y`` (eq. 5-17), Cholesky.
+
+    Squares the condition number: warns with :class:`IllConditionedWarning` when
+    cond(X^T X) > 1/sqrt(eps) (more than half the digits lost) and falls back to a minimum-norm
+    eigen-solution when X^T X is not numerically positive definite.
+    """
+    G = X.T @ X
+    b = X.T @ Y
+    try:
+        c, lower = sla.cho_factor(G, lower=False, check_finite=False)
+        rc, info = lapack.dpocon(c, 1.0 * np.abs(G).sum(axis=0).max())
+        if info == 0 and rc > 0 and 1.0 / rc > _NORMAL_WARN_COND:
+            warnings.warn(
+                f"normal: X^T X is ill-conditioned (estimated condition {1.0 / rc:.2e}); "
+                "the solution may have lost most of its digits. Use solver='qr'.",
+                IllConditionedWarning,
+                stacklevel=3,
+            )
+        if info == 0 and rc > _EPS:
+            return sla.cho_solve((c, lower), b, check_finite=False)
+    except np.linalg.LinAlgError:
+        pass
+    w, V = np.linalg.eigh(G)
+    keep = w > tol * tol * w.max()
+    if keep.sum() < X.shape[1]:
+        _warn_rank(int(keep.sum()), X.shape[1], "normal")
+    return V[:, keep] @ ((V[:, keep].T @ b) / w[keep, None])
+
+
+SOLVERS = {
+    "qr": qr,
+    "householder": householder,
+    "mgs": mgs,
+    "cgs": cgs,
+    "svd": svd,
+    "normal": normal,
+}
+
+
+def get_solver(name):
+    """Return the solver function for ``name`` (or ``name`` itself if it is callable)."""
+    if callable(name):
+        return name
+    try:
+        return SOLVERS[name]
+    except (KeyError, TypeError):
+        raise IdentificationError(
+            f"unknown solver {name!r}; choose one of {sorted(SOLVERS)} or pass a callable "
+            "solver(X, Y, *, rcond=None) -> coef"
+        ) from None
