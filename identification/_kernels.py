@@ -8,7 +8,7 @@ from __future__ import annotations
 import numba as nb
 import numpy as np
 
-__all__ = ["expand_terms", "free_run"]
+__all__ = ["expand_terms", "free_run", "input_coefficients"]
 
 
 @nb.njit(cache=True, parallel=True, nogil=True)
@@ -42,18 +42,57 @@ def expand_terms(Z, terms, out):  # pragma: no cover - compiled
 
 
 @nb.njit(cache=True, nogil=True)
-def free_run(U, Y, start, reg_src, reg_lag, reg_ptr, parent, factor, coef, mono_ptr, bound):  # pragma: no cover
-    """Free-run (simulation) of a MIMO polynomial NARX model, Algorithm 5.2.
+def input_coefficients(U, t0, t1, reg_src, reg_lag, parent, factor, e_mono, e_col, e_coef, columns, A):  # pragma: no cover
+    """Input-dependent coefficients ``A[t - t0, col]`` of the output monomials, t in [t0, t1).
 
-    ``U`` (N, nu) inputs, ``Y`` (N, ny) outputs, C-ordered; rows ``< start`` of ``Y`` hold the
-    initial conditions and rows ``>= start`` are overwritten. Channel ``k`` has regressors
-    ``reg_ptr[k]:reg_ptr[k+1]`` (source, lag; sources ``>= ny`` are inputs) and monomials
-    ``mono_ptr[k]:mono_ptr[k+1]``; the first monomial of every channel is the constant 1, and
-    monomial ``m`` is ``mono[parent[m]] * z[factor[m]]`` (``z[0] = 1``, ``z[r + 1]`` = regressor r),
-    so each term costs one multiplication. Returns ``(-1, -1)`` on success or the (channel, sample)
-    where ``|y|`` exceeded ``bound[channel]`` or became non-finite (that value is left in ``Y``).
+    Input regressor r is ``U[t - reg_lag[r], reg_src[r]]``; input monomial i is
+    ``P[:, parent[i]] * Z[:, factor[i]]`` (monomial 0 = 1, ``Z[:, 0] = 1``); entry e adds
+    ``e_coef[e] * P[:, e_mono[e]]`` to column ``e_col[e]`` of ``A``. ``A`` is Fortran-ordered;
+    the listed ``columns`` are zeroed first. Every loop runs along time, so it vectorises.
     """
-    N = U.shape[0]
+    n = t1 - t0
+    R = reg_src.shape[0]
+    Z = np.empty((R + 1, n))
+    for i in range(n):
+        Z[0, i] = 1.0
+    for r in range(R):
+        s = reg_src[r]
+        base = t0 - reg_lag[r]
+        for i in range(n):
+            Z[r + 1, i] = U[base + i, s]
+    P = np.empty((parent.shape[0], n))
+    for i in range(n):
+        P[0, i] = 1.0
+    for m in range(1, parent.shape[0]):
+        p = parent[m]
+        f = factor[m]
+        for i in range(n):
+            P[m, i] = P[p, i] * Z[f, i]
+    for c in columns:
+        for i in range(n):
+            A[i, c] = 0.0
+    for e in range(e_mono.shape[0]):
+        c = e_col[e]
+        mi = e_mono[e]
+        w = e_coef[e]
+        for i in range(n):
+            A[i, c] += w * P[mi, i]
+
+
+@nb.njit(cache=True, nogil=True)
+def free_run(Y, start, stop, A, reg_src, reg_lag, reg_ptr, parent, factor, mono_ptr, bound):  # pragma: no cover
+    """Free-run recursion of a MIMO polynomial NARX model written as a polynomial in past outputs.
+
+    ``Y`` (N, ny) C-ordered: rows ``< start`` hold past outputs; rows ``start .. stop-1`` are
+    computed. Channel ``k`` has output regressors ``reg_ptr[k]:reg_ptr[k+1]`` (output index, lag
+    >= 1) and output monomials ``mono_ptr[k]:mono_ptr[k+1]``; monomial 0 of each channel is the
+    constant and monomial ``m`` is ``mono[parent[m]] * z[factor[m]]`` with ``z[0] = 1``,
+    ``z[r + 1]`` = output regressor r. ``A[t - start, m]`` is the coefficient of monomial m at
+    time t: everything that depends only on the inputs, precomputed outside the recursion, so
+    the loop costs one multiplication and one multiply-add per distinct output monomial.
+    Returns ``(-1, -1)`` or the (channel, sample) where ``|y|`` exceeded ``bound[channel]`` or
+    became non-finite (that value is left in ``Y``).
+    """
     ny = Y.shape[1]
     max_r = 0
     max_m = 0
@@ -64,21 +103,22 @@ def free_run(U, Y, start, reg_src, reg_lag, reg_ptr, parent, factor, coef, mono_
     mono = np.empty(max_m)
     z[0] = 1.0
     mono[0] = 1.0
-    for t in range(start, N):
+    for t in range(start, stop):
+        row = t - start
         for k in range(ny):
             r0 = reg_ptr[k]
-            for r in range(r0, reg_ptr[k + 1]):
-                s = reg_src[r]
-                if s < ny:
-                    z[r - r0 + 1] = Y[t - reg_lag[r], s]
-                else:
-                    z[r - r0 + 1] = U[t - reg_lag[r], s - ny]
+            for r in range(reg_ptr[k + 1] - r0):
+                z[r + 1] = Y[t - reg_lag[r0 + r], reg_src[r0 + r]]
             m0 = mono_ptr[k]
-            acc = coef[m0]
-            for m in range(m0 + 1, mono_ptr[k + 1]):
-                v = mono[parent[m]] * z[factor[m]]
-                mono[m - m0] = v
-                acc += coef[m] * v
+            nm = mono_ptr[k + 1] - m0
+            par = parent[m0 : m0 + nm]
+            fac = factor[m0 : m0 + nm]
+            coef = A[row, m0 : m0 + nm]
+            for m in range(1, nm):
+                mono[m] = mono[par[m]] * z[fac[m]]
+            acc = 0.0
+            for m in range(nm):
+                acc += coef[m] * mono[m]
             Y[t, k] = acc
             if not (abs(acc) <= bound[k]):
                 return k, t

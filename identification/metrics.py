@@ -31,6 +31,11 @@ __all__ = [
 def _pair(y, yhat):
     y = np.asarray(y, dtype=np.float64)
     yhat = np.asarray(yhat, dtype=np.float64)
+    # a single channel may be given as (N,) on one side and (N, 1) on the other
+    if y.ndim == 1 and yhat.shape == (y.shape[0], 1):
+        y = y[:, None]
+    elif yhat.ndim == 1 and y.shape == (yhat.shape[0], 1):
+        yhat = yhat[:, None]
     if y.shape != yhat.shape:
         raise IdentificationError(
             f"reference and estimate must have the same shape, got {y.shape} and {yhat.shape}"

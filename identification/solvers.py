@@ -11,7 +11,7 @@ decisions become scale-free). A rank-deficient problem (relative singular value 
 default ``max(N, M) * eps``) gives a :class:`~identification.errors.RankDeficiencyWarning` naming
 the effective rank, and the minimum-norm solution.
 
-* ``qr``          LAPACK Householder QR of the augmented matrix ``[X | Y]`` (default; Q never formed)
+* ``qr``          LAPACK blocked Householder QR, ``Q^T Y`` by ``dormqr`` (default; Q never formed)
 * ``householder`` Householder triangularisation written out as Algorithm C.8
 * ``mgs``         modified Gram-Schmidt, Algorithms C.5 / C.6
 * ``cgs``         classical Gram-Schmidt, Algorithm C.4, with one re-orthogonalisation (CGS2)
@@ -81,7 +81,11 @@ def _solver(func):
         live = norms > 0
         if not np.all(live):
             _warn_rank(int(live.sum()), M, func.__name__)
-        Xs = np.asfortranarray(X[:, live] / norms[live])
+        if np.all(live):
+            Xs = np.empty(X.shape, order="F")
+            np.divide(X, norms, out=Xs)
+        else:
+            Xs = np.asfortranarray(X[:, live] / norms[live])
         coef = np.zeros((M, Y.shape[1]))
         if Xs.shape[1]:
             coef[live] = func(Xs, Y, tol) / norms[live, None]
@@ -113,21 +117,23 @@ def _solve_triangular_checked(R: np.ndarray, QtY: np.ndarray, tol: float, name: 
 
 @_solver
 def qr(X, Y, tol):
-    """Least squares by LAPACK Householder QR of the augmented matrix ``[X | Y]``.
+    """Least squares by LAPACK Householder QR (``dgeqrf``, blocked) and ``dormqr`` for ``Q^T Y``.
 
-    One ``dgeqrf`` call triangularises ``[X | Y]``: its leading M x M block is R and the first M
-    rows of the last columns are ``Q^T Y`` (the augmentation of Algorithm C.8), so Q is never
-    formed and all output channels are solved with one factorisation.
+    Q is never formed; all output channels are solved with the one factorisation. ``X`` (the
+    wrapper's scaled copy) is factorised in place.
     """
     M = X.shape[1]
-    A = np.empty((X.shape[0], M + Y.shape[1]), order="F")
-    A[:, :M] = X
-    A[:, M:] = Y
-    qr_a, _tau, _work, info = lapack.dgeqrf(A, overwrite_a=True)
+    lwork = int(lapack.dgeqrf(X, lwork=-1)[2][0])
+    qr_a, tau, _work, info = lapack.dgeqrf(X, lwork=max(lwork, 1), overwrite_a=True)
     if info != 0:  # pragma: no cover - LAPACK argument error
         raise RuntimeError(f"dgeqrf failed with info={info}")
+    C = np.asfortranarray(Y)
+    lwork = int(lapack.dormqr("L", "T", qr_a, tau, C, lwork=-1)[1][0])
+    QtY, _work, info = lapack.dormqr("L", "T", qr_a, tau, C, lwork=max(lwork, 1))
+    if info != 0:  # pragma: no cover
+        raise RuntimeError(f"dormqr failed with info={info}")
     R = np.triu(qr_a[:M, :M])
-    return _solve_triangular_checked(R, qr_a[:M, M:], tol, "qr")
+    return _solve_triangular_checked(R, QtY[:M], tol, "qr")
 
 
 @_solver
