@@ -120,6 +120,7 @@ def free_run(Y, start, stop, A, reg_src, reg_lag, reg_ptr, parent, factor, mono_
             for m in range(nm):
                 acc += coef[m] * mono[m]
             Y[t, k] = acc
-            if not (abs(acc) <= bound[k]):
+            mag = abs(acc)
+            if not (mag <= bound[k]) or mag == np.inf:  # also catches nan
                 return k, t
     return -1, -1

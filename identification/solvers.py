@@ -54,7 +54,12 @@ def _warn_rank(rank: int, M: int, name: str) -> None:
 
 
 def _solver(func):
-    """Validate, scale columns to unit norm, call the core, unscale (shared by all solvers)."""
+    """Validate, scale columns to unit norm, call the core, warn on rank deficiency.
+
+    A core ``func(Xs, Y, tol, norms) -> (coef, rank)`` gets the column-scaled matrix ``Xs`` and
+    the column norms, and returns coefficients of the original (unscaled) problem and the
+    numerical rank of ``Xs``.
+    """
 
     @functools.wraps(func)
     def wrapper(X, Y, *, rcond: float | None = None):
@@ -79,44 +84,54 @@ def _solver(func):
         tol = _default_rcond(N, M, rcond)
         norms = np.sqrt(np.einsum("ij,ij->j", X, X))
         live = norms > 0
-        if not np.all(live):
-            _warn_rank(int(live.sum()), M, func.__name__)
         if np.all(live):
             Xs = np.empty(X.shape, order="F")
             np.divide(X, norms, out=Xs)
         else:
             Xs = np.asfortranarray(X[:, live] / norms[live])
         coef = np.zeros((M, Y.shape[1]))
+        rank = 0
         if Xs.shape[1]:
-            coef[live] = func(Xs, Y, tol) / norms[live, None]
+            coef[live], rank = func(Xs, Y, tol, norms[live])
+        if rank < M:
+            _warn_rank(rank, M, func.__name__)
         return coef[:, 0] if vector else coef
 
     return wrapper
 
 
-def _solve_triangular_checked(R: np.ndarray, QtY: np.ndarray, tol: float, name: str) -> np.ndarray:
-    """Solve ``R theta = Q^T Y``; if R is (nearly) singular fall back to its SVD (minimum norm).
+def _truncated_solve(A: np.ndarray, B: np.ndarray, rank: int) -> np.ndarray:
+    """Minimum-norm solution of ``A theta ~ B`` keeping the ``rank`` largest singular values."""
+    U, s, Vt = sla.svd(A, full_matrices=False, check_finite=False)
+    return Vt[:rank].T @ ((U[:, :rank].T @ B) / s[:rank, None])
 
-    The minimum-norm least-squares solution of ``R theta = Q^T Y`` is that of ``X theta = Y``
-    because ``||X theta - Y||^2 = ||R theta - Q^T Y||^2 + const``.
+
+def _finish_triangular(Rs: np.ndarray, QtY: np.ndarray, tol: float, norms: np.ndarray):
+    """Solve ``Rs theta_s = Q^T Y`` for the scaled problem and return the original coefficients.
+
+    If ``Rs`` is numerically singular (relative singular value below ``tol``), the numerical
+    rank r is decided on ``Rs`` (scale-free) and the minimum-norm solution of the original
+    problem is returned: ``X = Q Rs D`` with ``D = diag(norms)``, and
+    ``||X theta - Y||^2 = ||Rs D theta - Q^T Y||^2 + const``, so the rank-r pseudo-inverse of
+    the small matrix ``Rs D`` gives it.
     """
-    M = R.shape[0]
-    diag = np.abs(np.diag(R))
-    cheap_ok = diag.min() > tol * diag.max() if M else True
-    if cheap_ok:
-        rc, info = lapack.dtrcon(R, norm="1", uplo="U", diag="N")
-        cheap_ok = info == 0 and rc > tol
-    if cheap_ok:
-        return sla.solve_triangular(R, QtY, lower=False, check_finite=False)
-    U, s, Vt = sla.svd(R, check_finite=False)
-    rank = int(np.sum(s > tol * s[0])) if s.size and s[0] > 0 else 0
-    if rank < M:
-        _warn_rank(rank, M, name)
-    return Vt[:rank].T @ ((U[:, :rank].T @ QtY) / s[:rank, None])
+    M = Rs.shape[0]
+    diag = np.abs(np.diag(Rs))
+    ok = diag.min() > tol * diag.max()
+    if ok:
+        rc, info = lapack.dtrcon(Rs, norm="1", uplo="U", diag="N")
+        ok = info == 0 and rc > tol
+    if ok:
+        return sla.solve_triangular(Rs, QtY, lower=False, check_finite=False) / norms[:, None], M
+    s = sla.svd(Rs, compute_uv=False, check_finite=False)
+    rank = int(np.sum(s > tol * s[0])) if s[0] > 0 else 0
+    if rank == M:
+        return sla.solve_triangular(Rs, QtY, lower=False, check_finite=False) / norms[:, None], M
+    return _truncated_solve(Rs * norms, QtY, rank), rank
 
 
 @_solver
-def qr(X, Y, tol):
+def qr(X, Y, tol, norms):
     """Least squares by LAPACK Householder QR (``dgeqrf``, blocked) and ``dormqr`` for ``Q^T Y``.
 
     Q is never formed; all output channels are solved with the one factorisation. ``X`` (the
@@ -133,11 +148,11 @@ def qr(X, Y, tol):
     if info != 0:  # pragma: no cover
         raise RuntimeError(f"dormqr failed with info={info}")
     R = np.triu(qr_a[:M, :M])
-    return _solve_triangular_checked(R, QtY[:M], tol, "qr")
+    return _finish_triangular(R, QtY[:M], tol, norms)
 
 
 @_solver
-def householder(X, Y, tol):
+def householder(X, Y, tol, norms):
     """Least squares by explicit Householder reflections on ``[X | Y]`` (Algorithm C.8)."""
     N, M = X.shape
     A = np.hstack([X, Y])
@@ -152,7 +167,7 @@ def householder(X, Y, tol):
         beta = 1.0 / (s * (s + abs(col[0])))
         A[j:, j:] -= np.outer(v, beta * (v @ A[j:, j:]))
     R = np.triu(A[:M, :M])
-    return _solve_triangular_checked(R, A[:M, M:], tol, "householder")
+    return _finish_triangular(R, A[:M, M:], tol, norms)
 
 
 def _gram_schmidt_to_r(W_norms_sq, Amat, g):
@@ -162,7 +177,7 @@ def _gram_schmidt_to_r(W_norms_sq, Amat, g):
 
 
 @_solver
-def mgs(X, Y, tol):
+def mgs(X, Y, tol, norms):
     """Least squares by modified Gram-Schmidt orthogonalisation (Algorithms C.5 and C.6)."""
     N, M = X.shape
     Xk = X.copy()
@@ -181,11 +196,11 @@ def mgs(X, Y, tol):
         g[k] = (w @ Yk) / d[k]
         Yk -= np.outer(w, g[k])
     R, QtY = _gram_schmidt_to_r(d, Amat, g)
-    return _solve_triangular_checked(R, QtY, tol, "mgs")
+    return _finish_triangular(R, QtY, tol, norms)
 
 
 @_solver
-def cgs(X, Y, tol):
+def cgs(X, Y, tol, norms):
     """Least squares by classical Gram-Schmidt orthogonalisation (Algorithm C.4, eq. C-17/C-18).
 
     Plain classical Gram-Schmidt loses orthogonality in proportion to the condition number
@@ -214,19 +229,21 @@ def cgs(X, Y, tol):
     live = d > 0
     g[live] = (W[:, live].T @ Y) / d[live, None]
     R, QtY = _gram_schmidt_to_r(d, Amat, g)
-    return _solve_triangular_checked(R, QtY, tol, "cgs")
+    return _finish_triangular(R, QtY, tol, norms)
 
 
 @_solver
-def svd(X, Y, tol):
+def svd(X, Y, tol, norms):
     """Minimum-norm least squares by the SVD pseudo-inverse (eq. C-3 to C-7; LAPACK gelsd).
 
-    Singular values below ``rcond * s_max`` are treated as zero (eq. C-5).
+    Singular values below ``rcond * s_max`` of the column-scaled matrix are treated as zero
+    (eq. C-5); with a rank deficiency the minimum-norm solution of the original problem is
+    computed from the SVD of the unscaled matrix truncated at that rank.
     """
     coef, _res, rank, _s = sla.lstsq(X, Y, cond=tol, lapack_driver="gelsd", check_finite=False)
-    if rank < X.shape[1]:
-        _warn_rank(int(rank), X.shape[1], "svd")
-    return coef
+    if rank == X.shape[1]:
+        return coef / norms[:, None], int(rank)
+    return _truncated_solve(X * norms, Y, int(rank)), int(rank)
 
 
 # normal equations lose about log10(cond(X^T X)) digits; warn beyond half the available precision
@@ -234,34 +251,42 @@ _NORMAL_WARN_COND = 1.0 / np.sqrt(_EPS)
 
 
 @_solver
-def normal(X, Y, tol):
+def normal(X, Y, tol, norms):
     """Least squares by the normal equations ``X^T X theta = X^T Y`` (eq. 5-17), Cholesky.
 
     Squares the condition number: warns with :class:`IllConditionedWarning` when
-    cond(X^T X) > 1/sqrt(eps) (more than half the digits lost) and falls back to a minimum-norm
-    eigen-solution when X^T X is not numerically positive definite.
+    cond(X^T X) > 1/sqrt(eps) (more than half the digits lost). When X^T X is not numerically
+    positive definite, its eigenvalues below ``rcond`` times the largest are treated as zero
+    (the rank the normal equations can resolve) and the minimum-norm solution is returned.
     """
     G = X.T @ X
     b = X.T @ Y
+    M = X.shape[1]
+    rc = 0.0
     try:
         c, lower = sla.cho_factor(G, lower=False, check_finite=False)
-        rc, info = lapack.dpocon(c, 1.0 * np.abs(G).sum(axis=0).max())
-        if info == 0 and rc > 0 and 1.0 / rc > _NORMAL_WARN_COND:
-            warnings.warn(
-                f"normal: X^T X is ill-conditioned (estimated condition {1.0 / rc:.2e}); "
-                "the solution may have lost most of its digits. Use solver='qr'.",
-                IllConditionedWarning,
-                stacklevel=3,
-            )
-        if info == 0 and rc > _EPS:
-            return sla.cho_solve((c, lower), b, check_finite=False)
+        rc, info = lapack.dpocon(c, np.abs(G).sum(axis=0).max())
+        if info != 0:  # pragma: no cover
+            rc = 0.0
     except np.linalg.LinAlgError:
         pass
-    w, V = np.linalg.eigh(G)
-    keep = w > tol * tol * w.max()
-    if keep.sum() < X.shape[1]:
-        _warn_rank(int(keep.sum()), X.shape[1], "normal")
-    return V[:, keep] @ ((V[:, keep].T @ b) / w[keep, None])
+    if rc == 0.0 or 1.0 / rc > _NORMAL_WARN_COND:
+        cond = "> 1e16" if rc <= _EPS else f"{1.0 / rc:.2e}"
+        warnings.warn(
+            f"normal: X^T X is ill-conditioned (estimated condition {cond}); the solution may "
+            "have lost most of its digits. Use solver='qr'.",
+            IllConditionedWarning,
+            stacklevel=3,
+        )
+    if rc > _EPS:
+        return sla.cho_solve((c, lower), b, check_finite=False) / norms[:, None], M
+    w = np.linalg.eigvalsh(G)
+    rank = int(np.sum(w > tol * w.max()))
+    Gd = G * np.outer(norms, norms)  # X^T X of the unscaled problem
+    wd, V = np.linalg.eigh(Gd)
+    keep = np.argsort(wd)[::-1][:rank]
+    V = V[:, keep]
+    return V @ ((V.T @ (b * norms[:, None])) / wd[keep, None]), rank
 
 
 SOLVERS = {
