@@ -22,7 +22,8 @@ class OrderScan:
     ----------
     orders : ndarray (n_orders,)
     errors : ndarray (n_orders, ny)
-        Free-run η0 [%] (eq. 5-28) per order and output channel; ``inf`` where the model's free
+        Free-run η0 [%] (eq. 5-28) per order and output channel, the free run started from the
+        record's own first ``order`` outputs and scored after them; ``inf`` where the model's free
         run diverged (see ``diverged``) or the record was too short for that order.
     diverged : ndarray of bool (n_orders, ny)
     n_terms : ndarray (n_orders,)
@@ -89,13 +90,16 @@ def order_scan(u, y, orders, *, degree: int = 1, validation=None, solver="qr", k
         except InsufficientDataError:
             continue
         n_terms[i] = model.n_terms_[0]
+        p = model.max_lag_
+        y0 = yv[:p]  # the record's own initial outputs: no start-up transient
         try:
-            errors[i] = metrics.qantim_fit_dc(yv, model.simulate(uv))
+            errors[i] = metrics.qantim_fit_dc(yv[p:], model.simulate(uv, y0=y0)[p:])
         except SimulationDivergedError as exc:
             diverged[i, :] = True
             # the other channels are still scored without the diverging one's feedback bound
             try:
-                errors[i] = metrics.qantim_fit_dc(yv, model.simulate(uv, bound=np.inf))
+                sim = model.simulate(uv, y0=y0, bound=np.inf)
+                errors[i] = metrics.qantim_fit_dc(yv[p:], sim[p:])
                 diverged[i, :] = False
                 diverged[i, exc.channel] = True
                 errors[i, exc.channel] = np.inf

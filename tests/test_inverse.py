@@ -1,0 +1,95 @@
+"""Inverse models and delay estimation (Section 1.6; lead for rig delay)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from scipy import signal
+
+from identification import (
+    Arx,
+    IdentificationError,
+    InverseModel,
+    Narx,
+    band_limited_noise,
+    estimate_delay,
+    metrics,
+)
+
+# minimum-phase G(q) = B(q)/A(q): zeros at 0.5 and -0.3, poles 0.9 e^{±0.6j}
+B = np.poly([0.5, -0.3]) * 0.4
+A = np.real(np.poly([0.9 * np.exp(0.6j), 0.9 * np.exp(-0.6j)]))
+DELAY = 3
+
+
+def _plant(u):
+    return signal.lfilter(np.concatenate([np.zeros(DELAY), B]), A, u, axis=0)
+
+
+def test_estimate_delay_finds_pure_delay():
+    u = band_limited_noise(5000, 1, cutoff=0.6, seed=1)
+    assert estimate_delay(u, _plant(u)) == DELAY
+
+
+def test_estimate_delay_mimo_takes_earliest_pair():
+    u = band_limited_noise(5000, 2, cutoff=0.6, seed=2)
+    y = np.column_stack([
+        signal.lfilter([0, 0, 0, 0, 1.0], [1, -0.5], u[:, 0]) + signal.lfilter([0, 0, 1.0], [1], u[:, 1]),
+        signal.lfilter([0, 0, 0, 0, 0, 1.0], [1], u[:, 1]),
+    ])
+    assert estimate_delay(u, y) == 2
+
+
+# noise-free data and a model order above the plant's: a rank-deficient regression is expected
+@pytest.mark.filterwarnings("ignore::identification.errors.RankDeficiencyWarning")
+def test_inverse_arx_recovers_the_drive_of_a_minimum_phase_system_with_delay():
+    drive_id = band_limited_noise(6000, 1, cutoff=0.5, seed=3)
+    inv = InverseModel(Arx(order=4), lead="auto").fit(drive_id, _plant(drive_id))
+    assert inv.lead_ == DELAY
+    drive = band_limited_noise(4000, 1, cutoff=0.4, seed=4)
+    recovered = inv.simulate(_plant(drive))
+    assert recovered.shape == drive.shape
+    assert metrics.qantim_fit_dc(drive, recovered)[0] < 1.0
+
+
+def test_without_the_lead_the_inverse_cannot_reproduce_the_drive():
+    drive_id = band_limited_noise(6000, 1, cutoff=0.5, seed=3)
+    inv = InverseModel(Arx(order=4), lead=0).fit(drive_id, _plant(drive_id))
+    drive = band_limited_noise(4000, 1, cutoff=0.4, seed=4)
+    try:
+        err = metrics.qantim_fit_dc(drive, inv.simulate(_plant(drive), bound=np.inf))[0]
+    except ArithmeticError:
+        err = np.inf
+    assert err > 20.0
+
+
+def _quadratic_plant(u):
+    # y(t) = 0.6 y(t-1) + 0.5 u(t-1) + 0.1 y(t-1)^2: its inverse is the polynomial
+    # u(t) = 2 y(t+1) - 1.2 y(t) - 0.2 y(t)^2, a quadratic NARX with lead 1
+    y = np.zeros(len(u))
+    for t in range(1, len(u)):
+        y[t] = 0.6 * y[t - 1] + 0.5 * u[t - 1] + 0.1 * y[t - 1] ** 2
+    return y
+
+
+@pytest.mark.filterwarnings("ignore::identification.errors.RankDeficiencyWarning")
+def test_inverse_narx_is_exact_when_the_inverse_is_polynomial():
+    drive_id = 0.5 * band_limited_noise(4000, 1, cutoff=0.4, seed=5)[:, 0]
+    inv = InverseModel(Narx(order=2, degree=2), lead="auto").fit(drive_id, _quadratic_plant(drive_id))
+    assert inv.lead_ == 1
+    coef = dict(zip(inv.model.term_names()[0], inv.model.coef_[0], strict=True))
+    assert coef["u1(t-1)*u1(t-1)"] == pytest.approx(-0.2, abs=1e-9)  # u1 is the response y(t)
+    drive = 0.4 * band_limited_noise(3000, 1, cutoff=0.3, seed=6)[:, 0]
+    recovered = inv.simulate(_quadratic_plant(drive))[:, 0]
+    np.testing.assert_allclose(recovered[:-1], drive[:-1], atol=1e-9)
+
+
+def test_inverse_model_bad_input():
+    with pytest.raises(IdentificationError, match="lead"):
+        InverseModel(Arx(order=2), lead=-1)
+    with pytest.raises(IdentificationError, match="Narx or Arx"):
+        InverseModel("arx")
+    with pytest.raises(IdentificationError, match="not fitted"):
+        InverseModel(Arx(order=2)).simulate(np.ones(10))
+    with pytest.raises(IdentificationError, match="samples"):
+        estimate_delay(np.ones(20), np.ones(20), max_lag=10)
