@@ -42,7 +42,9 @@ def expand_terms(Z, terms, out):  # pragma: no cover - compiled
 
 
 @nb.njit(cache=True, nogil=True)
-def input_coefficients(U, t0, t1, reg_src, reg_lag, parent, factor, e_mono, e_col, e_coef, columns, A):  # pragma: no cover
+def input_coefficients(
+    U, t0, t1, reg_src, reg_lag, parent, factor, e_mono, e_col, e_coef, columns, A
+):  # pragma: no cover
     """Input-dependent coefficients ``A[t - t0, col]`` of the output monomials, t in [t0, t1).
 
     Input regressor r is ``U[t - reg_lag[r], reg_src[r]]``; input monomial i is
@@ -80,7 +82,9 @@ def input_coefficients(U, t0, t1, reg_src, reg_lag, parent, factor, e_mono, e_co
 
 
 @nb.njit(cache=True, nogil=True)
-def free_run(Y, start, stop, A, reg_src, reg_lag, reg_ptr, parent, factor, mono_ptr, bound):  # pragma: no cover
+def free_run(
+    Y, start, stop, A, reg_src, reg_lag, reg_ptr, parent, factor, mono_ptr, bound
+):  # pragma: no cover
     """Free-run recursion of a MIMO polynomial NARX model written as a polynomial in past outputs.
 
     ``Y`` (N, ny) C-ordered: rows ``< start`` hold past outputs; rows ``start .. stop-1`` are

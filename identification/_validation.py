@@ -21,7 +21,9 @@ def as_signal(x, name: str, *, n_channels: int | None = None) -> np.ndarray:
     try:
         a = np.asarray(x, dtype=np.float64)
     except (TypeError, ValueError) as exc:
-        raise IdentificationError(f"{name} must be numeric array-like, got {type(x).__name__}") from exc
+        raise IdentificationError(
+            f"{name} must be numeric array-like, got {type(x).__name__}"
+        ) from exc
     if a.ndim == 1:
         a = a[:, None]
     elif a.ndim != 2:
@@ -63,13 +65,17 @@ def per_channel_int(value, n: int, name: str, *, minimum: int) -> tuple[int, ...
     elif isinstance(value, Sequence | np.ndarray) and not isinstance(value, str):
         values = tuple(value)
         if len(values) != n:
-            raise IdentificationError(f"{name} has {len(values)} values but there are {n} output channels")
+            raise IdentificationError(
+                f"{name} has {len(values)} values but there are {n} output channels"
+            )
         for v in values:
             if not isinstance(v, (int, np.integer)) or isinstance(v, bool):
                 raise IdentificationError(f"{name} values must be integers, got {v!r}")
         values = tuple(int(v) for v in values)
     else:
-        raise IdentificationError(f"{name} must be an int or one int per output channel, got {value!r}")
+        raise IdentificationError(
+            f"{name} must be an int or one int per output channel, got {value!r}"
+        )
     for v in values:
         if v < minimum:
             raise IdentificationError(f"{name} must be >= {minimum}, got {v}")

@@ -29,7 +29,9 @@ class ErrorSignalModel:
         self.nonlinear = Narx(order=2, degree=2) if nonlinear is None else nonlinear
         for name, m in (("linear", self.linear), ("nonlinear", self.nonlinear)):
             if not isinstance(m, Narx):
-                raise IdentificationError(f"{name} must be an Arx/Narx instance, got {type(m).__name__}")
+                raise IdentificationError(
+                    f"{name} must be an Arx/Narx instance, got {type(m).__name__}"
+                )
 
     def fit(self, u, y):
         u = as_signal(u, "u")

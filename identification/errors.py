@@ -4,9 +4,9 @@ from __future__ import annotations
 
 __all__ = [
     "IdentificationError",
+    "IllConditionedWarning",
     "InsufficientDataError",
     "RankDeficiencyWarning",
-    "IllConditionedWarning",
     "SimulationDivergedError",
 ]
 
@@ -50,10 +50,11 @@ class SimulationDivergedError(ArithmeticError):
         self.sample = int(sample)
         self.value = float(value)
         self.bound = float(bound)
+        what = "not finite" if not _isfinite(self.value) else f"beyond the bound {self.bound:.6g}"
         super().__init__(
             f"free-run simulation diverged on output channel {self.channel} "
             f"({self.channel_name!r}) at sample {self.sample}: value {self.value:.6g} "
-            f"is {'not finite' if not _isfinite(self.value) else f'beyond the bound {self.bound:.6g}'}. "
+            f"is {what}. "
             "The model is unstable for this input: check the input amplitude against the "
             "identification data, lower the model order/degree, or raise `bound` if the growth "
             "is genuine."

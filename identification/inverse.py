@@ -88,9 +88,13 @@ class InverseModel:
 
     def __init__(self, model: Narx, *, lead: int | str = 0, max_lead: int = 32):
         if not isinstance(model, Narx):
-            raise IdentificationError(f"model must be a Narx or Arx instance, got {type(model).__name__}")
+            raise IdentificationError(
+                f"model must be a Narx or Arx instance, got {type(model).__name__}"
+            )
         if lead != "auto" and (not isinstance(lead, (int, np.integer)) or lead < 0):
-            raise IdentificationError(f"lead must be a non-negative integer or 'auto', got {lead!r}")
+            raise IdentificationError(
+                f"lead must be a non-negative integer or 'auto', got {lead!r}"
+            )
         self.model = model
         self.lead = lead
         self.max_lead = max_lead
@@ -120,7 +124,9 @@ class InverseModel:
         computed with zero response beyond the record's end.
         """
         if not hasattr(self, "lead_"):
-            raise IdentificationError("this InverseModel is not fitted yet; call fit(drive, response)")
+            raise IdentificationError(
+                "this InverseModel is not fitted yet; call fit(drive, response)"
+            )
         r = as_signal(response, "response", n_channels=self.model.n_inputs_)
         shifted = np.zeros_like(r)
         shifted[: r.shape[0] - self.lead_] = r[self.lead_ :]

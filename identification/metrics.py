@@ -41,7 +41,9 @@ def _pair(y, yhat):
             f"reference and estimate must have the same shape, got {y.shape} and {yhat.shape}"
         )
     if y.ndim not in (1, 2) or y.shape[0] == 0:
-        raise IdentificationError(f"records must be (N,) or (N, channels) with N > 0, got {y.shape}")
+        raise IdentificationError(
+            f"records must be (N,) or (N, channels) with N > 0, got {y.shape}"
+        )
     if not (np.all(np.isfinite(y)) and np.all(np.isfinite(yhat))):
         raise IdentificationError("records contain NaN or inf")
     return y, yhat
@@ -77,8 +79,9 @@ def rms_error_percent(y, yhat):
     y, yhat = _pair(y, yhat)
     y0 = y - y.mean(axis=0)
     e0 = y0 - (yhat - yhat.mean(axis=0))
-    return 100.0 * _ratio(np.sqrt((e0**2).mean(axis=0)), np.sqrt((y0**2).mean(axis=0)),
-                          "rms_error_percent")
+    return 100.0 * _ratio(
+        np.sqrt((e0**2).mean(axis=0)), np.sqrt((y0**2).mean(axis=0)), "rms_error_percent"
+    )
 
 
 def rmse(y, yhat):
@@ -102,8 +105,9 @@ def nrmse(y, yhat, *, norm: str = "std"):
 def rrse(y, yhat):
     """Root relative squared error ``sqrt(sum (y - yhat)^2 / sum (y - mean y)^2)``."""
     y, yhat = _pair(y, yhat)
-    return np.sqrt(_ratio(((y - yhat) ** 2).sum(axis=0), ((y - y.mean(axis=0)) ** 2).sum(axis=0),
-                          "rrse"))
+    return np.sqrt(
+        _ratio(((y - yhat) ** 2).sum(axis=0), ((y - y.mean(axis=0)) ** 2).sum(axis=0), "rrse")
+    )
 
 
 def fit_percent(y, yhat):

@@ -204,7 +204,8 @@ class Narx:
         for k, ch in enumerate(channels):
             if rows < ch.n_terms:
                 raise InsufficientDataError(
-                    f"output channel {k}: {ch.n_terms} terms but only {max(rows, 0)} usable samples "
+                    f"output channel {k}: {ch.n_terms} terms but only {max(rows, 0)} usable "
+                    "samples "
                     f"({N} samples minus the largest lag {start}). Provide at least "
                     f"{ch.n_terms + start} samples, or lower the order/degree."
                 )
@@ -229,7 +230,9 @@ class Narx:
                     coefs[k] = np.ascontiguousarray(coef[:, j])
                 continue
             for k in g:
-                sel = forward_regression(X, y[start:, k], n_terms=self.n_terms, err_tol=self.err_tol)
+                sel = forward_regression(
+                    X, y[start:, k], n_terms=self.n_terms, err_tol=self.err_tol
+                )
                 idx = sel.selected
                 coefs[k] = np.ascontiguousarray(solve(X[:, idx], y[start:, k], rcond=self.rcond))
                 errs[k] = sel.err
@@ -253,7 +256,9 @@ class Narx:
     # ------------------------------------------------------------------ use
     def _check_fitted(self):
         if not hasattr(self, "coef_"):
-            raise IdentificationError(f"this {type(self).__name__} is not fitted yet; call fit(u, y)")
+            raise IdentificationError(
+                f"this {type(self).__name__} is not fitted yet; call fit(u, y)"
+            )
 
     @property
     def plan_(self):
@@ -377,7 +382,9 @@ class Narx:
         self._check_fitted()
         path = Path(path)
         if path.suffix != ".npz":
-            path = path.with_suffix(path.suffix + ".npz") if path.suffix else path.with_suffix(".npz")
+            path = (
+                path.with_suffix(path.suffix + ".npz") if path.suffix else path.with_suffix(".npz")
+            )
         meta = {
             "format": "vrig-identification-model",
             "version": _FORMAT_VERSION,
@@ -451,11 +458,33 @@ class Arx(Narx):
     Adds :meth:`to_statespace`, the MIMO discrete state-space form of eq. 4-14.
     """
 
-    def __init__(self, order=None, *, na=None, nb=None, nk=None, constant: bool = False,
-                 solver="qr", rcond=None, n_terms=None, err_tol=None, bound_factor: float = 1e3):
+    def __init__(
+        self,
+        order=None,
+        *,
+        na=None,
+        nb=None,
+        nk=None,
+        constant: bool = False,
+        solver="qr",
+        rcond=None,
+        n_terms=None,
+        err_tol=None,
+        bound_factor: float = 1e3,
+    ):
         super().__init__(
-            order, 1, na=na, nb=nb, nk=nk, kind="full", constant=constant, solver=solver,
-            rcond=rcond, n_terms=n_terms, err_tol=err_tol, bound_factor=bound_factor,
+            order,
+            1,
+            na=na,
+            nb=nb,
+            nk=nk,
+            kind="full",
+            constant=constant,
+            solver=solver,
+            rcond=rcond,
+            n_terms=n_terms,
+            err_tol=err_tol,
+            bound_factor=bound_factor,
         )
 
     def to_statespace(self, dt: float = 1.0):
@@ -494,6 +523,11 @@ class Arx(Narx):
             B[p * ny : p * ny + nu] = np.eye(nu)
             A[p * ny + nu :, p * ny : p * ny + (p - 1) * nu] = np.eye((p - 1) * nu)
         return control.ss(
-            A, B, C, D, dt,
-            inputs=list(self.input_names_), outputs=list(self.output_names_),
+            A,
+            B,
+            C,
+            D,
+            dt,
+            inputs=list(self.input_names_),
+            outputs=list(self.output_names_),
         )

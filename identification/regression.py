@@ -15,7 +15,9 @@ from .structure import ChannelStructure
 __all__ = ["lagged_regressors", "regression_matrix"]
 
 
-def lagged_regressors(u: np.ndarray, y: np.ndarray, regressors: np.ndarray, start: int) -> np.ndarray:
+def lagged_regressors(
+    u: np.ndarray, y: np.ndarray, regressors: np.ndarray, start: int
+) -> np.ndarray:
     """Return ``Z`` (N - start, R + 1), Fortran-ordered: a column of ones, then each regressor.
 
     Row ``i`` corresponds to time ``t = start + i``; regressor (source, lag) is

@@ -5,10 +5,12 @@ alone can be computed for a whole block of samples with array operations. Each c
 is therefore rewritten once (:func:`compile_plan`) as a polynomial in its output regressors whose
 coefficients are polynomials in its input regressors::
 
-    y_k(t) = sum_j a_kj(t) * m_kj(y(t-1), ..., y(t-n)),     a_kj(t) = sum_i W_k[i, j] * p_i(u(t), ...)
+    y_k(t) = sum_j a_kj(t) * m_kj(y(t-1), ..., y(t-n))
+    a_kj(t) = sum_i W_k[i, j] * p_i(u(t), u(t-1), ...)
 
 The input monomials ``p_i`` and the coefficients ``a_kj(t)`` are computed per block of samples
-by a kernel whose loops run along time (vectorised), and the compiled recursion (:func:`~identification._kernels.free_run`) costs
+by a kernel whose loops run along time (vectorised), and the compiled recursion
+(:func:`~identification._kernels.free_run`) costs
 one multiplication and one multiply-add per distinct output monomial and sample. For the SISO
 cubic model with 4 output and 5 input lags, 220 terms collapse to 35 output monomials.
 """
@@ -187,12 +189,31 @@ def simulate_plan(
         t1 = min(t0 + block, total)
         for part in plan.input_parts:
             input_coefficients(
-                U, t0, t1, part.reg_src, part.reg_lag, part.parent, part.factor, part.e_mono,
-                part.e_col, part.e_coef, part.columns, A,
+                U,
+                t0,
+                t1,
+                part.reg_src,
+                part.reg_lag,
+                part.parent,
+                part.factor,
+                part.e_mono,
+                part.e_col,
+                part.e_coef,
+                part.columns,
+                A,
             )
         k, t = free_run(
-            Y, t0, t1, A, plan.reg_src, plan.reg_lag, plan.reg_ptr, plan.parent, plan.factor,
-            plan.mono_ptr, bound,
+            Y,
+            t0,
+            t1,
+            A,
+            plan.reg_src,
+            plan.reg_lag,
+            plan.reg_ptr,
+            plan.parent,
+            plan.factor,
+            plan.mono_ptr,
+            bound,
         )
         if k >= 0:
             raise SimulationDivergedError(k, output_names[k], t - offset, Y[t, k], bound[k])

@@ -154,7 +154,7 @@ def qr(X, Y, tol, norms):
 @_solver
 def householder(X, Y, tol, norms):
     """Least squares by explicit Householder reflections on ``[X | Y]`` (Algorithm C.8)."""
-    N, M = X.shape
+    M = X.shape[1]
     A = np.hstack([X, Y])
     for j in range(M):
         col = A[j:, j]
@@ -179,7 +179,7 @@ def _gram_schmidt_to_r(W_norms_sq, Amat, g):
 @_solver
 def mgs(X, Y, tol, norms):
     """Least squares by modified Gram-Schmidt orthogonalisation (Algorithms C.5 and C.6)."""
-    N, M = X.shape
+    M = X.shape[1]
     Xk = X.copy()
     Yk = Y.copy()
     Amat = np.eye(M)
@@ -208,7 +208,7 @@ def cgs(X, Y, tol, norms):
     twice ("twice is enough", CGS2: Giraud, Langou & Rozloznik 2005), which makes it as accurate
     as modified Gram-Schmidt while keeping the classical, matrix-vector form of Algorithm C.4.
     """
-    N, M = X.shape
+    M = X.shape[1]
     W = np.empty_like(X)
     Amat = np.eye(M)
     d = np.zeros(M)

@@ -89,7 +89,7 @@ class ChannelStructure:
         return int(self.regressors[:, 1].max()) if self.regressors.size else 0
 
     def same_as(self, other: ChannelStructure) -> bool:
-        """True when both channels have identical regressors and terms (shared regression matrix)."""
+        """True when both channels have identical regressors and terms (one shared matrix)."""
         return np.array_equal(self.regressors, other.regressors) and np.array_equal(
             self.terms, other.terms
         )

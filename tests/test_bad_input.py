@@ -23,7 +23,9 @@ def data():
 def test_nan_in_input(data):
     u, y = data
     u[17, 1] = np.nan
-    with pytest.raises(IdentificationError, match=r"u contains NaN or inf \(first at sample 17, channel 1\)"):
+    with pytest.raises(
+        IdentificationError, match=r"u contains NaN or inf \(first at sample 17, channel 1\)"
+    ):
         Narx(order=2).fit(u, y)
 
 
@@ -42,7 +44,7 @@ def test_mismatched_lengths(data):
 
 def test_three_dimensional_input(data):
     u, y = data
-    with pytest.raises(IdentificationError, match="1-D .* or 2-D"):
+    with pytest.raises(IdentificationError, match=r"1-D .* or 2-D"):
         Narx(order=2).fit(u[:, :, None], y)
 
 

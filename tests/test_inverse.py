@@ -33,10 +33,13 @@ def test_estimate_delay_finds_pure_delay():
 
 def test_estimate_delay_mimo_takes_earliest_pair():
     u = band_limited_noise(5000, 2, cutoff=0.6, seed=2)
-    y = np.column_stack([
-        signal.lfilter([0, 0, 0, 0, 1.0], [1, -0.5], u[:, 0]) + signal.lfilter([0, 0, 1.0], [1], u[:, 1]),
-        signal.lfilter([0, 0, 0, 0, 0, 1.0], [1], u[:, 1]),
-    ])
+    y = np.column_stack(
+        [
+            signal.lfilter([0, 0, 0, 0, 1.0], [1, -0.5], u[:, 0])
+            + signal.lfilter([0, 0, 1.0], [1], u[:, 1]),
+            signal.lfilter([0, 0, 0, 0, 0, 1.0], [1], u[:, 1]),
+        ]
+    )
     assert estimate_delay(u, y) == 2
 
 
@@ -75,7 +78,9 @@ def _quadratic_plant(u):
 @pytest.mark.filterwarnings("ignore::identification.errors.RankDeficiencyWarning")
 def test_inverse_narx_is_exact_when_the_inverse_is_polynomial():
     drive_id = 0.5 * band_limited_noise(4000, 1, cutoff=0.4, seed=5)[:, 0]
-    inv = InverseModel(Narx(order=2, degree=2), lead="auto").fit(drive_id, _quadratic_plant(drive_id))
+    inv = InverseModel(Narx(order=2, degree=2), lead="auto").fit(
+        drive_id, _quadratic_plant(drive_id)
+    )
     assert inv.lead_ == 1
     coef = dict(zip(inv.model.term_names()[0], inv.model.coef_[0], strict=True))
     assert coef["u1(t-1)*u1(t-1)"] == pytest.approx(-0.2, abs=1e-9)  # u1 is the response y(t)

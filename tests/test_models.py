@@ -24,7 +24,8 @@ STABLE = ["qr", "householder", "mgs", "cgs", "svd"]
 
 def _max_rel_coef_error(fitted, truth):
     return max(
-        np.max(np.abs(a - b)) / np.max(np.abs(b)) for a, b in zip(fitted.coef_, truth.coef_, strict=True)
+        np.max(np.abs(a - b)) / np.max(np.abs(b))
+        for a, b in zip(fitted.coef_, truth.coef_, strict=True)
     )
 
 
@@ -60,8 +61,14 @@ def test_free_run_with_initial_conditions_matches_recursion_written_out():
     y = np.zeros(N)
     y[:2] = [0.3, -0.1]
     for t in range(2, N):
-        y[t] = (0.5 * y[t - 1] - 0.2 * y[t - 2] + u[t] + 0.3 * u[t - 1]
-                + 0.1 * y[t - 1] ** 2 - 0.05 * u[t] * y[t - 1])
+        y[t] = (
+            0.5 * y[t - 1]
+            - 0.2 * y[t - 2]
+            + u[t]
+            + 0.3 * u[t - 1]
+            + 0.1 * y[t - 1] ** 2
+            - 0.05 * u[t] * y[t - 1]
+        )
     m = Narx(na=2, nb=2, nk=0, degree=2).fit(u, y)
     np.testing.assert_allclose(m.simulate(u, y0=y[:2]), y[:, None], atol=1e-10)
     names = m.term_names()[0]
@@ -85,8 +92,10 @@ def test_non_square_systems(ny, nu):
 def test_per_channel_orders_and_degrees():
     truth = random_narx(2, 1, [1, 3], [2, 1], seed=21)
     assert truth.n_terms_.tolist() == [
-        # channel 1: order 1, quadratic: R = 2*1 + 1*2 = 4 -> C(6, 2) - 1; channel 2: order 3, linear
-        14, 2 * 3 + 1 * 4,
+        # channel 1: order 1, quadratic: R = 2*1 + 1*2 = 4 -> C(6, 2) - 1 = 14
+        # channel 2: order 3, linear: R = 2*3 + 1*4
+        14,
+        2 * 3 + 1 * 4,
     ]
     u = band_limited_noise(2000, 1, cutoff=0.3, seed=22)
     y = truth.simulate(u)
@@ -102,7 +111,12 @@ def test_cross_coupled_outputs_feed_each_other():
     y = np.zeros((N, 2))
     for t in range(1, N):
         y[t, 0] = 0.4 * y[t - 1, 0] + 0.3 * y[t - 1, 1] + u[t, 0]
-        y[t, 1] = -0.2 * y[t - 1, 0] + 0.5 * y[t - 1, 1] + 0.1 * y[t - 1, 0] * y[t - 1, 1] + 0.5 * u[t - 1, 0]
+        y[t, 1] = (
+            -0.2 * y[t - 1, 0]
+            + 0.5 * y[t - 1, 1]
+            + 0.1 * y[t - 1, 0] * y[t - 1, 1]
+            + 0.5 * u[t - 1, 0]
+        )
     m = Narx(order=1, degree=2).fit(u, y)
     np.testing.assert_allclose(m.simulate(u, y0=y[:1]), y, atol=1e-10)
 
@@ -209,7 +223,14 @@ def test_purely_quadratic_model_recovers_its_generator():
     u = rng.uniform(-1, 1, N)
     y = np.zeros(N)
     for t in range(1, N):
-        y[t] = 0.1 + 0.6 * y[t - 1] + 0.5 * u[t] - 0.2 * u[t - 1] + 0.3 * u[t - 1] ** 2 - 0.1 * y[t - 1] ** 2
+        y[t] = (
+            0.1
+            + 0.6 * y[t - 1]
+            + 0.5 * u[t]
+            - 0.2 * u[t - 1]
+            + 0.3 * u[t - 1] ** 2
+            - 0.1 * y[t - 1] ** 2
+        )
     m = Narx(order=1, degree=2, kind="pure", constant=True).fit(u, y)
     coef = dict(zip(m.term_names()[0], m.coef_[0], strict=True))
     assert coef["1"] == pytest.approx(0.1, abs=1e-10)
@@ -223,7 +244,14 @@ def test_quasi_static_model_recovers_a_static_nonlinearity():
     u = rng.uniform(-1, 1, (N, 2))
     y = np.zeros(N)
     for t in range(2, N):
-        y[t] = 0.5 * y[t - 1] - 0.1 * y[t - 2] + u[t, 0] + 0.2 * u[t - 1, 1] + 0.4 * u[t, 0] ** 2 - 0.3 * u[t, 1] ** 2
+        y[t] = (
+            0.5 * y[t - 1]
+            - 0.1 * y[t - 2]
+            + u[t, 0]
+            + 0.2 * u[t - 1, 1]
+            + 0.4 * u[t, 0] ** 2
+            - 0.3 * u[t, 1] ** 2
+        )
     m = Narx(order=2, degree=2, kind="quasi-static").fit(u, y)
     coef = dict(zip(m.term_names()[0], m.coef_[0], strict=True))
     assert coef["u1(t)*u1(t)"] == pytest.approx(0.4, abs=1e-10)

@@ -30,8 +30,9 @@ def test_order_scan_marks_a_diverging_order_instead_of_failing():
     for t in range(1, 2200):
         y[t] = 1.05 * y[t - 1] + u[t]
     # the validation output only sets the initial conditions: the free run diverges regardless
-    scan = order_scan(u[:200], y[:200] + 1e-3 * rng.standard_normal(200), [1, 2],
-                      validation=(u[200:], y[200:]))
+    scan = order_scan(
+        u[:200], y[:200] + 1e-3 * rng.standard_normal(200), [1, 2], validation=(u[200:], y[200:])
+    )
     assert scan.diverged.all()
     assert np.all(np.isinf(scan.errors))
     assert "diverged" in scan.table()

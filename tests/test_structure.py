@@ -13,17 +13,43 @@ from identification.structure import full_order_regressors, polynomial_terms
 
 # Appendix E, written out as the reference text lists it (2 inputs, 1 output, order 2, quadratic).
 _LIN = ["y1(t-1)", "y1(t-2)", "u1(t)", "u1(t-1)", "u1(t-2)", "u2(t)", "u2(t-1)", "u2(t-2)"]
-APPENDIX_E = _LIN + [
-    "y1(t-1)*y1(t-1)", "y1(t-1)*y1(t-2)", "y1(t-1)*u1(t)", "y1(t-1)*u1(t-1)", "y1(t-1)*u1(t-2)",
-    "y1(t-1)*u2(t)", "y1(t-1)*u2(t-1)", "y1(t-1)*u2(t-2)",
-    "y1(t-2)*y1(t-2)", "y1(t-2)*u1(t)", "y1(t-2)*u1(t-1)", "y1(t-2)*u1(t-2)", "y1(t-2)*u2(t)",
-    "y1(t-2)*u2(t-1)", "y1(t-2)*u2(t-2)",
-    "u1(t)*u1(t)", "u1(t)*u1(t-1)", "u1(t)*u1(t-2)", "u1(t)*u2(t)", "u1(t)*u2(t-1)",
+APPENDIX_E = [
+    *_LIN,
+    "y1(t-1)*y1(t-1)",
+    "y1(t-1)*y1(t-2)",
+    "y1(t-1)*u1(t)",
+    "y1(t-1)*u1(t-1)",
+    "y1(t-1)*u1(t-2)",
+    "y1(t-1)*u2(t)",
+    "y1(t-1)*u2(t-1)",
+    "y1(t-1)*u2(t-2)",
+    "y1(t-2)*y1(t-2)",
+    "y1(t-2)*u1(t)",
+    "y1(t-2)*u1(t-1)",
+    "y1(t-2)*u1(t-2)",
+    "y1(t-2)*u2(t)",
+    "y1(t-2)*u2(t-1)",
+    "y1(t-2)*u2(t-2)",
+    "u1(t)*u1(t)",
+    "u1(t)*u1(t-1)",
+    "u1(t)*u1(t-2)",
+    "u1(t)*u2(t)",
+    "u1(t)*u2(t-1)",
     "u1(t)*u2(t-2)",
-    "u1(t-1)*u1(t-1)", "u1(t-1)*u1(t-2)", "u1(t-1)*u2(t)", "u1(t-1)*u2(t-1)", "u1(t-1)*u2(t-2)",
-    "u1(t-2)*u1(t-2)", "u1(t-2)*u2(t)", "u1(t-2)*u2(t-1)", "u1(t-2)*u2(t-2)",
-    "u2(t)*u2(t)", "u2(t)*u2(t-1)", "u2(t)*u2(t-2)",
-    "u2(t-1)*u2(t-1)", "u2(t-1)*u2(t-2)",
+    "u1(t-1)*u1(t-1)",
+    "u1(t-1)*u1(t-2)",
+    "u1(t-1)*u2(t)",
+    "u1(t-1)*u2(t-1)",
+    "u1(t-1)*u2(t-2)",
+    "u1(t-2)*u1(t-2)",
+    "u1(t-2)*u2(t)",
+    "u1(t-2)*u2(t-1)",
+    "u1(t-2)*u2(t-2)",
+    "u2(t)*u2(t)",
+    "u2(t)*u2(t-1)",
+    "u2(t)*u2(t-2)",
+    "u2(t-1)*u2(t-1)",
+    "u2(t-1)*u2(t-2)",
     "u2(t-2)*u2(t-2)",
 ]
 
@@ -52,7 +78,9 @@ def _eq_5_10(ny, nu, n, L):
     return R if L == 1 else R + inner(R, 2)
 
 
-@pytest.mark.parametrize("ny,nu,n,L", list(itertools.product([1, 2, 3], [0, 1, 2], [0, 1, 2, 4], [1, 2, 3, 4])))
+@pytest.mark.parametrize(
+    "ny,nu,n,L", list(itertools.product([1, 2, 3], [0, 1, 2], [0, 1, 2, 4], [1, 2, 3, 4]))
+)
 def test_term_count_matches_eq_5_10_and_combinatorics(ny, nu, n, L):
     R = ny * n + nu * (n + 1)
     expected = math.comb(R + L, L) - 1
@@ -76,8 +104,18 @@ def test_term_count_rejects_bad_arguments():
 def test_full_order_regressors_eq_4_15():
     regs = full_order_regressors(ny=2, nu=1, order=3)
     # na = n for every output (lags 1..n); nb = n + 1 terms for every input (lags 0..n), nk = 0
-    assert regs.tolist() == [[0, 1], [0, 2], [0, 3], [1, 1], [1, 2], [1, 3],
-                             [2, 0], [2, 1], [2, 2], [2, 3]]
+    assert regs.tolist() == [
+        [0, 1],
+        [0, 2],
+        [0, 3],
+        [1, 1],
+        [1, 2],
+        [1, 3],
+        [2, 0],
+        [2, 1],
+        [2, 2],
+        [2, 3],
+    ]
 
 
 def test_any_degree_is_supported():
