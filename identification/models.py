@@ -249,7 +249,8 @@ class Narx:
         self.output_names_ = _names(output_names, ny, "y", "output_names")
         scale = np.max(np.abs(y), axis=0)
         self.bound_ = self.bound_factor * np.where(scale > 0, scale, 1.0)
-        self._plan = None
+        # compile the free-run plan now: simulate() then pays only for the recursion
+        self._plan = compile_plan(self.channels_, self.coef_, ny, nu)
         self.fit_time_ = time.perf_counter() - t0
         return self
 
