@@ -11,7 +11,7 @@ import numpy as np
 __all__ = ["expand_terms", "free_run", "input_coefficients"]
 
 
-@nb.njit(cache=True, parallel=True, nogil=True)
+@nb.njit(cache=True, nogil=True)
 def expand_terms(Z, terms, out):  # pragma: no cover - compiled
     """Fill ``out[:, m]`` with the product of the columns ``Z[:, terms[m, :]]``.
 
@@ -22,7 +22,7 @@ def expand_terms(Z, terms, out):  # pragma: no cover - compiled
     rows = Z.shape[0]
     M = terms.shape[0]
     L = terms.shape[1]
-    for m in nb.prange(M):
+    for m in range(M):
         first = -1
         for f in range(L):
             if terms[m, f] != 0:

@@ -325,8 +325,11 @@ class Narx:
         if u.shape[0] <= p:
             raise IdentificationError(f"need more than max_lag_ = {p} samples to predict")
         out = y.copy()
+        X, shared_with = None, None
         for k, ch in enumerate(self.channels_):
-            out[p:, k] = regression_matrix(u, y, ch, p) @ self.coef_[k]
+            if shared_with is None or not ch.same_as(shared_with):
+                X, shared_with = regression_matrix(u, y, ch, p), ch  # reuse for equal structures
+            out[p:, k] = X @ self.coef_[k]
         return out
 
     def term_names(self) -> list[list[str]]:

@@ -45,12 +45,17 @@ def _frols(W, y, n_max, err_tol):  # pragma: no cover - compiled
     sigma = 0.0
     for i in range(N):
         sigma += y[i] * y[i]
-    norms0 = np.empty(M)
+    d = np.empty(M)  # squared norm of each candidate, orthogonalised against the chosen ones
+    g = np.empty(M)  # its projection on y
     for j in range(M):
-        s = 0.0
+        dj = 0.0
+        gj = 0.0
         for i in range(N):
-            s += W[i, j] * W[i, j]
-        norms0[j] = s
+            dj += W[i, j] * W[i, j]
+            gj += W[i, j] * y[i]
+        d[j] = dj
+        g[j] = gj
+    floor = 1e-24 * d  # below this a candidate is numerically dependent on the chosen terms
     chosen = np.zeros(M, dtype=np.bool_)
     selected = np.empty(n_max, dtype=np.int64)
     errs = np.empty(n_max)
@@ -60,16 +65,9 @@ def _frols(W, y, n_max, err_tol):  # pragma: no cover - compiled
         best = -1
         best_err = -1.0
         for j in range(M):
-            if chosen[j]:
+            if chosen[j] or d[j] <= floor[j] or d[j] == 0.0:
                 continue
-            d = 0.0
-            g = 0.0
-            for i in range(N):
-                d += W[i, j] * W[i, j]
-                g += W[i, j] * y[i]
-            if d <= 1e-24 * norms0[j] or d == 0.0:
-                continue  # numerically dependent on the chosen terms
-            e = g * g / (d * sigma)
+            e = g[j] * g[j] / (d[j] * sigma)
             if e > best_err:
                 best_err = e
                 best = j
@@ -80,11 +78,11 @@ def _frols(W, y, n_max, err_tol):  # pragma: no cover - compiled
         errs[count] = best_err
         count += 1
         total += best_err
-        if 1.0 - total < err_tol:
+        if 1.0 - total < err_tol or count == n_max:
             break
-        dw = 0.0
-        for i in range(N):
-            dw += W[i, best] * W[i, best]
+        dw = d[best]
+        # modified Gram-Schmidt step; the new norms and projections are accumulated in the same
+        # pass that updates each column
         for j in range(M):
             if chosen[j]:
                 continue
@@ -92,8 +90,15 @@ def _frols(W, y, n_max, err_tol):  # pragma: no cover - compiled
             for i in range(N):
                 a += W[i, best] * W[i, j]
             a /= dw
+            dj = 0.0
+            gj = 0.0
             for i in range(N):
-                W[i, j] -= a * W[i, best]
+                v = W[i, j] - a * W[i, best]
+                W[i, j] = v
+                dj += v * v
+                gj += v * y[i]
+            d[j] = dj
+            g[j] = gj
     return selected[:count], errs[:count]
 
 

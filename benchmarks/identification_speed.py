@@ -1,0 +1,413 @@
+"""Identification speed of vrig's ``identification`` package, compared with SysIdentPy 0.9.0.
+
+Run from the repository root::
+
+    python -m benchmarks.identification_speed            # problems A and B
+    python -m benchmarks.identification_speed --quick    # problem A only, fewer repetitions
+
+Problem A (SISO cubic NARX, the classic SysIdentPy example)
+    ``y(t) = 0.2 y(t-1) + 0.1 y(t-1) x(t-1) + 0.9 x(t-2) + e(t)``, ``x ~ U(-1, 1)``,
+    ``e ~ N(0, 0.001^2)``; 10,000 identification and 3,000 validation samples. Candidate
+    structure: 4 output lags, 5 input lags (1..5), degree 3, constant: 220 terms, all of them
+    used by both libraries. Measured: fit time of vrig (every solver, and FROLS ordering all 220
+    terms) and of SysIdentPy ``FROLS`` + ``LeastSquares``, the speed-up, free-run simulation
+    throughput and the free-run accuracy (RRSE) of both models on the validation record.
+
+Problem B (7 x 7 quadratic inverse NARX of order 4)
+    A random stable 7-input, 7-output quadratic NARX system is driven by band-limited noise for
+    20,000 samples; its noisy response is the input and its drive the output of a full-order
+    ``Narx(order=4, degree=2)`` inverse model (2,079 terms per channel, one shared QR
+    factorisation). Measured: fit time, and one bare ``numpy.linalg.qr(X, mode="r")`` of the
+    20,000 x 2,079 regression matrix for reference.
+
+Both libraries see the same data in the same process. Each time is the minimum wall-clock
+time of at least ``--repeats`` calls (more for sub-second operations, until 2 s have been spent),
+after a warm-up call that loads the compiled numba kernels. The table is printed and written as
+JSON to ``results/identification_speed.json``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import datetime
+import json
+import math
+import os
+import platform
+import sys
+import time
+import warnings
+from collections.abc import Callable
+from dataclasses import asdict, dataclass
+from pathlib import Path
+from typing import Any, TypeVar
+
+import numba
+import numpy as np
+import scipy
+
+from identification import Narx, band_limited_noise, metrics, random_narx, regression_matrix
+from identification.solvers import SOLVERS
+
+T = TypeVar("T")
+
+RESULTS_PATH = Path(__file__).resolve().parent.parent / "results" / "identification_speed.json"
+SKIP_SYSIDENTPY = "skipped: sysidentpy not installed (pip install -e .[bench])"
+
+# Problem A: SISO cubic NARX
+A_N_ID, A_N_VAL, A_N_SIM = 10_000, 3_000, 1_000_000
+A_NOISE_STD = 1e-3
+A_YLAG, A_XLAG, A_DEGREE, A_N_TERMS = 4, 5, 3, 220
+A_SEED = 20240601
+
+# Problem B: 7 x 7 quadratic inverse NARX
+B_CHANNELS, B_ORDER, B_DEGREE, B_N_TERMS = 7, 4, 2, 2079
+B_N = 20_000
+B_NOISE = 0.01  # response measurement noise, fraction of its RMS (keeps X full rank)
+B_SEED = 7
+
+# Targets, and SysIdentPy's earlier figures on the reference machine
+TARGET_SPEEDUP = 20.0
+TARGET_SIM_RATE = 3e6
+TARGET_RRSE = 0.01
+TARGET_B_FIT_S = 20.0
+SYSIDENTPY_FIT_BEFORE = "earlier on the reference machine: 3.67 s"
+SYSIDENTPY_SIM_BEFORE = "earlier on the reference machine: ~12.3 k samples/s"
+
+
+@dataclass
+class Figure:
+    """One measured figure: a row of the table and an entry of the JSON file."""
+
+    problem: str
+    key: str
+    label: str
+    value: float | None
+    unit: str
+    op: str = ""  # ">=" or "<=" when the figure has a target
+    target: float | None = None
+    status: str = ""  # PASS, MISS, SKIP, or "" (informational)
+    note: str = ""
+
+
+class Report:
+    """Collects :class:`Figure` rows; decides PASS/MISS against the targets."""
+
+    def __init__(self) -> None:
+        self.figures: list[Figure] = []
+
+    def add(
+        self,
+        problem: str,
+        key: str,
+        label: str,
+        value: float,
+        unit: str,
+        *,
+        at_least: float | None = None,
+        at_most: float | None = None,
+        note: str = "",
+    ) -> float:
+        op, target, status = "", None, ""
+        if at_least is not None:
+            op, target = ">=", at_least
+            status = "PASS" if value >= at_least else "MISS"
+        elif at_most is not None:
+            op, target = "<=", at_most
+            status = "PASS" if value <= at_most else "MISS"
+        self.figures.append(
+            Figure(problem, key, label, float(value), unit, op, target, status, note)
+        )
+        return value
+
+    def skip(self, problem: str, key: str, label: str) -> None:
+        self.figures.append(Figure(problem, key, label, None, "", status="SKIP"))
+
+    @property
+    def missed(self) -> list[Figure]:
+        return [f for f in self.figures if f.status == "MISS"]
+
+
+def best_of(
+    fn: Callable[[], T], repeats: int, *, min_time: float = 2.0, max_calls: int = 50
+) -> tuple[float, T]:
+    """Minimum wall-clock time over calls of ``fn``, and the last result.
+
+    ``fn`` is called ``repeats`` times, and more (up to ``max_calls``) while the calls so far
+    took less than ``min_time`` seconds in total: fast operations get more samples, which makes
+    their minimum robust on a busy machine at little cost.
+    """
+    best, spent, calls = math.inf, 0.0, 0
+    result: T | None = None
+    while calls < max(repeats, 1) or (spent < min_time and calls < max_calls):
+        t0 = time.perf_counter()
+        result = fn()
+        elapsed = time.perf_counter() - t0
+        best, spent, calls = min(best, elapsed), spent + elapsed, calls + 1
+    assert result is not None
+    return best, result
+
+
+def progress(message: str) -> None:
+    print(f"... {message}", file=sys.stderr, flush=True)
+
+
+# ---------------------------------------------------------------------------------- data
+def narx_example_data(n: int, seed: int) -> tuple[np.ndarray, np.ndarray]:
+    """Input ``x`` (n, 1) and output ``y`` (n, 1) of SysIdentPy's classic example system."""
+    rng = np.random.default_rng(seed)
+    x = rng.uniform(-1.0, 1.0, n)
+    e = rng.normal(0.0, A_NOISE_STD, n)
+    y = np.zeros(n)
+    for t in range(2, n):  # the true system: the only per-sample Python loop of the benchmark
+        y[t] = 0.2 * y[t - 1] + 0.1 * y[t - 1] * x[t - 1] + 0.9 * x[t - 2] + e[t]
+    return x[:, None], y[:, None]
+
+
+def inverse_problem_data(n: int, seed: int) -> tuple[np.ndarray, np.ndarray]:
+    """Noisy response (n, 7) and drive (n, 7) of a random stable quadratic 7 x 7 NARX system."""
+    rng = np.random.default_rng(seed)
+    system = random_narx(B_CHANNELS, B_CHANNELS, 2, 2, seed=rng)
+    drive = band_limited_noise(n, B_CHANNELS, cutoff=0.3, seed=rng)
+    response = system.simulate(drive)
+    response += B_NOISE * response.std(axis=0) * rng.standard_normal(response.shape)
+    return response, drive
+
+
+# ---------------------------------------------------------------------------------- SysIdentPy
+class SysIdentPy:
+    """The SysIdentPy 0.9.0 counterpart of problem A's vrig model."""
+
+    def __init__(self) -> None:
+        import sysidentpy
+        from sysidentpy.basis_function import Polynomial
+        from sysidentpy.model_structure_selection import FROLS
+        from sysidentpy.parameter_estimation import LeastSquares
+
+        self.version: str = getattr(sysidentpy, "__version__", "unknown")
+        self._frols, self._polynomial, self._least_squares = FROLS, Polynomial, LeastSquares
+
+    def model(self) -> Any:
+        """FROLS with all 220 candidate terms kept, ordinary least squares."""
+        return self._frols(
+            order_selection=False,
+            n_terms=A_N_TERMS,
+            ylag=A_YLAG,
+            xlag=A_XLAG,
+            basis_function=self._polynomial(degree=A_DEGREE),
+            estimator=self._least_squares(),
+            model_type="NARMAX",
+        )
+
+    @classmethod
+    def load(cls) -> SysIdentPy | None:
+        try:
+            return cls()
+        except ImportError:
+            return None
+
+
+# ---------------------------------------------------------------------------------- problems
+def vrig_model(**kwargs: Any) -> Narx:
+    """Problem A's candidate structure: lags y 1..4, u 1..5, cubic, with constant (220 terms)."""
+    return Narx(na=A_YLAG, nb=A_XLAG, nk=1, degree=A_DEGREE, constant=True, **kwargs)
+
+
+def problem_a(report: Report, repeats: int, sip: SysIdentPy | None) -> None:
+    progress("problem A: data")
+    u, y = narx_example_data(A_N_ID + A_N_VAL, A_SEED)
+    u_id, y_id, u_val, y_val = u[:A_N_ID], y[:A_N_ID], u[A_N_ID:], y[A_N_ID:]
+    u_long = np.random.default_rng(A_SEED + 1).uniform(-1.0, 1.0, (A_N_SIM, 1))
+    vrig_model().fit(u_id, y_id).simulate(u_val)  # warm-up: load the compiled kernels
+
+    def free_run(model: Narx) -> np.ndarray:
+        # same initial conditions as SysIdentPy's free run: the first max_lag measured outputs
+        return model.simulate(u_val, y0=y_val[: model.max_lag_])
+
+    progress("problem A: vrig fits")
+    fit_s: dict[str, float] = {}
+    rrse: dict[str, float] = {}
+    models: dict[str, Narx] = {}
+    for name in SOLVERS:
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            fit_s[name], models[name] = best_of(
+                lambda name=name: vrig_model(solver=name).fit(u_id, y_id), repeats
+            )
+        if models[name].n_terms_[0] != A_N_TERMS:
+            raise RuntimeError(f"vrig model has {models[name].n_terms_[0]} terms, not {A_N_TERMS}")
+        rrse[name] = float(metrics.rrse(y_val, free_run(models[name]))[0])
+        label = "vrig fit, full QR (solver='qr', default)" if name == "qr" else (
+            f"vrig fit, solver={name!r}"
+        )
+        notes = sorted({type(w.message).__name__ for w in caught})
+        report.add("A", f"vrig_fit_s.{name}", label, fit_s[name], "s", note=", ".join(notes))
+    t_frols, frols = best_of(lambda: vrig_model(n_terms=A_N_TERMS).fit(u_id, y_id), repeats)
+    if frols.n_terms_[0] != A_N_TERMS:
+        raise RuntimeError(f"vrig FROLS kept {frols.n_terms_[0]} terms, not {A_N_TERMS}")
+    report.add("A", "vrig_fit_s.frols", f"vrig fit, FROLS ordering all {A_N_TERMS} terms",
+               t_frols, "s")
+
+    model = models["qr"]
+    progress("problem A: vrig simulation")
+    t_long, _ = best_of(lambda: model.simulate(u_long), repeats)
+    report.add("A", "vrig_simulate_rate.long", f"vrig free run, {A_N_SIM:,} samples",
+               A_N_SIM / t_long, "samples/s", at_least=TARGET_SIM_RATE)
+    t_val, y_vrig = best_of(lambda: free_run(model), repeats)
+    report.add("A", "vrig_simulate_rate.validation", f"vrig free run, {A_N_VAL:,} samples",
+               A_N_VAL / t_val, "samples/s", at_least=TARGET_SIM_RATE)
+    report.add("A", "vrig_rrse", "vrig free-run RRSE on validation (solver='qr')",
+               rrse["qr"], "", at_most=TARGET_RRSE)
+    spread = max(rrse.values()) - min(rrse.values())
+    report.add("A", "vrig_rrse_spread", "RRSE spread over the six solvers", spread, "")
+
+    if sip is None:
+        report.skip("A", "sysidentpy", SKIP_SYSIDENTPY)
+        return
+    progress(f"problem A: SysIdentPy {sip.version} fits (several seconds each)")
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        t_sip, smodel = best_of(lambda: sip.model().fit(X=u_id, y=y_id), repeats)
+        if len(smodel.final_model) != A_N_TERMS:
+            raise RuntimeError(f"SysIdentPy kept {len(smodel.final_model)} terms, not {A_N_TERMS}")
+        progress("problem A: SysIdentPy free run")
+        t_sip_sim, y_sip = best_of(
+            lambda: smodel.predict(X=u_val, y=y_val, steps_ahead=None), repeats
+        )
+    y_sip = np.asarray(y_sip).reshape(-1, 1)
+    report.add("A", "sysidentpy_fit_s", f"SysIdentPy {sip.version} fit, FROLS + LeastSquares",
+               t_sip, "s", note=SYSIDENTPY_FIT_BEFORE)
+    report.add("A", "speedup.fit_qr", "speed-up, fit: vrig qr vs SysIdentPy",
+               t_sip / fit_s["qr"], "x", at_least=TARGET_SPEEDUP)
+    report.add("A", "speedup.fit_frols", "speed-up, fit: vrig FROLS vs SysIdentPy",
+               t_sip / t_frols, "x")
+    report.add("A", "sysidentpy_simulate_rate", f"SysIdentPy free run, {A_N_VAL:,} samples",
+               A_N_VAL / t_sip_sim, "samples/s", note=SYSIDENTPY_SIM_BEFORE)
+    report.add("A", "speedup.simulate", "speed-up, free run (validation record)",
+               t_sip_sim / t_val, "x")
+    report.add("A", "sysidentpy_rrse", "SysIdentPy free-run RRSE on validation",
+               float(metrics.rrse(y_val, y_sip)[0]), "", at_most=TARGET_RRSE)
+    report.add("A", "max_abs_diff", "max |y_vrig - y_SysIdentPy|, free run",
+               float(np.max(np.abs(y_vrig - y_sip))), "")
+
+
+def problem_b(report: Report, repeats: int) -> None:
+    progress("problem B: data (random stable 7 x 7 NARX system)")
+    response, drive = inverse_problem_data(B_N, B_SEED)
+
+    def fit() -> Narx:
+        return Narx(order=B_ORDER, degree=B_DEGREE).fit(response, drive)
+
+    progress("problem B: fits")
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        t_fit, inverse = best_of(fit, repeats)
+    if np.any(inverse.n_terms_ != B_N_TERMS):
+        raise RuntimeError(f"inverse model has {inverse.n_terms_} terms, not {B_N_TERMS}")
+    notes = ", ".join(sorted({type(w.message).__name__ for w in caught}))
+    label = f"vrig fit, 7x7 quadratic inverse NARX, {B_N_TERMS} terms, {B_N:,} samples"
+    report.add("B", "vrig_fit_s", label, t_fit, "s", at_most=TARGET_B_FIT_S, note=notes)
+
+    progress("problem B: bare numpy QR")
+    channel, start = inverse.channels_[0], inverse.max_lag_
+    t_reg, X = best_of(lambda: regression_matrix(response, drive, channel, start), repeats)
+    report.add("B", "regression_matrix_s", f"  regression matrix {X.shape[0]:,} x {X.shape[1]:,}",
+               t_reg, "s")
+    t_qr, _ = best_of(lambda: np.linalg.qr(X, mode="r"), repeats)
+    report.add("B", "numpy_qr_s", '  numpy.linalg.qr(X, mode="r"), reference', t_qr, "s")
+    report.add("B", "fit_over_qr", "  fit time / bare QR time", t_fit / t_qr, "x")
+
+
+# ---------------------------------------------------------------------------------- output
+def format_value(value: float | None, unit: str) -> str:
+    if value is None:
+        return "-"
+    if unit == "samples/s":
+        if value >= 1e6:
+            return f"{value / 1e6:.2f} M samples/s"
+        return f"{value / 1e3:.1f} k samples/s"
+    if unit == "s":
+        return f"{value:.3f} s"
+    if unit == "x":
+        return f"{value:.1f} x"
+    return f"{value:.3g}"
+
+
+def print_table(figures: list[Figure]) -> None:
+    rows = [("", "measurement", "value", "target", "status")]
+    for f in figures:
+        target = f"{f.op} {format_value(f.target, f.unit)}" if f.op else ""
+        rows.append((f.problem, f.label, format_value(f.value, f.unit), target, f.status))
+    widths = [max(len(r[i]) for r in rows) for i in range(5)]
+    for n, row in enumerate(rows):
+        line = "  ".join(
+            cell.rjust(w) if i in (2, 3) else cell.ljust(w)
+            for i, (cell, w) in enumerate(zip(row, widths, strict=True))
+        )
+        notes = figures[n - 1].note if n else "note"
+        print(f"{line}  {notes}".rstrip())
+        if n == 0:
+            print("-" * (sum(widths) + 2 * len(widths) + 4))
+
+
+def environment(sip: SysIdentPy | None) -> dict[str, Any]:
+    threads = {k: os.environ[k] for k in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS",
+                                            "MKL_NUM_THREADS") if k in os.environ}
+    try:
+        blas = np.show_config(mode="dicts")["Build Dependencies"]["blas"]["name"]
+    except Exception:  # pragma: no cover - depends on the numpy build
+        blas = "unknown"
+    return {
+        "python": platform.python_version(),
+        "numpy": np.__version__,
+        "scipy": scipy.__version__,
+        "numba": numba.__version__,
+        "sysidentpy": sip.version if sip else None,
+        "blas": blas,
+        "thread_env": threads,
+        "cpu_count": os.cpu_count(),
+        "machine": platform.machine(),
+        "processor": platform.processor(),
+        "platform": platform.platform(),
+    }
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=(__doc__ or "").splitlines()[0])
+    parser.add_argument("--quick", action="store_true", help="problem A only, 2 repetitions")
+    parser.add_argument("--repeats", type=int, help="repetitions per timing (default 3, quick 2)")
+    parser.add_argument("--output", type=Path, default=RESULTS_PATH, help="JSON results file")
+    parser.add_argument("--strict", action="store_true", help="exit with status 1 on a MISS")
+    args = parser.parse_args(argv)
+    repeats = args.repeats or (2 if args.quick else 3)
+
+    sip = SysIdentPy.load()
+    report = Report()
+    started = time.perf_counter()
+    problem_a(report, repeats, sip)
+    if not args.quick:
+        problem_b(report, repeats)
+    elapsed = time.perf_counter() - started
+
+    print_table(report.figures)
+    if sip is None:
+        print(f"\nSysIdentPy comparison {SKIP_SYSIDENTPY}")
+    print(f"\n{len(report.missed)} target(s) missed; benchmark took {elapsed:.0f} s")
+
+    args.output.parent.mkdir(parents=True, exist_ok=True)
+    payload = {
+        "benchmark": "identification_speed",
+        "date": datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds"),
+        "quick": args.quick,
+        "repeats": repeats,
+        "environment": environment(sip),
+        "figures": [asdict(f) for f in report.figures],
+        "missed": [f.key for f in report.missed],
+    }
+    args.output.write_text(json.dumps(payload, indent=2) + "\n")
+    print(f"results written to {args.output}")
+    return 1 if args.strict and report.missed else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
