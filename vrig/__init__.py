@@ -4,6 +4,20 @@ The identification library lives in the sibling package :mod:`identification`; t
 signals, processing, reconstruction workflow, gymnasium environments and CLI live here.
 """
 
+from .errors import RigLimitError, RigModelError, SimulationInstabilityError
+from .rigs import ChannelSpec, MujocoRig, list_rigs, load_rig
+from .timehistory import TimeHistory
+
 __version__ = "0.1.0"
 
-__all__ = ["__version__"]
+__all__ = [
+    "ChannelSpec",
+    "MujocoRig",
+    "RigLimitError",
+    "RigModelError",
+    "SimulationInstabilityError",
+    "TimeHistory",
+    "__version__",
+    "list_rigs",
+    "load_rig",
+]

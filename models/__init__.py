@@ -1,0 +1,1 @@
+"""MJCF models of the vrig test rigs (data package; see README.md)."""

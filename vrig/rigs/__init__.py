@@ -1,0 +1,75 @@
+"""Virtual test rigs: MuJoCo models of the reference text's rigs behind one small interface.
+
+>>> import vrig
+>>> vrig.list_rigs()                                    # doctest: +SKIP
+>>> rig = vrig.load_rig("shock-absorber", seed=0)       # doctest: +SKIP
+>>> response = rig.run(drive)                           # doctest: +SKIP
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from ..errors import RigModelError
+from .daq import AntiAliasFilter, Transducer
+from .hydraulics import HydraulicActuator
+from .mujoco_rig import MujocoRig, _models_dir
+from .spec import ChannelSpec, read_description
+
+__all__ = [
+    "AntiAliasFilter",
+    "ChannelSpec",
+    "HydraulicActuator",
+    "MujocoRig",
+    "Transducer",
+    "list_rigs",
+    "load_rig",
+    "rig_path",
+]
+
+
+def list_rigs() -> list[str]:
+    """Names of the rigs shipped in ``models/`` (folders with a ``<name>.rig.json``)."""
+    root = _models_dir()
+    return sorted(p.name for p in root.iterdir() if (p / f"{p.name}.rig.json").exists())
+
+
+def rig_path(name: str) -> Path:
+    """The side-car description file of a shipped rig."""
+    path = _models_dir() / name / f"{name}.rig.json"
+    if not path.exists():
+        raise ValueError(f"unknown rig {name!r}; available rigs: {list_rigs()}")
+    return path
+
+
+def load_rig(name_or_path, *, seed: int = 0, fidelity: str = "full", **overrides) -> MujocoRig:
+    """Load a shipped rig by name, or a user's rig from an MJCF or side-car path.
+
+    Parameters
+    ----------
+    name_or_path : str or path
+        A name from :func:`list_rigs`, a ``*.rig.json`` side-car file, or an MJCF ``.xml`` file
+        with a side-car ``<stem>.rig.json`` next to it (see ``models/README.md``).
+    seed : int
+        Noise seed of the rig.
+    fidelity : {"full", "fast"}
+        ``"fast"`` doubles the physics timestep for cheap exploratory runs.
+    **overrides
+        Documented rig parameters (``rig.describe()`` lists them).
+    """
+    text = str(name_or_path)
+    if text.endswith(".json"):
+        path = Path(text)
+    elif text.endswith(".xml"):
+        path = Path(text).with_suffix(".rig.json")
+        if not path.exists():
+            raise RigModelError(
+                f"{text}: a user rig needs its side-car description {path.name} next to the MJCF "
+                "(which actuators are drives, which sensors are responses, units and limits; see "
+                "models/README.md)"
+            )
+    else:
+        path = rig_path(text)
+    if not path.exists():
+        raise FileNotFoundError(f"no rig description at {path}")
+    return MujocoRig(read_description(path), seed=seed, fidelity=fidelity, **overrides)

@@ -1,0 +1,358 @@
+"""A rig backed by a MuJoCo model: drives in, sampled transducer responses out.
+
+``run(drive)``: the drive (at the DAQ rate fs) is checked against the rig's limits, linearly
+interpolated to the physics rate, and played through ``mujoco.rollout`` with the servo-hydraulic
+control callback; the physics-rate sensor signals then pass through the transducer/DAQ chain
+(:mod:`vrig.rigs.daq`). Interlock trips raise :class:`~vrig.errors.RigLimitError`; MuJoCo
+warnings or non-finite states raise :class:`~vrig.errors.SimulationInstabilityError`.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from pathlib import Path
+
+import mujoco
+import numpy as np
+from mujoco import rollout
+
+from ..errors import RigLimitError, RigModelError, SimulationInstabilityError
+from ..timehistory import TimeHistory
+from . import hydraulics
+from .spec import ChannelSpec, InputDef, OutputDef, RigDescription, read_description
+
+__all__ = ["MujocoRig"]
+
+_STATE = mujoco.mjtState.mjSTATE_FULLPHYSICS
+
+
+class MujocoRig:
+    """A virtual test rig from an MJCF model and its side-car description.
+
+    Parameters
+    ----------
+    description : path or RigDescription
+        The ``*.rig.json`` side-car file.
+    seed : int
+        Seed of the rig's noise generator (transducer noise, valve noise, mains phase). Runs
+        without their own seed draw successive streams from it, like repeated runs of a real
+        rig; ``run(drive, seed=s)`` is reproducible bit for bit.
+    fidelity : {"full", "fast"}
+        ``"fast"`` doubles the physics timestep (for short exploratory runs and learning);
+        ``"full"`` (default) uses the documented timestep.
+    **overrides
+        Documented parameters (see :meth:`describe`).
+    """
+
+    def __init__(self, description, *, seed: int = 0, fidelity: str = "full", **overrides):
+        desc = description if isinstance(description, RigDescription) else read_description(description)
+        if fidelity not in ("full", "fast"):
+            raise ValueError(f"fidelity must be 'full' or 'fast', got {fidelity!r}")
+        unknown = set(overrides) - set(desc.parameters)
+        if unknown:
+            raise ValueError(
+                f"unknown parameter(s) {sorted(unknown)} for rig {desc.name!r}; documented "
+                f"parameters: {sorted(desc.parameters)}"
+            )
+        self._desc = desc
+        self.fidelity = fidelity
+        self.parameters = {k: (overrides[k] if k in overrides else p.value) for k, p in desc.parameters.items()}
+        spec = mujoco.MjSpec.from_file(str(desc.mjcf))
+        self._inputs, self._outputs = list(desc.inputs), list(desc.outputs)
+        for name, value in self.parameters.items():
+            self._apply(spec, desc.parameters[name], value)
+        if fidelity == "fast":
+            spec.option.timestep *= 2
+        n_hyd = sum(1 for c in self._inputs if c.hydraulic is not None)
+        spec.nuserdata = max(spec.nuserdata, 8 + 8 * n_hyd)
+        try:
+            self.model = spec.compile()
+        except ValueError as exc:
+            raise RigModelError(f"{desc.mjcf}: MuJoCo could not compile the model: {exc}") from exc
+        self.data = mujoco.MjData(self.model)
+        self.timestep = float(self.model.opt.timestep)
+        ratio = 1.0 / (desc.fs * self.timestep)
+        self.decimation = int(round(ratio))
+        if abs(ratio - self.decimation) > 1e-6 or self.decimation < 1:
+            raise RigModelError(
+                f"{desc.name}: the physics rate {1 / self.timestep:g} Hz must be an integer multiple "
+                f"of fs = {desc.fs:g} Hz"
+            )
+        self._bind()
+        self._rng = np.random.default_rng(seed)
+        self.seed = seed
+
+    # ------------------------------------------------------------------ set-up
+    def _apply(self, spec: mujoco.MjSpec, param, value) -> None:
+        for rule in param.apply:
+            v = rule.get("map", {}).get(str(value).lower(), value) if "map" in rule else value
+            if "scale" in rule:
+                v = v * rule["scale"]
+            if "input" in rule or "output" in rule:
+                self._apply_channel(rule, v, param.name)
+                continue
+            kind = next((k for k in ("joint", "body", "geom", "site", "actuator", "tendon",
+                                     "equality", "sensor") if k in rule), None)
+            if kind is None:
+                raise RigModelError(f"parameter {param.name!r}: rule {rule} names no element")
+            element = getattr(spec, kind)(rule[kind])
+            if element is None:
+                raise RigModelError(f"parameter {param.name!r}: no {kind} named {rule[kind]!r}")
+            attr = rule["attr"]
+            current = getattr(element, attr)
+            if rule.get("symmetric"):
+                v = [-float(v), float(v)]
+            if "index" in rule:
+                arr = np.array(current, dtype=float)
+                arr[rule["index"]] = v
+                v = arr
+            setattr(element, attr, v)
+
+    def _apply_channel(self, rule, value, pname) -> None:
+        if "input" in rule:
+            i = next((k for k, c in enumerate(self._inputs) if c.spec.name == rule["input"]), None)
+            if i is None:
+                raise RigModelError(f"parameter {pname!r}: no input {rule['input']!r}")
+            c = self._inputs[i]
+            if "hydraulic" in rule:
+                c = dataclasses.replace(c, hydraulic=c.hydraulic.replace(**{rule["hydraulic"]: float(value)}))
+            else:
+                c = dataclasses.replace(c, **{rule["field"]: value})
+            self._inputs[i] = c
+        else:
+            i = next((k for k, c in enumerate(self._outputs) if c.spec.name == rule["output"]), None)
+            if i is None:
+                raise RigModelError(f"parameter {pname!r}: no output {rule['output']!r}")
+            c = self._outputs[i]
+            c = dataclasses.replace(c, transducer=dataclasses.replace(c.transducer, **{rule["transducer"]: value}))
+            self._outputs[i] = c
+
+    def _bind(self) -> None:
+        m = self.model
+
+        def actuator(name):
+            i = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_ACTUATOR, name)
+            if i < 0:
+                raise RigModelError(f"{self.name}: the MJCF has no actuator {name!r}")
+            return i
+
+        self._hyd = []  # (parameters, cmd, noise, force actuator, qpos adr, dof adr) per hydraulic drive
+        self._slots = []  # per drive: (ctrl column of the command, ctrl column its noise goes to)
+        for c in self._inputs:
+            if c.hydraulic is not None:
+                j = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_JOINT, c.joint or "")
+                if j < 0:
+                    raise RigModelError(f"{self.name}: hydraulic input {c.spec.name!r} needs its piston joint")
+                i_cmd, i_noise = actuator(c.actuator + "_cmd"), actuator(c.actuator + "_noise")
+                self._hyd.append((c.hydraulic, i_cmd, i_noise, actuator(c.actuator + "_force"),
+                                  int(m.jnt_qposadr[j]), int(m.jnt_dofadr[j])))
+                self._slots.append((i_cmd, i_noise))
+            else:
+                i_act = actuator(c.actuator)
+                self._slots.append((i_act, i_act))
+        self._sensor_cols = []
+        for o in self._outputs:
+            s = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_SENSOR, o.sensor)
+            if s < 0:
+                raise RigModelError(f"{self.name}: the MJCF has no sensor {o.sensor!r}")
+            if not 0 <= o.component < m.sensor_dim[s]:
+                raise RigModelError(f"{self.name}: sensor {o.sensor!r} has no component {o.component}")
+            self._sensor_cols.append(int(m.sensor_adr[s]) + o.component)
+        key = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_KEY, "home")
+        if key >= 0:
+            mujoco.mj_resetDataKeyframe(m, self.data, key)
+        else:
+            mujoco.mj_resetData(m, self.data)
+        self._state0 = np.empty(mujoco.mj_stateSize(m, _STATE))
+        mujoco.mj_getState(m, self.data, self._state0, _STATE)
+
+    # ------------------------------------------------------------------ public
+    @property
+    def name(self) -> str:
+        return self._desc.name
+
+    @property
+    def fs(self) -> float:
+        """DAQ sample rate [Hz] of drives and responses."""
+        return self._desc.fs
+
+    @property
+    def inputs(self) -> tuple[ChannelSpec, ...]:
+        return tuple(c.spec for c in self._inputs)
+
+    @property
+    def outputs(self) -> tuple[ChannelSpec, ...]:
+        return tuple(c.spec for c in self._outputs)
+
+    @property
+    def bandwidth(self) -> tuple[float, float]:
+        """The rig's test band [Hz] (from the reference text)."""
+        return self._desc.bandwidth
+
+    @property
+    def input_defs(self) -> tuple[InputDef, ...]:
+        return tuple(self._inputs)
+
+    @property
+    def output_defs(self) -> tuple[OutputDef, ...]:
+        return tuple(self._outputs)
+
+    @property
+    def description(self) -> RigDescription:
+        return self._desc
+
+    def describe(self) -> str:
+        """What the rig is, its channels, limits and parameters, as text."""
+        d = self._desc
+        lines = [f"{d.name}: {d.title}", "", d.description.strip(), "",
+                 f"DAQ rate fs = {self.fs:g} Hz, physics timestep {self.timestep * 1e3:g} ms "
+                 f"({self.decimation} steps per sample, fidelity {self.fidelity!r}), "
+                 f"test band {d.bandwidth[0]:g}-{d.bandwidth[1]:g} Hz", "", "drives:"]
+        for c in self._inputs:
+            lines.append(f"  {c.spec}  {c.spec.description}")
+            if c.hydraulic is not None:
+                h = c.hydraulic
+                lines.append(
+                    f"      servo-hydraulic: A = {h.area * 1e4:g} cm², Ps = {h.supply_pressure / 1e6:g} MPa, "
+                    f"velocity limit {h.velocity_limit:.3g} m/s, valve {h.valve_frequency:g} Hz, "
+                    f"oil stiffness {h.oil_stiffness:.3g} N/m; interlocks: stroke ±{h.stroke:g} m, "
+                    f"force ±{h.force_limit:g} N, following error ±{h.error_limit:g} m"
+                )
+        lines.append("responses:")
+        for o in self._outputs:
+            t = o.transducer
+            extra = f", high-pass {t.highpass_hz:g} Hz" if t.highpass_hz else ""
+            lines.append(f"  {o.spec}  noise {t.noise_rms:g} {o.spec.unit} rms{extra}  {o.spec.description}")
+        if self.parameters:
+            lines.append("parameters (override with load_rig(name, **{param: value})):")
+            for k, p in d.parameters.items():
+                lines.append(f"  {k} = {self.parameters[k]!r} {p.unit}: {p.description} [{p.source}]")
+        return "\n".join(lines)
+
+    def __repr__(self) -> str:
+        return f"<MujocoRig {self.name!r}: {len(self._inputs)} drives, {len(self._outputs)} responses, fs {self.fs:g} Hz>"
+
+    # ------------------------------------------------------------------ running
+    def _check_drive(self, drive) -> np.ndarray:
+        n_in = len(self._inputs)
+        if isinstance(drive, TimeHistory):
+            if abs(drive.fs - self.fs) > 1e-9 * self.fs:
+                raise ValueError(
+                    f"drive is sampled at {drive.fs:g} Hz but rig {self.name!r} runs at fs = {self.fs:g} Hz; "
+                    "resample it first (e.g. scipy.signal.resample_poly)"
+                )
+            expected = [c.spec.name for c in self._inputs]
+            default = [f"ch{i + 1}" for i in range(drive.n_channels)]
+            if list(drive.names) not in (expected, default):
+                raise ValueError(f"drive channels {list(drive.names)} do not match the rig's drives {expected}")
+            x = np.array(drive.data)
+        else:
+            x = np.asarray(drive, dtype=float)
+            if x.ndim == 1 and n_in == 1:
+                x = x[:, None]
+        if x.ndim != 2 or x.shape[1] != n_in:
+            raise ValueError(
+                f"drive must have shape (N, {n_in}) for rig {self.name!r} "
+                f"(drives {[c.spec.name for c in self._inputs]}), got {x.shape}"
+            )
+        if x.shape[0] < 2:
+            raise ValueError("drive needs at least 2 samples")
+        if not np.all(np.isfinite(x)):
+            bad = np.argwhere(~np.isfinite(x))[0]
+            raise ValueError(f"drive contains NaN or inf (first at sample {bad[0]}, channel {bad[1]})")
+        for j, c in enumerate(self._inputs):
+            over = np.abs(x[:, j]) > c.spec.full_scale
+            if over.any():
+                i = int(np.argmax(over))
+                raise RigLimitError(
+                    "drive", c.spec.name, float("nan"), x[i, j], c.spec.full_scale, c.spec.unit,
+                    hint=f"(sample {i}, t = {i / self.fs:.4f} s): the drive was not sent; scale it down.",
+                )
+        return x
+
+    def run(self, drive, *, seed: int | None = None) -> TimeHistory:
+        """Play a drive on the rig and return the sampled responses.
+
+        Parameters
+        ----------
+        drive : TimeHistory or array (N, n_inputs)
+            Drive signals at the rig's fs, in the drive channels' units.
+        seed : int, optional
+            Noise seed for this run; default: the next stream of the rig's generator.
+
+        Raises
+        ------
+        ValueError
+            wrong shape, sample rate or channel names; NaN.
+        RigLimitError
+            a drive beyond full scale (not sent), or an interlock trip during the run.
+        SimulationInstabilityError
+            a MuJoCo warning or a non-finite state.
+        """
+        x = self._check_drive(drive)
+        rng = np.random.default_rng(seed) if seed is not None else np.random.default_rng(self._rng.integers(2**63))
+        m, d = self.model, self.data
+        dec = self.decimation
+        n = x.shape[0]
+        settle = int(round(self._desc.settle_time / self.timestep))
+        n_steps = settle + n * dec
+        t_drive = np.arange(n) * dec
+        steps = np.arange(n * dec)
+        ctrl = np.zeros((1, n_steps, m.nu))
+        for j, (c, (i_cmd, i_noise)) in enumerate(zip(self._inputs, self._slots, strict=True)):
+            ctrl[0, settle:, i_cmd] = np.interp(steps, t_drive, x[:, j])  # linear interpolation
+            if c.noise_rms > 0:  # valve-command noise (hydraulic) or amplifier noise (direct)
+                ctrl[0, :, i_noise] += c.noise_rms * rng.standard_normal(n_steps)
+        for w in d.warning:
+            w.number = 0
+        installed = hydraulics.install(m, d, self._hyd, self.timestep)
+        try:
+            _, sensordata = rollout.rollout(m, d, self._state0[None, :], ctrl)
+        finally:
+            hydraulics.uninstall()
+        del installed
+        trip = hydraulics.trip_record(d)
+        if trip is not None:
+            kind, c, step, value, limit = trip
+            spec = [cc for cc in self._inputs if cc.hydraulic is not None][c].spec
+            t = (step - settle) * self.timestep
+            hint = {"following error": "The demanded velocity or acceleration exceeds what the "
+                    "servo valve can deliver: reduce the drive's amplitude or bandwidth.",
+                    "stroke": "", "force": "Reduce the drive amplitude."}[kind]
+            unit = "N" if kind == "force" else spec.unit
+            raise RigLimitError(kind, spec.name, t, value, limit, unit, hint=hint)
+        warnings = [(mujoco.mjtWarning(i).name, w.number) for i, w in enumerate(d.warning) if w.number]
+        if warnings:
+            raise SimulationInstabilityError(
+                f"{self.name}: MuJoCo reported {warnings} during the run; the model became unstable "
+                "for this drive (reduce its amplitude, or check the model's timestep)"
+            )
+        raw = sensordata[0, settle:][:, self._sensor_cols]
+        if not np.all(np.isfinite(raw)):
+            raise SimulationInstabilityError(f"{self.name}: non-finite sensor values during the run")
+        full = np.array([o.spec.full_scale for o in self._outputs])
+        sampled, peak = self._acquire(raw, full, rng)
+        over = peak > full
+        if over.any():
+            j = int(np.argmax(over))
+            i = int(np.argmax(np.abs(sampled[:, j]) > full[j]))
+            o = self._outputs[j].spec
+            raise RigLimitError("transducer range", o.name, i / self.fs, sampled[i, j], full[j], o.unit,
+                                hint="The response is beyond the transducer's range: reduce the drive.")
+        return TimeHistory(sampled, self.fs, [o.spec.name for o in self._outputs],
+                           [o.spec.unit for o in self._outputs])
+
+    def _acquire(self, raw, full, rng):
+        from .daq import acquire
+
+        return acquire(raw, [o.transducer for o in self._outputs], full, fs=self.fs,
+                       decimation=self.decimation, aa=self._desc.anti_alias, rng=rng)
+
+
+def _models_dir() -> Path:
+    here = Path(__file__).resolve().parents[2] / "models"
+    if here.is_dir():
+        return here
+    from importlib.resources import files
+
+    return Path(str(files("vrig.models")))
