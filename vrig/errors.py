@@ -23,8 +23,16 @@ class RigLimitError(RuntimeError):
         ``"stroke"``, ``"force"``, ``"following error"``, ``"transducer range"``, ``"drive"``.
     """
 
-    def __init__(self, kind: str, channel: str, time: float, value: float, limit: float,
-                 unit: str = "", hint: str = ""):
+    def __init__(
+        self,
+        kind: str,
+        channel: str,
+        time: float,
+        value: float,
+        limit: float,
+        unit: str = "",
+        hint: str = "",
+    ):
         self.kind, self.channel = kind, channel
         self.time, self.value, self.limit, self.unit = float(time), float(value), float(limit), unit
         when = "before the drive was sent" if time != time else f"at t = {time:.4f} s"

@@ -50,7 +50,9 @@ class TimeHistory:
         if data.ndim == 1:
             data = data[:, None]
         if data.ndim != 2:
-            raise ValueError(f"TimeHistory data must be (N,) or (N, channels), got shape {data.shape}")
+            raise ValueError(
+                f"TimeHistory data must be (N,) or (N, channels), got shape {data.shape}"
+            )
         if data.shape[0] == 0:
             raise ValueError("TimeHistory needs at least one sample")
         if not np.all(np.isfinite(data)):
@@ -107,7 +109,9 @@ class TimeHistory:
 
     def __repr__(self) -> str:
         chans = ", ".join(f"{n} [{u}]" for n, u in zip(self.names, self.units, strict=True))
-        return f"TimeHistory({self.n_samples} samples at {self.fs:g} Hz, {self.duration:g} s: {chans})"
+        return (
+            f"TimeHistory({self.n_samples} samples at {self.fs:g} Hz, {self.duration:g} s: {chans})"
+        )
 
     # ------------------------------------------------------------------ selection
     def index(self, name: str) -> int:
@@ -120,7 +124,11 @@ class TimeHistory:
         """Select channels by name (``th["F"]``, ``th[["x", "F"]]``) or index/slice."""
         if isinstance(key, str):
             idx = [self.index(key)]
-        elif isinstance(key, Sequence) and not isinstance(key, str) and all(isinstance(k, str) for k in key):
+        elif (
+            isinstance(key, Sequence)
+            and not isinstance(key, str)
+            and all(isinstance(k, str) for k in key)
+        ):
             idx = [self.index(k) for k in key]
         elif isinstance(key, (int, np.integer)):
             idx = [int(key)]
@@ -138,10 +146,12 @@ class TimeHistory:
 
     def window(self, start: float = 0.0, stop: float | None = None) -> TimeHistory:
         """The samples with ``start <= t < stop`` (seconds)."""
-        i0 = int(round(start * self.fs))
-        i1 = self.n_samples if stop is None else int(round(stop * self.fs))
+        i0 = round(start * self.fs)
+        i1 = self.n_samples if stop is None else round(stop * self.fs)
         if not 0 <= i0 < i1 <= self.n_samples:
-            raise ValueError(f"window [{start}, {stop}) s is outside the record (0 .. {self.duration} s)")
+            raise ValueError(
+                f"window [{start}, {stop}) s is outside the record (0 .. {self.duration} s)"
+            )
         return self.with_data(self.data[i0:i1])
 
     def with_data(self, data) -> TimeHistory:
@@ -154,8 +164,13 @@ class TimeHistory:
         path = Path(path)
         if path.suffix != ".npz":
             path = path.with_suffix(".npz")
-        meta = {"format": "vrig-timehistory", "version": 1, "names": list(self.names),
-                "units": list(self.units), "fs": self.fs}
+        meta = {
+            "format": "vrig-timehistory",
+            "version": 1,
+            "names": list(self.names),
+            "units": list(self.units),
+            "fs": self.fs,
+        }
         np.savez(path, data=self.data, meta=np.array(json.dumps(meta)))
         return path
 

@@ -47,12 +47,16 @@ class AntiAliasFilter:
     def sos(self, fs: float, physics_rate: float) -> np.ndarray:
         wn = self.cutoff * fs / (physics_rate / 2.0)
         if not 0 < wn < 1:
-            raise ValueError(f"anti-alias cutoff {self.cutoff * fs} Hz is outside (0, {physics_rate / 2}) Hz")
+            raise ValueError(
+                f"anti-alias cutoff {self.cutoff * fs} Hz is outside (0, {physics_rate / 2}) Hz"
+            )
         return signal.butter(self.order, wn, output="sos")
 
     def response(self, f, fs: float, physics_rate: float) -> np.ndarray:
         """Complex frequency response at frequencies ``f`` [Hz] (for analytic models)."""
-        _, h = signal.sosfreqz(self.sos(fs, physics_rate), worN=np.asarray(f, float), fs=physics_rate)
+        _, h = signal.sosfreqz(
+            self.sos(fs, physics_rate), worN=np.asarray(f, float), fs=physics_rate
+        )
         return h
 
 
@@ -64,8 +68,9 @@ def transducer_response(t: Transducer, f, physics_rate: float) -> np.ndarray:
     """Complex response of the transducer's dynamics and gain at ``f`` [Hz]."""
     h = np.full(np.shape(f), t.gain, dtype=complex)
     if t.highpass_hz > 0:
-        _, hp = signal.sosfreqz(_highpass_sos(t.highpass_hz, physics_rate), worN=np.asarray(f, float),
-                                fs=physics_rate)
+        _, hp = signal.sosfreqz(
+            _highpass_sos(t.highpass_hz, physics_rate), worN=np.asarray(f, float), fs=physics_rate
+        )
         h = h * hp
     return h
 
@@ -100,7 +105,9 @@ def acquire(
     time = np.arange(n_steps) / physics_rate
     for j, t in enumerate(transducers):
         if t.mains_amplitude > 0:
-            x[:, j] += t.mains_amplitude * np.sin(2 * np.pi * t.mains_hz * time + rng.uniform(0, 2 * np.pi))
+            x[:, j] += t.mains_amplitude * np.sin(
+                2 * np.pi * t.mains_hz * time + rng.uniform(0, 2 * np.pi)
+            )
     x = signal.sosfilt(aa.sos(fs, physics_rate), x, axis=0)
     sampled = x[::decimation].copy()
     peak = np.abs(sampled).max(axis=0)

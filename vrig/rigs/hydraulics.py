@@ -5,8 +5,10 @@ callback (a numba ``cfunc`` registered with ``mujoco.set_mjcb_control``): no Pyt
 physics step. Per channel and physics step:
 
 * **controller** (at the controller rate, sample-and-hold): error ``e = x_cmd - x`` from the LVDT,
-  valve command ``i = kp e + ki ∫e + kd de/dt + valve noise``, clipped to ±1 (anti-windup:
-  the integrator holds while the command saturates);
+  valve command ``i = kp e + ki ∫e + kd de/dt - k_dp p_L / P_s + valve noise``, clipped to ±1
+  (anti-windup: the integrator holds while the command saturates). The delta-P term
+  (``pressure_feedback``) is the usual stabilisation of the lightly damped oil-column resonance;
+  the integrator removes the static error it causes under load;
 * **servo valve**: second-order spool dynamics ``x_v'' = ω_v² (i - x_v) - 2 ζ_v ω_v x_v'``,
   spool travel ±1;
 * **flow** through the valve, load dependent (orifice law):
@@ -14,6 +16,10 @@ physics step. Per channel and physics step:
   limits the piston velocity to ``Q_max / A``;
 * **oil column** compliance: ``dp_L/dt = (4 β / V_t) (Q - A v - C_leak p_L)``, ``|p_L| <= P_s``;
 * **force** on the piston ``F = A p_L`` (applied by a ``motor`` actuator).
+
+With the default parameters and ~25 kg moving mass the displacement loop is flat within about
+±1 dB to 80 Hz and -3 dB near 150 Hz (``tests/test_hydraulics.py`` checks the simulated loop
+against its linearisation); heavier payloads lower the oil-column resonance and the bandwidth.
 
 Interlocks checked every physics step (first trip recorded): stroke ``|x| > stroke``, force
 ``|F| > force_limit``, following error ``|e| > error_limit``.
@@ -34,10 +40,10 @@ from numba import types
 from numba.core import cgutils
 from numba.extending import intrinsic
 
-__all__ = ["MAX_CHANNELS", "HydraulicActuator", "TRIP_KINDS", "install", "trip_record"]
+__all__ = ["MAX_CHANNELS", "TRIP_KINDS", "HydraulicActuator", "install", "trip_record"]
 
 MAX_CHANNELS = 16
-_NPAR = 16
+_NPAR = 20
 _NINT = 8
 _UD_HEADER = 8
 _UD_PER_CHANNEL = 8
@@ -63,6 +69,9 @@ class HydraulicActuator:
     kp: float = 470.0  # proportional gain [valve fraction per m]: ~40 Hz loop crossover
     ki: float = 2000.0  # integral gain [1/(m s)]
     kd: float = 0.0  # derivative gain [s/m]
+    pressure_feedback: float = (
+        1.0  # delta-P stabilisation [valve fraction per P_s of load pressure]
+    )
     stroke: float = 0.075  # stroke limit (half stroke) [m]
     force_limit: float = 24e3  # force interlock [N]
     error_limit: float = 0.01  # following-error interlock [m]
@@ -82,18 +91,34 @@ class HydraulicActuator:
         names = {f.name for f in fields(self)}
         unknown = set(changes) - names
         if unknown:
-            raise ValueError(f"unknown hydraulic parameter(s) {sorted(unknown)}; known: {sorted(names)}")
+            raise ValueError(
+                f"unknown hydraulic parameter(s) {sorted(unknown)}; known: {sorted(names)}"
+            )
         return HydraulicActuator(**{**asdict(self), **changes})
 
     def as_row(self, dt: float) -> np.ndarray:
         row = np.zeros(_NPAR)
-        steps = max(1, int(round(1.0 / (self.controller_rate * dt))))
+        steps = max(1, round(1.0 / (self.controller_rate * dt)))
         row[:15] = [
-            self.area, self.supply_pressure, self.max_flow, 2 * np.pi * self.valve_frequency,
-            self.valve_damping, 4.0 * self.bulk_modulus / self.oil_volume, self.leakage,
-            self.kp, self.ki, self.kd, self.stroke, self.force_limit, self.error_limit,
-            float(steps), steps * dt,
+            self.area,
+            self.supply_pressure,
+            self.max_flow,
+            2 * np.pi * self.valve_frequency,
+            self.valve_damping,
+            4.0 * self.bulk_modulus / self.oil_volume,
+            self.leakage,
+            self.kp,
+            self.ki,
+            self.kd,
+            self.stroke,
+            self.force_limit,
+            self.error_limit,
+            float(steps),
+            steps * dt,
         ]
+        row[15] = self.pressure_feedback
+        row[16] = dt
+
         return row
 
 
@@ -125,7 +150,7 @@ def _control_callback(m, d):  # pragma: no cover - compiled, runs inside mj_step
     ud = nb.carray(_as_pointer(ctx[4]), (ctx[10],), dtype=np.float64)
     par = nb.carray(_as_pointer(ctx[5]), (MAX_CHANNELS, _NPAR), dtype=np.float64)
     idx = nb.carray(_as_pointer(ctx[6]), (MAX_CHANNELS, _NINT), dtype=np.int64)
-    dt = par[0, 15]
+    dt = par[0, 16]
     step = int(ud[0])
     ud[0] = step + 1
     for c in range(nch):
@@ -139,7 +164,13 @@ def _control_callback(m, d):  # pragma: no cover - compiled, runs inside mj_step
         if step % per == 0:
             tc = p[14]
             deriv = (err - ud[s + 4]) / tc if step > 0 else 0.0
-            u = p[7] * err + p[8] * ud[s + 3] + p[9] * deriv + ctrl[idx[c, 1]]
+            u = (
+                p[7] * err
+                + p[8] * ud[s + 3]
+                + p[9] * deriv
+                - p[15] * ud[s + 2] / p[1]
+                + ctrl[idx[c, 1]]
+            )
             if u > 1.0:
                 u = 1.0
             elif u < -1.0:
@@ -223,12 +254,15 @@ def install(model: mujoco.MjModel, data: mujoco.MjData, channels, dt: float) -> 
     for c, (act, i_cmd, i_noise, i_force, qadr, dadr) in enumerate(channels):
         params[c] = act.as_row(dt)
         index[c, :5] = [i_cmd, i_noise, i_force, qadr, dadr]
-    params[0, 15] = dt
     data.userdata[:] = 0.0
     _CTX[:] = 0
     _CTX[1:7] = [
-        data.ctrl.ctypes.data, data.qpos.ctypes.data, data.qvel.ctypes.data,
-        data.userdata.ctypes.data, params.ctypes.data, index.ctypes.data,
+        data.ctrl.ctypes.data,
+        data.qpos.ctypes.data,
+        data.qvel.ctypes.data,
+        data.userdata.ctypes.data,
+        params.ctypes.data,
+        index.ctypes.data,
     ]
     _CTX[7:11] = [model.nu, model.nq, model.nv, model.nuserdata]
     _CTX[0] = n

@@ -45,7 +45,11 @@ class MujocoRig:
     """
 
     def __init__(self, description, *, seed: int = 0, fidelity: str = "full", **overrides):
-        desc = description if isinstance(description, RigDescription) else read_description(description)
+        desc = (
+            description
+            if isinstance(description, RigDescription)
+            else read_description(description)
+        )
         if fidelity not in ("full", "fast"):
             raise ValueError(f"fidelity must be 'full' or 'fast', got {fidelity!r}")
         unknown = set(overrides) - set(desc.parameters)
@@ -56,7 +60,9 @@ class MujocoRig:
             )
         self._desc = desc
         self.fidelity = fidelity
-        self.parameters = {k: (overrides[k] if k in overrides else p.value) for k, p in desc.parameters.items()}
+        self.parameters = {
+            k: (overrides[k] if k in overrides else p.value) for k, p in desc.parameters.items()
+        }
         spec = mujoco.MjSpec.from_file(str(desc.mjcf))
         self._inputs, self._outputs = list(desc.inputs), list(desc.outputs)
         for name, value in self.parameters.items():
@@ -72,7 +78,7 @@ class MujocoRig:
         self.data = mujoco.MjData(self.model)
         self.timestep = float(self.model.opt.timestep)
         ratio = 1.0 / (desc.fs * self.timestep)
-        self.decimation = int(round(ratio))
+        self.decimation = round(ratio)
         if abs(ratio - self.decimation) > 1e-6 or self.decimation < 1:
             raise RigModelError(
                 f"{desc.name}: the physics rate {1 / self.timestep:g} Hz must be an integer multiple "
@@ -91,8 +97,23 @@ class MujocoRig:
             if "input" in rule or "output" in rule:
                 self._apply_channel(rule, v, param.name)
                 continue
-            kind = next((k for k in ("joint", "body", "geom", "site", "actuator", "tendon",
-                                     "equality", "sensor") if k in rule), None)
+            kind = next(
+                (
+                    k
+                    for k in (
+                        "joint",
+                        "body",
+                        "geom",
+                        "site",
+                        "actuator",
+                        "tendon",
+                        "equality",
+                        "sensor",
+                    )
+                    if k in rule
+                ),
+                None,
+            )
             if kind is None:
                 raise RigModelError(f"parameter {param.name!r}: rule {rule} names no element")
             element = getattr(spec, kind)(rule[kind])
@@ -115,16 +136,22 @@ class MujocoRig:
                 raise RigModelError(f"parameter {pname!r}: no input {rule['input']!r}")
             c = self._inputs[i]
             if "hydraulic" in rule:
-                c = dataclasses.replace(c, hydraulic=c.hydraulic.replace(**{rule["hydraulic"]: float(value)}))
+                c = dataclasses.replace(
+                    c, hydraulic=c.hydraulic.replace(**{rule["hydraulic"]: float(value)})
+                )
             else:
                 c = dataclasses.replace(c, **{rule["field"]: value})
             self._inputs[i] = c
         else:
-            i = next((k for k, c in enumerate(self._outputs) if c.spec.name == rule["output"]), None)
+            i = next(
+                (k for k, c in enumerate(self._outputs) if c.spec.name == rule["output"]), None
+            )
             if i is None:
                 raise RigModelError(f"parameter {pname!r}: no output {rule['output']!r}")
             c = self._outputs[i]
-            c = dataclasses.replace(c, transducer=dataclasses.replace(c.transducer, **{rule["transducer"]: value}))
+            c = dataclasses.replace(
+                c, transducer=dataclasses.replace(c.transducer, **{rule["transducer"]: value})
+            )
             self._outputs[i] = c
 
     def _bind(self) -> None:
@@ -142,10 +169,20 @@ class MujocoRig:
             if c.hydraulic is not None:
                 j = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_JOINT, c.joint or "")
                 if j < 0:
-                    raise RigModelError(f"{self.name}: hydraulic input {c.spec.name!r} needs its piston joint")
+                    raise RigModelError(
+                        f"{self.name}: hydraulic input {c.spec.name!r} needs its piston joint"
+                    )
                 i_cmd, i_noise = actuator(c.actuator + "_cmd"), actuator(c.actuator + "_noise")
-                self._hyd.append((c.hydraulic, i_cmd, i_noise, actuator(c.actuator + "_force"),
-                                  int(m.jnt_qposadr[j]), int(m.jnt_dofadr[j])))
+                self._hyd.append(
+                    (
+                        c.hydraulic,
+                        i_cmd,
+                        i_noise,
+                        actuator(c.actuator + "_force"),
+                        int(m.jnt_qposadr[j]),
+                        int(m.jnt_dofadr[j]),
+                    )
+                )
                 self._slots.append((i_cmd, i_noise))
             else:
                 i_act = actuator(c.actuator)
@@ -156,7 +193,9 @@ class MujocoRig:
             if s < 0:
                 raise RigModelError(f"{self.name}: the MJCF has no sensor {o.sensor!r}")
             if not 0 <= o.component < m.sensor_dim[s]:
-                raise RigModelError(f"{self.name}: sensor {o.sensor!r} has no component {o.component}")
+                raise RigModelError(
+                    f"{self.name}: sensor {o.sensor!r} has no component {o.component}"
+                )
             self._sensor_cols.append(int(m.sensor_adr[s]) + o.component)
         key = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_KEY, "home")
         if key >= 0:
@@ -204,10 +243,17 @@ class MujocoRig:
     def describe(self) -> str:
         """What the rig is, its channels, limits and parameters, as text."""
         d = self._desc
-        lines = [f"{d.name}: {d.title}", "", d.description.strip(), "",
-                 f"DAQ rate fs = {self.fs:g} Hz, physics timestep {self.timestep * 1e3:g} ms "
-                 f"({self.decimation} steps per sample, fidelity {self.fidelity!r}), "
-                 f"test band {d.bandwidth[0]:g}-{d.bandwidth[1]:g} Hz", "", "drives:"]
+        lines = [
+            f"{d.name}: {d.title}",
+            "",
+            d.description.strip(),
+            "",
+            f"DAQ rate fs = {self.fs:g} Hz, physics timestep {self.timestep * 1e3:g} ms "
+            f"({self.decimation} steps per sample, fidelity {self.fidelity!r}), "
+            f"test band {d.bandwidth[0]:g}-{d.bandwidth[1]:g} Hz",
+            "",
+            "drives:",
+        ]
         for c in self._inputs:
             lines.append(f"  {c.spec}  {c.spec.description}")
             if c.hydraulic is not None:
@@ -222,11 +268,15 @@ class MujocoRig:
         for o in self._outputs:
             t = o.transducer
             extra = f", high-pass {t.highpass_hz:g} Hz" if t.highpass_hz else ""
-            lines.append(f"  {o.spec}  noise {t.noise_rms:g} {o.spec.unit} rms{extra}  {o.spec.description}")
+            lines.append(
+                f"  {o.spec}  noise {t.noise_rms:g} {o.spec.unit} rms{extra}  {o.spec.description}"
+            )
         if self.parameters:
             lines.append("parameters (override with load_rig(name, **{param: value})):")
             for k, p in d.parameters.items():
-                lines.append(f"  {k} = {self.parameters[k]!r} {p.unit}: {p.description} [{p.source}]")
+                lines.append(
+                    f"  {k} = {self.parameters[k]!r} {p.unit}: {p.description} [{p.source}]"
+                )
         return "\n".join(lines)
 
     def __repr__(self) -> str:
@@ -244,7 +294,9 @@ class MujocoRig:
             expected = [c.spec.name for c in self._inputs]
             default = [f"ch{i + 1}" for i in range(drive.n_channels)]
             if list(drive.names) not in (expected, default):
-                raise ValueError(f"drive channels {list(drive.names)} do not match the rig's drives {expected}")
+                raise ValueError(
+                    f"drive channels {list(drive.names)} do not match the rig's drives {expected}"
+                )
             x = np.array(drive.data)
         else:
             x = np.asarray(drive, dtype=float)
@@ -259,13 +311,20 @@ class MujocoRig:
             raise ValueError("drive needs at least 2 samples")
         if not np.all(np.isfinite(x)):
             bad = np.argwhere(~np.isfinite(x))[0]
-            raise ValueError(f"drive contains NaN or inf (first at sample {bad[0]}, channel {bad[1]})")
+            raise ValueError(
+                f"drive contains NaN or inf (first at sample {bad[0]}, channel {bad[1]})"
+            )
         for j, c in enumerate(self._inputs):
             over = np.abs(x[:, j]) > c.spec.full_scale
             if over.any():
                 i = int(np.argmax(over))
                 raise RigLimitError(
-                    "drive", c.spec.name, float("nan"), x[i, j], c.spec.full_scale, c.spec.unit,
+                    "drive",
+                    c.spec.name,
+                    float("nan"),
+                    x[i, j],
+                    c.spec.full_scale,
+                    c.spec.unit,
                     hint=f"(sample {i}, t = {i / self.fs:.4f} s): the drive was not sent; scale it down.",
                 )
         return x
@@ -290,11 +349,15 @@ class MujocoRig:
             a MuJoCo warning or a non-finite state.
         """
         x = self._check_drive(drive)
-        rng = np.random.default_rng(seed) if seed is not None else np.random.default_rng(self._rng.integers(2**63))
+        rng = (
+            np.random.default_rng(seed)
+            if seed is not None
+            else np.random.default_rng(self._rng.integers(2**63))
+        )
         m, d = self.model, self.data
         dec = self.decimation
         n = x.shape[0]
-        settle = int(round(self._desc.settle_time / self.timestep))
+        settle = round(self._desc.settle_time / self.timestep)
         n_steps = settle + n * dec
         t_drive = np.arange(n) * dec
         steps = np.arange(n * dec)
@@ -316,12 +379,17 @@ class MujocoRig:
             kind, c, step, value, limit = trip
             spec = [cc for cc in self._inputs if cc.hydraulic is not None][c].spec
             t = (step - settle) * self.timestep
-            hint = {"following error": "The demanded velocity or acceleration exceeds what the "
-                    "servo valve can deliver: reduce the drive's amplitude or bandwidth.",
-                    "stroke": "", "force": "Reduce the drive amplitude."}[kind]
+            hint = {
+                "following error": "The demanded velocity or acceleration exceeds what the "
+                "servo valve can deliver: reduce the drive's amplitude or bandwidth.",
+                "stroke": "",
+                "force": "Reduce the drive amplitude.",
+            }[kind]
             unit = "N" if kind == "force" else spec.unit
             raise RigLimitError(kind, spec.name, t, value, limit, unit, hint=hint)
-        warnings = [(mujoco.mjtWarning(i).name, w.number) for i, w in enumerate(d.warning) if w.number]
+        warnings = [
+            (mujoco.mjtWarning(i).name, w.number) for i, w in enumerate(d.warning) if w.number
+        ]
         if warnings:
             raise SimulationInstabilityError(
                 f"{self.name}: MuJoCo reported {warnings} during the run; the model became unstable "
@@ -329,7 +397,9 @@ class MujocoRig:
             )
         raw = sensordata[0, settle:][:, self._sensor_cols]
         if not np.all(np.isfinite(raw)):
-            raise SimulationInstabilityError(f"{self.name}: non-finite sensor values during the run")
+            raise SimulationInstabilityError(
+                f"{self.name}: non-finite sensor values during the run"
+            )
         full = np.array([o.spec.full_scale for o in self._outputs])
         sampled, peak = self._acquire(raw, full, rng)
         over = peak > full
@@ -337,16 +407,34 @@ class MujocoRig:
             j = int(np.argmax(over))
             i = int(np.argmax(np.abs(sampled[:, j]) > full[j]))
             o = self._outputs[j].spec
-            raise RigLimitError("transducer range", o.name, i / self.fs, sampled[i, j], full[j], o.unit,
-                                hint="The response is beyond the transducer's range: reduce the drive.")
-        return TimeHistory(sampled, self.fs, [o.spec.name for o in self._outputs],
-                           [o.spec.unit for o in self._outputs])
+            raise RigLimitError(
+                "transducer range",
+                o.name,
+                i / self.fs,
+                sampled[i, j],
+                full[j],
+                o.unit,
+                hint="The response is beyond the transducer's range: reduce the drive.",
+            )
+        return TimeHistory(
+            sampled,
+            self.fs,
+            [o.spec.name for o in self._outputs],
+            [o.spec.unit for o in self._outputs],
+        )
 
     def _acquire(self, raw, full, rng):
         from .daq import acquire
 
-        return acquire(raw, [o.transducer for o in self._outputs], full, fs=self.fs,
-                       decimation=self.decimation, aa=self._desc.anti_alias, rng=rng)
+        return acquire(
+            raw,
+            [o.transducer for o in self._outputs],
+            full,
+            fs=self.fs,
+            decimation=self.decimation,
+            aa=self._desc.anti_alias,
+            rng=rng,
+        )
 
 
 def _models_dir() -> Path:

@@ -129,17 +129,33 @@ def read_description(path) -> RigDescription:
                 hyd = HydraulicActuator().replace(**item.get("hydraulic", {}))
             except ValueError as exc:
                 raise RigModelError(f"{w}: {exc}") from None
-            limits = {"stroke": hyd.stroke, "force": hyd.force_limit,
-                      "velocity": hyd.velocity_limit, "following_error": hyd.error_limit}
+            limits = {
+                "stroke": hyd.stroke,
+                "force": hyd.force_limit,
+                "velocity": hyd.velocity_limit,
+                "following_error": hyd.error_limit,
+            }
         spec = ChannelSpec(
-            name=_need(item, "name", w), unit=_need(item, "unit", w),
-            full_scale=float(_need(item, "full_scale", w)), kind=kind,
-            description=item.get("description", ""), limits=limits,
+            name=_need(item, "name", w),
+            unit=_need(item, "unit", w),
+            full_scale=float(_need(item, "full_scale", w)),
+            kind=kind,
+            description=item.get("description", ""),
+            limits=limits,
         )
         if hyd is not None and spec.full_scale > hyd.stroke:
-            raise RigModelError(f"{w}: full scale {spec.full_scale} exceeds the stroke {hyd.stroke}")
-        inputs.append(InputDef(spec, _need(item, "actuator", w), item.get("joint"), hyd,
-                               float(item.get("noise_rms", 0.0))))
+            raise RigModelError(
+                f"{w}: full scale {spec.full_scale} exceeds the stroke {hyd.stroke}"
+            )
+        inputs.append(
+            InputDef(
+                spec,
+                _need(item, "actuator", w),
+                item.get("joint"),
+                hyd,
+                float(item.get("noise_rms", 0.0)),
+            )
+        )
     outputs = []
     for i, item in enumerate(_need(raw, "outputs", where)):
         w = f"{where} outputs[{i}]"
@@ -149,11 +165,16 @@ def read_description(path) -> RigDescription:
         except TypeError as exc:
             raise RigModelError(f"{w}: bad transducer entry ({exc})") from None
         spec = ChannelSpec(
-            name=_need(item, "name", w), unit=_need(item, "unit", w),
-            full_scale=float(_need(item, "full_scale", w)), kind=transducer.kind,
-            description=item.get("description", ""), limits={"range": float(item["full_scale"])},
+            name=_need(item, "name", w),
+            unit=_need(item, "unit", w),
+            full_scale=float(_need(item, "full_scale", w)),
+            kind=transducer.kind,
+            description=item.get("description", ""),
+            limits={"range": float(item["full_scale"])},
         )
-        outputs.append(OutputDef(spec, _need(item, "sensor", w), int(item.get("component", 0)), transducer))
+        outputs.append(
+            OutputDef(spec, _need(item, "sensor", w), int(item.get("component", 0)), transducer)
+        )
     names = [c.spec.name for c in inputs] + [c.spec.name for c in outputs]
     if len(set(names)) != len(names):
         raise RigModelError(f"{where}: channel names must be unique, got {names}")
@@ -161,16 +182,27 @@ def read_description(path) -> RigDescription:
     for name, p in raw.get("parameters", {}).items():
         w = f"{where} parameters.{name}"
         params[name] = Parameter(
-            name=name, value=_need(p, "value", w), unit=p.get("unit", "-"),
-            description=_need(p, "description", w), source=p.get("source", ""),
+            name=name,
+            value=_need(p, "value", w),
+            unit=p.get("unit", "-"),
+            description=_need(p, "description", w),
+            source=p.get("source", ""),
             apply=tuple(_need(p, "apply", w)),
         )
     aa = AntiAliasFilter(**raw.get("anti_alias", {}))
     band = tuple(float(b) for b in raw.get("bandwidth_hz", (0.0, fs / 4)))
     return RigDescription(
-        name=_need(raw, "name", where), title=raw.get("title", ""),
-        description=raw.get("description", ""), path=path, mjcf=mjcf, fs=fs,
-        bandwidth=band, settle_time=float(raw.get("settle_time", 0.0)), anti_alias=aa,
-        inputs=tuple(inputs), outputs=tuple(outputs), parameters=params,
+        name=_need(raw, "name", where),
+        title=raw.get("title", ""),
+        description=raw.get("description", ""),
+        path=path,
+        mjcf=mjcf,
+        fs=fs,
+        bandwidth=band,
+        settle_time=float(raw.get("settle_time", 0.0)),
+        anti_alias=aa,
+        inputs=tuple(inputs),
+        outputs=tuple(outputs),
+        parameters=params,
         notes=tuple(raw.get("notes", ())),
     )
