@@ -27,7 +27,7 @@ from identification import band_limited_noise
 def _drive(rig, seconds, seed=0):
     """Band-limited random drive in the rig's band at the largest of 10/5/2/1 % of full scale
     (rms) that a 5 s trial plays without an interlock trip."""
-    lo, hi = rig.bandwidth
+    hi = rig.bandwidth[1]
     cutoff = min(max(hi, 5.0), 0.4 * rig.fs) / (rig.fs / 2)
     d = band_limited_noise(int(seconds * rig.fs), len(rig.inputs), cutoff=cutoff, seed=seed)
     full = np.array([c.full_scale for c in rig.inputs])
