@@ -138,95 +138,100 @@ _CTX = np.zeros(16, dtype=np.int64)
 _CTX_ADDR = _CTX.ctypes.data
 
 
-@nb.cfunc(types.void(types.voidptr, types.voidptr), nopython=True, cache=False)
-def _control_callback(m, d):  # pragma: no cover - compiled, runs inside mj_step
-    ctx = nb.carray(_as_pointer(_CTX_ADDR), (16,), dtype=np.int64)
-    nch = ctx[0]
-    if nch == 0:
-        return
-    ctrl = nb.carray(_as_pointer(ctx[1]), (ctx[7],), dtype=np.float64)
-    qpos = nb.carray(_as_pointer(ctx[2]), (ctx[8],), dtype=np.float64)
-    qvel = nb.carray(_as_pointer(ctx[3]), (ctx[9],), dtype=np.float64)
-    ud = nb.carray(_as_pointer(ctx[4]), (ctx[10],), dtype=np.float64)
-    par = nb.carray(_as_pointer(ctx[5]), (MAX_CHANNELS, _NPAR), dtype=np.float64)
-    idx = nb.carray(_as_pointer(ctx[6]), (MAX_CHANNELS, _NINT), dtype=np.int64)
-    dt = par[0, 16]
-    step = int(ud[0])
-    ud[0] = step + 1
-    for c in range(nch):
-        p = par[c]
-        s = _UD_HEADER + _UD_PER_CHANNEL * c
-        x = qpos[idx[c, 3]]
-        v = qvel[idx[c, 4]]
-        err = ctrl[idx[c, 0]] - x
-        # controller, sample-and-hold at its own rate
-        per = int(p[13])
-        if step % per == 0:
-            tc = p[14]
-            deriv = (err - ud[s + 4]) / tc if step > 0 else 0.0
-            u = (
-                p[7] * err
-                + p[8] * ud[s + 3]
-                + p[9] * deriv
-                - p[15] * ud[s + 2] / p[1]
-                + ctrl[idx[c, 1]]
-            )
-            if u > 1.0:
-                u = 1.0
-            elif u < -1.0:
-                u = -1.0
-            else:
-                ud[s + 3] += err * tc  # integrate only while the valve is not saturated
-            ud[s + 5] = u
-            ud[s + 4] = err
-        # servo valve, second order (semi-implicit Euler)
-        wv = p[3]
-        acc = wv * wv * (ud[s + 5] - ud[s + 0]) - 2.0 * p[4] * wv * ud[s + 1]
-        ud[s + 1] += dt * acc
-        xv = ud[s + 0] + dt * ud[s + 1]
-        if xv > 1.0:
-            xv = 1.0
-            ud[s + 1] = 0.0
-        elif xv < -1.0:
-            xv = -1.0
-            ud[s + 1] = 0.0
-        ud[s + 0] = xv
-        # load-dependent flow through the valve
-        ps = p[1]
-        pl = ud[s + 2]
-        drop = ps - pl if xv >= 0.0 else ps + pl
-        if drop < 0.0:
-            drop = 0.0
-        q = p[2] * xv * np.sqrt(drop / ps)
-        # oil-column compliance
-        pl += dt * p[5] * (q - p[0] * v - p[6] * pl)
-        if pl > ps:
-            pl = ps
-        elif pl < -ps:
-            pl = -ps
-        ud[s + 2] = pl
-        force = p[0] * pl
-        ctrl[idx[c, 2]] = force
-        # interlocks: record the first trip
-        if ud[1] == 0.0:
-            code = 0
-            value = 0.0
-            limit = 0.0
-            if abs(x) > p[10]:
-                code, value, limit = 1, x, p[10]
-            elif abs(force) > p[11]:
-                code, value, limit = 2, force, p[11]
-            elif abs(err) > p[12]:
-                code, value, limit = 3, err, p[12]
-            if code:
-                ud[1] = code
-                ud[2] = c
-                ud[3] = step
-                ud[4] = value
-                ud[5] = limit
+def _build_callback():
+    """Compile the control callback (once per process, on first use: ~1 s)."""
+
+    @nb.cfunc(types.void(types.voidptr, types.voidptr), nopython=True, cache=False)
+    def _control_callback(m, d):  # pragma: no cover - compiled, runs inside mj_step
+        ctx = nb.carray(_as_pointer(_CTX_ADDR), (16,), dtype=np.int64)
+        nch = ctx[0]
+        if nch == 0:
+            return
+        ctrl = nb.carray(_as_pointer(ctx[1]), (ctx[7],), dtype=np.float64)
+        qpos = nb.carray(_as_pointer(ctx[2]), (ctx[8],), dtype=np.float64)
+        qvel = nb.carray(_as_pointer(ctx[3]), (ctx[9],), dtype=np.float64)
+        ud = nb.carray(_as_pointer(ctx[4]), (ctx[10],), dtype=np.float64)
+        par = nb.carray(_as_pointer(ctx[5]), (MAX_CHANNELS, _NPAR), dtype=np.float64)
+        idx = nb.carray(_as_pointer(ctx[6]), (MAX_CHANNELS, _NINT), dtype=np.int64)
+        dt = par[0, 16]
+        step = int(ud[0])
+        ud[0] = step + 1
+        for c in range(nch):
+            p = par[c]
+            s = _UD_HEADER + _UD_PER_CHANNEL * c
+            x = qpos[idx[c, 3]]
+            v = qvel[idx[c, 4]]
+            err = ctrl[idx[c, 0]] - x
+            # controller, sample-and-hold at its own rate
+            per = int(p[13])
+            if step % per == 0:
+                tc = p[14]
+                deriv = (err - ud[s + 4]) / tc if step > 0 else 0.0
+                u = (
+                    p[7] * err
+                    + p[8] * ud[s + 3]
+                    + p[9] * deriv
+                    - p[15] * ud[s + 2] / p[1]
+                    + ctrl[idx[c, 1]]
+                )
+                if u > 1.0:
+                    u = 1.0
+                elif u < -1.0:
+                    u = -1.0
+                else:
+                    ud[s + 3] += err * tc  # integrate only while the valve is not saturated
+                ud[s + 5] = u
+                ud[s + 4] = err
+            # servo valve, second order (semi-implicit Euler)
+            wv = p[3]
+            acc = wv * wv * (ud[s + 5] - ud[s + 0]) - 2.0 * p[4] * wv * ud[s + 1]
+            ud[s + 1] += dt * acc
+            xv = ud[s + 0] + dt * ud[s + 1]
+            if xv > 1.0:
+                xv = 1.0
+                ud[s + 1] = 0.0
+            elif xv < -1.0:
+                xv = -1.0
+                ud[s + 1] = 0.0
+            ud[s + 0] = xv
+            # load-dependent flow through the valve
+            ps = p[1]
+            pl = ud[s + 2]
+            drop = ps - pl if xv >= 0.0 else ps + pl
+            if drop < 0.0:
+                drop = 0.0
+            q = p[2] * xv * np.sqrt(drop / ps)
+            # oil-column compliance
+            pl += dt * p[5] * (q - p[0] * v - p[6] * pl)
+            if pl > ps:
+                pl = ps
+            elif pl < -ps:
+                pl = -ps
+            ud[s + 2] = pl
+            force = p[0] * pl
+            ctrl[idx[c, 2]] = force
+            # interlocks: record the first trip
+            if ud[1] == 0.0:
+                code = 0
+                value = 0.0
+                limit = 0.0
+                if abs(x) > p[10]:
+                    code, value, limit = 1, x, p[10]
+                elif abs(force) > p[11]:
+                    code, value, limit = 2, force, p[11]
+                elif abs(err) > p[12]:
+                    code, value, limit = 3, err, p[12]
+                if code:
+                    ud[1] = code
+                    ud[2] = c
+                    ud[3] = step
+                    ud[4] = value
+                    ud[5] = limit
+
+    return _control_callback
 
 
-_REGISTERED = False
+_CALLBACK = None
 
 
 @dataclass
@@ -242,7 +247,7 @@ def install(model: mujoco.MjModel, data: mujoco.MjData, channels, dt: float) -> 
     index, qpos address, dof address). Returns the parameter/index buffers (keep a reference
     while the rollout runs). Resets the callback's states in ``data.userdata``.
     """
-    global _REGISTERED
+    global _CALLBACK
     n = len(channels)
     if n > MAX_CHANNELS:
         raise ValueError(f"at most {MAX_CHANNELS} hydraulic channels are supported, got {n}")
@@ -266,9 +271,9 @@ def install(model: mujoco.MjModel, data: mujoco.MjData, channels, dt: float) -> 
     ]
     _CTX[7:11] = [model.nu, model.nq, model.nv, model.nuserdata]
     _CTX[0] = n
-    if not _REGISTERED:
-        mujoco.set_mjcb_control(_control_callback.ctypes)
-        _REGISTERED = True
+    if _CALLBACK is None:
+        _CALLBACK = _build_callback()
+        mujoco.set_mjcb_control(_CALLBACK.ctypes)
     return _Installed(params, index)
 
 
