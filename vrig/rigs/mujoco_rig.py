@@ -438,9 +438,10 @@ class MujocoRig:
 
 
 def _models_dir() -> Path:
-    here = Path(__file__).resolve().parents[2] / "models"
-    if here.is_dir():
-        return here
+    """The shipped models: ``models/`` of a source checkout, else the installed ``vrig.models``."""
+    checkout = Path(__file__).resolve().parents[2] / "models"
+    if (checkout / "common" / "hydraulic.xml").exists():
+        return checkout
     from importlib.resources import files
 
     return Path(str(files("vrig.models")))
