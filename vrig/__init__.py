@@ -5,7 +5,7 @@ signals, processing, reconstruction workflow, gymnasium environments and CLI liv
 """
 
 from .errors import RigLimitError, RigModelError, SimulationInstabilityError
-from .rigs import ChannelSpec, MujocoRig, list_rigs, load_rig
+from .rigs import ChannelSpec, MujocoRig, list_rigs, load_rig, rig_path
 from .timehistory import TimeHistory
 
 __version__ = "0.1.0"
@@ -20,4 +20,5 @@ __all__ = [
     "__version__",
     "list_rigs",
     "load_rig",
+    "rig_path",
 ]

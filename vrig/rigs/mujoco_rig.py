@@ -80,9 +80,11 @@ class MujocoRig:
         ratio = 1.0 / (desc.fs * self.timestep)
         self.decimation = round(ratio)
         if abs(ratio - self.decimation) > 1e-6 or self.decimation < 1:
+            hint = (" (fidelity='fast' halves the physics rate: it needs fs to divide half the "
+                    "documented physics rate)" if fidelity == "fast" else "")
             raise RigModelError(
                 f"{desc.name}: the physics rate {1 / self.timestep:g} Hz must be an integer multiple "
-                f"of fs = {desc.fs:g} Hz"
+                f"of fs = {desc.fs:g} Hz{hint}"
             )
         self._bind()
         self._rng = np.random.default_rng(seed)
@@ -357,7 +359,7 @@ class MujocoRig:
         m, d = self.model, self.data
         dec = self.decimation
         n = x.shape[0]
-        settle = round(self._desc.settle_time / self.timestep)
+        settle = round(self._desc.settle_time * self.fs) * dec  # whole DAQ samples
         n_steps = settle + n * dec
         t_drive = np.arange(n) * dec
         steps = np.arange(n * dec)
