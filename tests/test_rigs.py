@@ -153,3 +153,10 @@ def test_time_history_basics(tmp_path):
         th["y"]
     with pytest.raises(ValueError, match="unique"):
         vrig.TimeHistory(np.zeros((3, 2)), fs=1, names=["a", "a"])
+
+
+def test_a_mujoco_instability_is_an_error_not_nan():
+    # a 1e14 N/m spring at a 10 ms timestep: explicit-in-position integration blows up
+    r = vrig.load_rig(Path(__file__).parent / "data" / "unstable.xml")
+    with pytest.raises(vrig.SimulationInstabilityError, match="mjWARN_BADQACC"):
+        r.run(0.001 * np.sin(np.arange(200) / 5))
