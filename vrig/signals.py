@@ -1,0 +1,193 @@
+"""Drive signals: random drives from a PSD, sine sweeps, rig-specific PSDs (Algorithm 3.1).
+
+Random drives are synthesised in the frequency domain: each spectral line gets the amplitude of
+the target PSD and a random phase (independent per channel, so multi-channel drives are
+uncorrelated), and lines outside the band are exactly zero. The result is scaled to the
+requested RMS or peak. All functions take ``fs`` in Hz and a seed (int or Generator).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+
+import numpy as np
+from scipy import signal
+
+from .timehistory import TimeHistory
+
+__all__ = [
+    "flat_psd",
+    "one_over_f_psd",
+    "random_drive",
+    "rig_specific_psd",
+    "sine_sweep",
+    "triangular_psd",
+]
+
+
+def _band(f, band):
+    lo, hi = band
+    if not (0 <= lo < hi):
+        raise ValueError(f"band must be (low, high) Hz with 0 <= low < high, got {band}")
+    return (f >= lo) & (f <= hi)
+
+
+def flat_psd(band: tuple[float, float]) -> Callable[[np.ndarray], np.ndarray]:
+    """Flat (white) PSD inside ``band`` (Hz), zero outside."""
+
+    def psd(f):
+        return _band(f, band).astype(float)
+
+    return psd
+
+
+def triangular_psd(band: tuple[float, float]) -> Callable[[np.ndarray], np.ndarray]:
+    """Triangular PSD: largest at the band's low edge, falling linearly to zero at its high edge
+    (the identification PSD QanTiM prefers, §3.3, Fig. 3.18b)."""
+    lo, hi = band
+
+    def psd(f):
+        return np.where(_band(f, band), (hi - f) / (hi - lo), 0.0)
+
+    return psd
+
+
+def one_over_f_psd(band: tuple[float, float], n: float = 1.0) -> Callable[[np.ndarray], np.ndarray]:
+    """``1/f^n`` PSD inside ``band`` (Hz) (the frequency-domain tools' default, §3.3, Fig. 3.18a).
+
+    A band starting at 0 Hz is held flat below its first non-zero line.
+    """
+    lo = band[0]
+
+    def psd(f):
+        f_eff = np.maximum(f, max(lo, 1e-3))
+        return np.where(_band(f, band), f_eff ** (-float(n)), 0.0)
+
+    return psd
+
+
+def random_drive(
+    psd,
+    n_samples: int,
+    fs: float,
+    *,
+    channels: int = 1,
+    rms=None,
+    peak=None,
+    seed=None,
+    names: Sequence[str] | None = None,
+    unit: str = "-",
+) -> TimeHistory:
+    """Random drive with the PSD shape ``psd`` (a function of f in Hz, or one per channel).
+
+    Parameters
+    ----------
+    psd : callable or sequence of callables
+        PSD shape(s); only the shape matters (the level is set by ``rms`` or ``peak``).
+    n_samples, fs : int, float
+        Length and sample rate.
+    channels : int
+        Number of uncorrelated channels (independent random phases).
+    rms, peak : float or sequence, optional
+        Scale each channel to this RMS or this peak magnitude (give one; default RMS 1).
+    seed : int or numpy.random.Generator
+    names, unit : channel names and unit of the returned TimeHistory.
+    """
+    if n_samples < 8:
+        raise ValueError(f"n_samples must be >= 8, got {n_samples}")
+    if not fs > 0:
+        raise ValueError(f"fs must be > 0 Hz, got {fs}")
+    if rms is not None and peak is not None:
+        raise ValueError("give rms or peak, not both")
+    shapes = list(psd) if isinstance(psd, Sequence) else [psd] * channels
+    if len(shapes) != channels:
+        raise ValueError(f"{len(shapes)} PSDs for {channels} channels")
+    rng = np.random.default_rng(seed)
+    f = np.fft.rfftfreq(n_samples, 1.0 / fs)
+    out = np.empty((n_samples, channels))
+    for k, shape in enumerate(shapes):
+        level = np.asarray(shape(f), dtype=float)
+        if level.shape != f.shape or np.any(level < 0) or not np.all(np.isfinite(level)):
+            raise ValueError("the PSD function must return finite, non-negative values per line")
+        if not np.any(level > 0):
+            raise ValueError(
+                "the PSD is zero at every spectral line: widen the band or lengthen the record"
+            )
+        spectrum = np.sqrt(level) * np.exp(2j * np.pi * rng.random(f.size))
+        spectrum[0] = np.sqrt(level[0])  # real DC line
+        if n_samples % 2 == 0:
+            spectrum[-1] = np.sqrt(level[-1]) * rng.choice([-1.0, 1.0])  # real Nyquist line
+        x = np.fft.irfft(spectrum, n=n_samples)
+        out[:, k] = x / np.sqrt(np.mean(x**2))
+    if peak is not None:
+        out *= np.broadcast_to(np.asarray(peak, float), (channels,)) / np.abs(out).max(axis=0)
+    elif rms is not None:
+        out *= np.broadcast_to(np.asarray(rms, float), (channels,))
+    return TimeHistory(
+        out, fs, names or [f"drive{k + 1}" for k in range(channels)], [unit] * channels
+    )
+
+
+def sine_sweep(
+    f0: float,
+    f1: float,
+    duration: float,
+    fs: float,
+    *,
+    amplitude: float = 1.0,
+    kind: str = "linear",
+    name: str = "sweep",
+    unit: str = "-",
+) -> TimeHistory:
+    """Linear or logarithmic sine sweep from ``f0`` to ``f1`` Hz (scipy.signal.chirp)."""
+    if kind not in ("linear", "log"):
+        raise ValueError(f"kind must be 'linear' or 'log', got {kind!r}")
+    if not (0 <= f0 < fs / 2 and 0 < f1 <= fs / 2) or (kind == "log" and f0 <= 0):
+        raise ValueError(
+            f"sweep {f0}-{f1} Hz must lie in (0, fs/2 = {fs / 2}] (log sweeps need f0 > 0)"
+        )
+    t = np.arange(round(duration * fs)) / fs
+    method = "linear" if kind == "linear" else "logarithmic"
+    x = amplitude * signal.chirp(t, f0=f0, t1=duration, f1=f1, method=method, phi=-90)
+    return TimeHistory(x, fs, [name], [unit])
+
+
+def rig_specific_psd(sweep_drive, sweep_response, *, nperseg: int = 256, floor: float = 0.02):
+    """Rig-specific identification PSDs from a low-amplitude sweep (Algorithm 3.1).
+
+    For each channel k: ``psd_jk = mean(drvpsd_k) * (2 - respsd_jk / mean(respsd_k))``: the drive
+    PSD is lowered where the response is resonant and raised where it is weak. Values below
+    ``floor`` times the mean drive PSD are raised to it (the formula goes negative at strong
+    resonances; a PSD must stay non-negative).
+
+    Parameters
+    ----------
+    sweep_drive, sweep_response : TimeHistory
+        The sweep drives and the rig's responses (same number of channels: channel k of the
+        response is paired with drive k, as in the text).
+
+    Returns
+    -------
+    list of callables, one PSD shape per channel (interpolating the spectral lines).
+    """
+    if not isinstance(sweep_drive, TimeHistory) or not isinstance(sweep_response, TimeHistory):
+        raise TypeError("sweep_drive and sweep_response must be TimeHistory records")
+    if sweep_drive.n_channels != sweep_response.n_channels:
+        raise ValueError(
+            f"Algorithm 3.1 pairs drive k with response k: got {sweep_drive.n_channels} drives and "
+            f"{sweep_response.n_channels} responses"
+        )
+    if sweep_drive.fs != sweep_response.fs or sweep_drive.n_samples != sweep_response.n_samples:
+        raise ValueError("sweep drive and response must have the same fs and length")
+    fs = sweep_drive.fs
+    f, drv = signal.welch(sweep_drive.data, fs=fs, nperseg=nperseg, axis=0)
+    _, res = signal.welch(sweep_response.data, fs=fs, nperseg=nperseg, axis=0)
+    band = drv.mean(axis=1) > 1e-3 * drv.mean(axis=1).max()  # the swept band
+    shapes = []
+    for k in range(drv.shape[1]):
+        mean_drv = drv[band, k].mean()
+        mean_res = res[band, k].mean()
+        amp = mean_drv * (2.0 - res[:, k] / mean_res)
+        amp = np.where(band, np.maximum(amp, floor * mean_drv), 0.0)
+        shapes.append(lambda x, amp=amp: np.interp(x, f, amp, left=0.0, right=0.0))
+    return shapes
