@@ -8,7 +8,10 @@ physics step. Per channel and physics step:
   valve command ``i = kp e + ki ∫e + kd de/dt - k_dp p_L / P_s + valve noise``, clipped to ±1
   (anti-windup: the integrator holds while the command saturates). The delta-P term
   (``pressure_feedback``) is the usual stabilisation of the lightly damped oil-column resonance;
-  the integrator removes the static error it causes under load;
+  the integrator removes the static error it causes under load. It damps the oil-column mode
+  when that mode lies below the servo-valve bandwidth; with a light payload or a small oil
+  volume (oil-column mode above the valve frequency) it can destabilise it: set it to 0 and use
+  cross-port ``leakage`` for damping (the radiator and motorcycle rigs do);
 * **servo valve**: second-order spool dynamics ``x_v'' = ω_v² (i - x_v) - 2 ζ_v ω_v x_v'``,
   spool travel ±1;
 * **flow** through the valve, load dependent (orifice law):
