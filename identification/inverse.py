@@ -9,10 +9,13 @@ restores causality.
 
 from __future__ import annotations
 
+import copy
+
 import numpy as np
 
+from . import metrics
 from ._validation import as_signal, check_same_length
-from .errors import IdentificationError
+from .errors import IdentificationError, SimulationDivergedError
 from .models import Narx
 
 __all__ = ["InverseModel", "estimate_delay"]
@@ -74,11 +77,17 @@ class InverseModel:
     ----------
     model : Narx or Arx (unfitted)
         The structure of the inverse model (its inputs are the responses, its outputs the drives).
-    lead : int or "auto"
+    lead : int, "delay" or "auto"
         Time shift in samples: the drive at t is modelled from responses up to t + lead.
-        ``"auto"`` estimates the rig delay with :func:`estimate_delay`.
+        ``"delay"`` uses the rig delay from :func:`estimate_delay`. ``"auto"`` (default) also
+        tries the next ``lead_search`` leads and keeps the one whose inverse model reproduces the
+        identification drive best in free run: a transducer/anti-alias lag makes the first
+        response coefficient small, and an inverse built on it is unstable; one more sample of
+        lead fixes that.
     max_lead : int
-        Largest delay considered by ``lead="auto"``.
+        Largest delay considered by the delay estimate.
+    lead_search : int
+        Extra leads tried by ``"auto"``.
 
     Examples
     --------
@@ -86,35 +95,58 @@ class InverseModel:
     >>> first_drive = inv.simulate(desired_response)                          # doctest: +SKIP
     """
 
-    def __init__(self, model: Narx, *, lead: int | str = 0, max_lead: int = 32):
+    def __init__(
+        self, model: Narx, *, lead: int | str = "auto", max_lead: int = 32, lead_search: int = 3
+    ):
         if not isinstance(model, Narx):
             raise IdentificationError(
                 f"model must be a Narx or Arx instance, got {type(model).__name__}"
             )
-        if lead != "auto" and (not isinstance(lead, (int, np.integer)) or lead < 0):
+        if lead not in ("auto", "delay") and (not isinstance(lead, (int, np.integer)) or lead < 0):
             raise IdentificationError(
-                f"lead must be a non-negative integer or 'auto', got {lead!r}"
+                f"lead must be a non-negative integer, 'delay' or 'auto', got {lead!r}"
             )
         self.model = model
         self.lead = lead
         self.max_lead = max_lead
+        self.lead_search = lead_search
 
     def fit(self, drive, response, *, drive_names=None, response_names=None):
         """Fit the inverse from an identification drive (N, n_drives) and response (N, n_resp)."""
         drive = as_signal(drive, "drive")
         response = as_signal(response, "response")
         check_same_length(drive, response, "drive", "response")
-        if self.lead == "auto":
-            lead = estimate_delay(drive, response, max_lag=self.max_lead)
-        else:
-            lead = int(self.lead)
         N = drive.shape[0]
-        if lead >= N // 2:
-            raise IdentificationError(f"lead {lead} is too long for a record of {N} samples")
-        self.lead_ = lead
-        self.model.fit(
-            response[lead:], drive[: N - lead], input_names=response_names, output_names=drive_names
-        )
+        if self.lead in ("auto", "delay"):
+            delay = estimate_delay(drive, response, max_lag=self.max_lead)
+            candidates = (
+                [delay] if self.lead == "delay" else range(delay, delay + 1 + self.lead_search)
+            )
+        else:
+            candidates = [int(self.lead)]
+        best = None
+        for lead in candidates:
+            if lead >= N // 2:
+                raise IdentificationError(f"lead {lead} is too long for a record of {N} samples")
+            model = copy.deepcopy(self.model)
+            model.fit(
+                response[lead:],
+                drive[: N - lead],
+                input_names=response_names,
+                output_names=drive_names,
+            )
+            if len(candidates) == 1:
+                best = (0.0, lead, model)
+                break
+            try:
+                sim = model.simulate(response[lead:])
+                score = float(np.mean(metrics.qantim_fit_dc(drive[: N - lead], sim)))
+            except SimulationDivergedError:
+                score = np.inf
+            if best is None or score < best[0]:
+                best = (score, lead, model)
+        self.lead_ = best[1]
+        self.model = best[2]
         return self
 
     def simulate(self, response, *, bound=None) -> np.ndarray:

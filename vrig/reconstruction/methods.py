@@ -1,0 +1,191 @@
+"""Reconstruction methods: how a drive is computed from a (desired) response.
+
+Every method has the same small interface:
+
+* ``identify(iddrv, idres)`` — fit the inverse of the rig from processed identification records;
+* ``drive(response)`` — the drive the inverse model predicts for a response record.
+
+The iteration (:func:`vrig.reconstruction.reconstruct`) computes ``IT00DRV = drive(DESRES)`` and
+corrects with ``ITn+1DRV = ITnDRV + gain * (drive(DESRES) - drive(ITnRES))``, which for a
+linear inverse equals ``gain * drive(DESRES - ITnRES)`` and stays meaningful for a non-linear one.
+
+Methods: :class:`InverseArx` (QanTiM), :class:`InverseNarx`, :class:`SplitSpectra` (two bands,
+each its own inverse model) and :class:`InverseFrf` (H1 estimate, inverse by truncated SVD /
+Tikhonov per frequency line: the MTS RPC / Simcenter TWR baseline).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy import signal
+
+from identification import Arx, InverseModel, Narx
+
+from ..processing import band_split
+from ..timehistory import TimeHistory
+
+__all__ = ["METHODS", "InverseArx", "InverseFrf", "InverseNarx", "SplitSpectra", "make_method"]
+
+
+class _InverseTimeDomain:
+    """An inverse ARX/NARX model with a lead for rig delay."""
+
+    name = "time-domain"
+
+    def _model(self):  # pragma: no cover - abstract
+        raise NotImplementedError
+
+    def __init__(self, *, lead="auto", max_lead: int = 32):
+        self.lead = lead
+        self.max_lead = max_lead
+
+    def identify(self, iddrv: TimeHistory, idres: TimeHistory) -> None:
+        lead = (
+            self.lead if self.lead == "auto" or not hasattr(self, "inverse") else self.inverse.lead_
+        )
+        self.inverse = InverseModel(self._model(), lead=lead, max_lead=self.max_lead).fit(
+            iddrv.data, idres.data, drive_names=iddrv.names, response_names=idres.names
+        )
+
+    def drive(self, response: TimeHistory) -> np.ndarray:
+        return self.inverse.simulate(response.data, bound=np.inf)
+
+    def describe(self) -> str:
+        m = self.inverse.model
+        return f"{self.name}: {type(m).__name__} {m.n_terms_.tolist()} terms, lead {self.inverse.lead_}"
+
+
+class InverseArx(_InverseTimeDomain):
+    """Time-domain inverse ARX model (the QanTiM method, full-order structure eq. 4-15)."""
+
+    name = "arx"
+
+    def __init__(self, order: int = 4, **kw):
+        super().__init__(**kw)
+        self.order = order
+
+    def _model(self):
+        return Arx(order=self.order)
+
+
+class InverseNarx(_InverseTimeDomain):
+    """Time-domain inverse polynomial NARX model (any order/degree; ``kind`` = "full", "pure"
+    (purely quadratic, eq. 5-24) or "quasi-static" (eq. 5-25))."""
+
+    name = "narx"
+
+    def __init__(self, order: int = 4, degree: int = 2, *, kind: str = "full", **kw):
+        super().__init__(**kw)
+        self.order, self.degree, self.kind = order, degree, kind
+
+    def _model(self):
+        return Narx(order=self.order, degree=self.degree, kind=self.kind)
+
+
+class SplitSpectra:
+    """Split-spectra modelling (§3.2, §5.5.3): one inverse model per band, drives superposed.
+
+    ``low`` and ``high`` are methods (e.g. a non-linear low band and a linear high band); the
+    identification and response records are split at ``split_hz`` with complementary zero-phase
+    filters.
+    """
+
+    name = "split"
+
+    def __init__(self, split_hz: float, low=None, high=None):
+        self.split_hz = split_hz
+        self.low = low or InverseArx(4)
+        self.high = high or InverseArx(4)
+
+    def identify(self, iddrv: TimeHistory, idres: TimeHistory) -> None:
+        d_lo, d_hi = band_split(iddrv, self.split_hz)
+        r_lo, r_hi = band_split(idres, self.split_hz)
+        self.low.identify(d_lo, r_lo)
+        self.high.identify(d_hi, r_hi)
+
+    def drive(self, response: TimeHistory) -> np.ndarray:
+        r_lo, r_hi = band_split(response, self.split_hz)
+        return self.low.drive(r_lo) + self.high.drive(r_hi)
+
+    def describe(self) -> str:
+        return f"split at {self.split_hz:g} Hz: low [{self.low.describe()}], high [{self.high.describe()}]"
+
+
+class InverseFrf:
+    """Frequency-domain inverse (RPC/TWR baseline): H1 estimate and a regularised inverse.
+
+    ``H(f) = S_yu(f) S_uu(f)^-1`` from Welch cross-spectra of the identification records; the
+    inverse per frequency line is the truncated-SVD pseudo-inverse (singular values below
+    ``rcond`` of the largest dropped) with Tikhonov damping ``tikhonov * s_max``. The drive for a
+    response is ``irfft(H^-1(f) R(f))`` on the record's own frequency grid (H^-1 interpolated).
+    """
+
+    name = "frf"
+
+    def __init__(self, *, nperseg: int = 512, rcond: float = 1e-3, tikhonov: float = 1e-3):
+        self.nperseg, self.rcond, self.tikhonov = nperseg, rcond, tikhonov
+
+    def identify(self, iddrv: TimeHistory, idres: TimeHistory) -> None:
+        u, y, fs = iddrv.data, idres.data, iddrv.fs
+        nper = min(self.nperseg, u.shape[0] // 4)
+        f, suu = _cross(u, u, fs, nper)
+        _, syu = _cross(y, u, fs, nper)
+        self.f = f
+        H = np.einsum("fij,fjk->fik", syu, np.linalg.pinv(suu))  # (F, ny, nu)
+        U, s, Vh = np.linalg.svd(H, full_matrices=False)
+        keep = s >= self.rcond * s[:, :1]
+        lam = self.tikhonov * s[:, :1]
+        sinv = np.where(keep, s / (s**2 + lam**2), 0.0)
+        self.Hinv = np.einsum("fji,fj,fkj->fik", Vh.conj(), sinv, U.conj())  # (F, nu, ny)
+        _, syy = _cross(y, y, fs, nper)
+        self.coherence = np.real(
+            np.einsum("fij,fjk,fki->fi", syu, np.linalg.pinv(suu), syu.conj().transpose(0, 2, 1))
+            / np.maximum(np.real(np.einsum("fii->fi", syy)), 1e-300)
+        )
+        self.fs = fs
+
+    def drive(self, response: TimeHistory) -> np.ndarray:
+        r = response.data
+        n = r.shape[0]
+        R = np.fft.rfft(r, axis=0)
+        fr = np.fft.rfftfreq(n, 1.0 / self.fs)
+        Hi = np.empty((fr.size, *self.Hinv.shape[1:]), dtype=complex)
+        for i in range(self.Hinv.shape[1]):
+            for j in range(self.Hinv.shape[2]):
+                Hi[:, i, j] = np.interp(fr, self.f, self.Hinv[:, i, j].real) + 1j * np.interp(
+                    fr, self.f, self.Hinv[:, i, j].imag
+                )
+        return np.fft.irfft(np.einsum("fij,fj->fi", Hi, R), n=n, axis=0)
+
+    def describe(self) -> str:
+        return f"frf: H1 with {self.f.size} lines, truncated-SVD/Tikhonov inverse"
+
+
+def _cross(a, b, fs, nperseg):
+    """Cross-spectral matrices S_ab(f) (F, na, nb) by Welch averaging."""
+    f = None
+    out = []
+    for i in range(a.shape[1]):
+        row = []
+        for j in range(b.shape[1]):
+            f, s = signal.csd(a[:, i], b[:, j], fs=fs, nperseg=nperseg)
+            row.append(np.conj(s))  # scipy's csd(x, y) = conj(X) Y: conj gives X conj(Y)
+        out.append(row)
+    return f, np.array(out).transpose(2, 0, 1)
+
+
+METHODS = {"arx": InverseArx, "narx": InverseNarx, "split": SplitSpectra, "frf": InverseFrf}
+
+
+def make_method(method, **options):
+    """A method object from a name (``"arx"``, ``"narx"``, ``"split"``, ``"frf"``) and options,
+    or the given object if it already has ``identify`` and ``drive``."""
+    if hasattr(method, "identify") and hasattr(method, "drive"):
+        if options:
+            raise ValueError("options are only for methods given by name")
+        return method
+    try:
+        cls = METHODS[method]
+    except (KeyError, TypeError):
+        raise ValueError(f"unknown method {method!r}; choose one of {sorted(METHODS)}") from None
+    return cls(**options)
