@@ -79,11 +79,11 @@ class InverseModel:
         The structure of the inverse model (its inputs are the responses, its outputs the drives).
     lead : int, "delay" or "auto"
         Time shift in samples: the drive at t is modelled from responses up to t + lead.
-        ``"delay"`` uses the rig delay from :func:`estimate_delay`. ``"auto"`` (default) also
-        tries the next ``lead_search`` leads and keeps the one whose inverse model reproduces the
-        identification drive best in free run: a transducer/anti-alias lag makes the first
-        response coefficient small, and an inverse built on it is unstable; one more sample of
-        lead fixes that.
+        ``"delay"`` uses the rig delay from :func:`estimate_delay`. ``"auto"`` (default) tries
+        leads 0 .. ``lead_search``, the delay estimate and one more, and keeps the one whose
+        inverse model reproduces the identification drive best in free run: a transducer or
+        anti-alias lag makes the first response coefficient small, and an inverse built on it is
+        unstable, while one more sample of lead is not.
     max_lead : int
         Largest delay considered by the delay estimate.
     lead_search : int
@@ -119,9 +119,10 @@ class InverseModel:
         N = drive.shape[0]
         if self.lead in ("auto", "delay"):
             delay = estimate_delay(drive, response, max_lag=self.max_lead)
-            candidates = (
-                [delay] if self.lead == "delay" else range(delay, delay + 1 + self.lead_search)
-            )
+            if self.lead == "delay":
+                candidates = [delay]
+            else:  # short leads and the delay estimate (with one more sample), by free-run error
+                candidates = sorted({*range(self.lead_search + 1), delay, delay + 1})
         else:
             candidates = [int(self.lead)]
         best = None

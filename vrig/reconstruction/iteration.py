@@ -15,12 +15,13 @@ from dataclasses import dataclass, field
 
 import numpy as np
 import rainflow
+from scipy import signal
 from tqdm.auto import tqdm
 
 from identification import metrics
 
 from ..errors import RigLimitError
-from ..processing import gprepro, identification_band
+from ..processing import decimate, gprepro, identification_band
 from ..signals import random_drive, triangular_psd
 from ..timehistory import TimeHistory
 from .methods import make_method
@@ -130,6 +131,7 @@ def reconstruct(
     id_rms: float | None = None,
     divergence: float = 1.5,
     min_increase: float = 1.0,
+    decimation: int | None = None,
     seed: int = 0,
     progress: bool = False,
     **method_options,
@@ -159,6 +161,11 @@ def reconstruct(
     divergence, min_increase : float
         Stop when the mean η0 exceeds ``divergence`` times the best so far and by more than
         ``min_increase`` percentage points (so scatter at the noise floor is not divergence).
+    decimation : int, optional
+        Models work at ``fs / decimation`` (zero-phase decimation of the processed records; the
+        drives are interpolated back to fs before they are sent). Default: the largest integer
+        keeping at least 8 samples per period of the identification band's upper edge: a record
+        sampled far above its band makes the lagged regressors nearly collinear (Table 5.1).
     seed : int
         Seeds the identification drive and every rig run (reproducible).
     """
@@ -181,6 +188,16 @@ def reconstruct(
     band = tuple(bandwidth) if bandwidth is not None else tuple(rig.bandwidth)
     id_band = identification_band(band, fs=rig.fs)
     method = make_method(method, **method_options)
+    if decimation is None:
+        decimation = max(1, int(rig.fs // (8 * id_band[1])))
+    if not isinstance(decimation, int) or decimation < 1:
+        raise ValueError(f"decimation must be a positive integer, got {decimation!r}")
+
+    def down(th: TimeHistory) -> TimeHistory:
+        return decimate(th, decimation)
+
+    def up(x: np.ndarray, n: int) -> np.ndarray:
+        return x if decimation == 1 else signal.resample_poly(x, decimation, 1, axis=0)[:n]
 
     # identification
     n_id = round((id_duration or desired.duration) * rig.fs)
@@ -213,12 +230,12 @@ def reconstruct(
             0.0,
             hint="(no identification drive amplitude ran without a trip)",
         )
-    iddrv_p, idres_p = gprepro(iddrv, id_band), gprepro(idres, id_band)
-    method.identify(iddrv_p, idres_p)
+    method.identify(down(gprepro(iddrv, id_band)), down(gprepro(idres, id_band)))
 
     desres = gprepro(desired, band)
-    target = method.drive(desres)
-    drive = target.copy()
+    n = desres.n_samples
+    target = method.drive(down(desres))
+    drive = up(target, n)
     result = ReconstructionResult(
         desired=desres,
         id_drive=iddrv,
@@ -265,9 +282,9 @@ def reconstruct(
         if it == iterations:
             break
         if strategy == "adaptive":
-            method.identify(gprepro(drv, id_band), gprepro(raw, id_band))
-            target = method.drive(desres)
-        drive = drive + gain * (target - method.drive(res))
+            method.identify(down(gprepro(drv, id_band)), down(gprepro(raw, id_band)))
+            target = method.drive(down(desres))
+        drive = drive + gain * up(target - method.drive(down(res)), n)
     bar.close()
     if not errs:
         raise RigLimitError(
