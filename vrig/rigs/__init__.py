@@ -17,6 +17,7 @@ from .mujoco_rig import MujocoRig, _models_dir
 from .spec import ChannelSpec, read_description
 
 __all__ = [
+    "COMMON_DIR",
     "AntiAliasFilter",
     "ChannelSpec",
     "HydraulicActuator",
@@ -26,6 +27,10 @@ __all__ = [
     "load_rig",
     "rig_path",
 ]
+
+
+COMMON_DIR = _models_dir() / "common"
+"""Folder of the shared MJCF parts (``hydraulic.xml``) to include from a user's rig."""
 
 
 def list_rigs() -> list[str]:
