@@ -89,3 +89,27 @@ def test_bad_arguments(shaker_case):
         reconstruct(rig, desired, gain=0.0)
     with pytest.raises(ValueError, match="sampled at"):
         reconstruct(rig, vrig.TimeHistory(desired.data, fs=100.0))
+
+
+def test_offline_iteration_with_a_file_backed_rig(tmp_path, shaker_case):
+    """Drives go out as RPC III files and responses come back as files (an external lab)."""
+    from vrig import io
+    from vrig.rigs import FileRig
+
+    lab, desired = shaker_case
+    played = []
+
+    def respond(drive_path):
+        drive = io.read(drive_path)
+        played.append(drive_path.name)
+        out = tmp_path / drive_path.with_suffix(".rsp").name
+        io.write_rpc3(out, lab.run(drive.data, seed=len(played)), data_type="FLOATING_POINT")
+        return out
+
+    rig = FileRig(
+        tmp_path / "test", lab.inputs, lab.outputs, lab.fs, respond, bandwidth=lab.bandwidth
+    )
+    res = reconstruct(rig, desired, method="arx", order=4, iterations=3, bandwidth=BAND)
+    assert played[:2] == ["RUN000.drv", "RUN001.drv"]  # identification drive, then IT00DRV
+    assert len(played) == 1 + res.errors.shape[0]
+    assert res.errors.min() < 5.0

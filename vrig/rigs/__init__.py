@@ -12,6 +12,7 @@ from pathlib import Path
 
 from ..errors import RigModelError
 from .daq import AntiAliasFilter, Transducer
+from .file_rig import FileRig
 from .hydraulics import HydraulicActuator
 from .mujoco_rig import MujocoRig, _models_dir
 from .spec import ChannelSpec, read_description
@@ -20,6 +21,7 @@ __all__ = [
     "COMMON_DIR",
     "AntiAliasFilter",
     "ChannelSpec",
+    "FileRig",
     "HydraulicActuator",
     "MujocoRig",
     "Transducer",
