@@ -11,7 +11,8 @@ the reference. Three measures, per response channel:
 * :func:`signal_to_noise` — the more sensitive measure the text asks for: per frequency line,
   ``10 log10(P_mean(f) / P_dev(f))`` [dB], the PSD of the mean response against the PSD of the
   run-to-run deviation (unbiased: scaled by n/(n-1)). It separates the repeatable part of the
-  response from the non-repeatable part in every band; noise-only bands score ~0 dB.
+  response from the non-repeatable part in every band; bands holding only noise score far
+  below 0 dB (floored at -60 dB).
 """
 
 from __future__ import annotations
@@ -71,6 +72,6 @@ def signal_to_noise(runs, fs: float, *, nperseg: int = 256):
     _, p_dev = _psd(a - mean, fs, nperseg)
     p_dev = p_dev.mean(axis=0) * n / (n - 1)  # deviation from the sample mean is biased low
     # the mean of n runs still carries 1/n of the noise power
-    p_signal = np.maximum(p_mean - p_dev / n, 0.0)
-    with np.errstate(divide="ignore"):
+    p_signal = np.maximum(p_mean - p_dev / n, 1e-6 * p_dev)  # floor: -60 dB
+    with np.errstate(divide="ignore", invalid="ignore"):
         return f, 10.0 * np.log10(np.maximum(p_signal, 1e-300) / np.maximum(p_dev, 1e-300))
