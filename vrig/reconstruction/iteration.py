@@ -22,6 +22,7 @@ from identification import metrics
 
 from ..errors import RigLimitError
 from ..processing import decimate, gprepro, identification_band
+from ..rigs.spec import check_drive_limits
 from ..signals import random_drive, triangular_psd
 from ..timehistory import TimeHistory
 from .methods import make_method
@@ -104,18 +105,7 @@ def _scores(desired: TimeHistory, response: TimeHistory):
 
 
 def _check_drive(rig, drive: np.ndarray, what: str) -> None:
-    for j, c in enumerate(rig.inputs):
-        peak = np.abs(drive[:, j]).max()
-        if peak > c.full_scale:
-            raise RigLimitError(
-                "drive",
-                c.name,
-                float("nan"),
-                peak,
-                c.full_scale,
-                c.unit,
-                hint=f"({what} was not sent)",
-            )
+    check_drive_limits(rig.inputs, drive, fs=rig.fs, what=what)
 
 
 def reconstruct(

@@ -13,9 +13,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import RigLimitError
 from ..timehistory import TimeHistory
-from .spec import ChannelSpec
+from .spec import ChannelSpec, check_drive_limits
 
 __all__ = ["FileRig"]
 
@@ -74,18 +73,7 @@ class FileRig:
             data = data[:, None]
         if data.ndim != 2 or data.shape[1] != len(self.inputs):
             raise ValueError(f"drive must have shape (N, {len(self.inputs)}), got {data.shape}")
-        for j, c in enumerate(self.inputs):
-            peak = np.abs(data[:, j]).max()
-            if peak > c.full_scale:
-                raise RigLimitError(
-                    "drive",
-                    c.name,
-                    float("nan"),
-                    peak,
-                    c.full_scale,
-                    c.unit,
-                    hint="(the drive file was not written)",
-                )
+        check_drive_limits(self.inputs, data, fs=self.fs, what="the drive file")
         th = TimeHistory(
             data, self.fs, [c.name for c in self.inputs], [c.unit for c in self.inputs]
         )

@@ -19,7 +19,14 @@ from mujoco import rollout
 from ..errors import RigLimitError, RigModelError, SimulationInstabilityError
 from ..timehistory import TimeHistory
 from . import hydraulics
-from .spec import ChannelSpec, InputDef, OutputDef, RigDescription, read_description
+from .spec import (
+    ChannelSpec,
+    InputDef,
+    OutputDef,
+    RigDescription,
+    check_drive_limits,
+    read_description,
+)
 
 __all__ = ["MujocoRig"]
 
@@ -80,8 +87,12 @@ class MujocoRig:
         ratio = 1.0 / (desc.fs * self.timestep)
         self.decimation = round(ratio)
         if abs(ratio - self.decimation) > 1e-6 or self.decimation < 1:
-            hint = (" (fidelity='fast' halves the physics rate: it needs fs to divide half the "
-                    "documented physics rate)" if fidelity == "fast" else "")
+            hint = (
+                " (fidelity='fast' halves the physics rate: it needs fs to divide half the "
+                "documented physics rate)"
+                if fidelity == "fast"
+                else ""
+            )
             raise RigModelError(
                 f"{desc.name}: the physics rate {1 / self.timestep:g} Hz must be an integer multiple "
                 f"of fs = {desc.fs:g} Hz{hint}"
@@ -316,19 +327,7 @@ class MujocoRig:
             raise ValueError(
                 f"drive contains NaN or inf (first at sample {bad[0]}, channel {bad[1]})"
             )
-        for j, c in enumerate(self._inputs):
-            over = np.abs(x[:, j]) > c.spec.full_scale
-            if over.any():
-                i = int(np.argmax(over))
-                raise RigLimitError(
-                    "drive",
-                    c.spec.name,
-                    float("nan"),
-                    x[i, j],
-                    c.spec.full_scale,
-                    c.spec.unit,
-                    hint=f"(sample {i}, t = {i / self.fs:.4f} s): the drive was not sent; scale it down.",
-                )
+        check_drive_limits(self.inputs, x, fs=self.fs)
         return x
 
     def run(self, drive, *, seed: int | None = None) -> TimeHistory:

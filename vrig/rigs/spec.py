@@ -12,11 +12,13 @@ import json
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from ..errors import RigModelError
+import numpy as np
+
+from ..errors import RigLimitError, RigModelError
 from .daq import AntiAliasFilter, Transducer
 from .hydraulics import HydraulicActuator
 
-__all__ = ["ChannelSpec", "Parameter", "RigDescription", "read_description"]
+__all__ = ["ChannelSpec", "Parameter", "RigDescription", "check_drive_limits", "read_description"]
 
 
 @dataclass(frozen=True)
@@ -206,3 +208,27 @@ def read_description(path) -> RigDescription:
         parameters=params,
         notes=tuple(raw.get("notes", ())),
     )
+
+
+def check_drive_limits(
+    channels, drive, *, fs: float | None = None, what: str = "the drive"
+) -> None:
+    """Raise :class:`~vrig.errors.RigLimitError` if any drive channel exceeds its full scale.
+
+    A drive beyond a channel's ± full scale is never sent: the error names the channel, the
+    first offending sample (and its time when ``fs`` is given) and says the drive was not sent.
+    """
+    for j, c in enumerate(channels):
+        over = np.abs(drive[:, j]) > c.full_scale
+        if over.any():
+            i = int(np.argmax(over))
+            when = f"sample {i}" + (f", t = {i / fs:.4f} s" if fs else "")
+            raise RigLimitError(
+                "drive",
+                c.name,
+                float("nan"),
+                drive[i, j],
+                c.full_scale,
+                c.unit,
+                hint=f"({when}): {what} was not sent; scale it down.",
+            )
