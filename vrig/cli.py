@@ -1,13 +1,56 @@
-"""The ``vrig`` command line."""
+"""The ``vrig`` command line.
+
+::
+
+    vrig rigs                                   # the shipped rigs, one line each
+    vrig describe shock-absorber                # channels, limits, parameters
+    vrig reconstruct --rig shock-absorber --method arx
+    vrig repeatability --rig shock-absorber
+    vrig demo                                   # identify a generated non-linear MIMO system
+
+``vrig reconstruct`` without ``--desired`` reconstructs a pseudo-field response (reference text
+§6.5): the rig's response to a road-like random drive (triangular PSD over the simulation band,
+10 % of each drive's full scale RMS, halved until the rig runs it with its responses within two
+thirds of their transducer ranges; 1 s fade-in and fade-out). It writes the QanTiM test folder
+(:class:`vrig.testfolder.TestFolder`) and the plots (:mod:`vrig.plots`) into ``--out``.
+
+Exit codes: 0 success, 1 the rig or the iteration failed (interlock trip, unstable model), 2 bad
+arguments.
+"""
 
 from __future__ import annotations
 
 import argparse
 import sys
+import time
+from pathlib import Path
 
-__all__ = ["main"]
+import numpy as np
+
+__all__ = ["DEFAULT_BANDS", "main", "pseudo_field"]
+
+DEFAULT_BANDS = {"shaker": (10.0, 60.0)}
+"""Default simulation bands that differ from a rig's test band: the shaker's accelerometer is
+deaf below ~10 Hz (a ~ ω² x below the 32 Hz suspension resonance; §3.1.1), so the inverse model
+of the full 0-80 Hz band is unstable, and the drive needs headroom below its 80 Hz edge."""
+
+_METHODS = ("arx", "narx", "split", "frf")
+_FIELD_FRACTION = 0.10  # pseudo-field drive RMS as a fraction of full scale (5 mm on the damper)
+_FIELD_HEADROOM = 2 / 3  # pseudo-field responses peak below this fraction of the transducer range
+_FADE_S = 1.0
 
 
+class _UsageError(Exception):
+    """A bad argument: reported with the command's name, exit code 2."""
+
+
+class _Failure(Exception):
+    """The rig or the iteration failed: reported with the command's name, exit code 1."""
+
+
+# ---------------------------------------------------------------------------------------------
+# parser
+# ---------------------------------------------------------------------------------------------
 def _parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(
         prog="vrig",
@@ -24,11 +67,460 @@ def _parser() -> argparse.ArgumentParser:
         default=0.01,
         help="output noise as a fraction of the output std (default 0.01)",
     )
+
+    sub.add_parser("rigs", help="list the shipped rigs")
+    desc = sub.add_parser("describe", help="a rig's channels, limits and parameters")
+    desc.add_argument("rig", help="rig name (see `vrig rigs`) or a user rig's .rig.json/.xml")
+
+    rec = sub.add_parser(
+        "reconstruct",
+        help="drive iteration: reproduce a desired response on a rig",
+        description="Identify the rig's inverse model, iterate the drive towards the desired "
+        "response, print the per-iteration error table and write the QanTiM test folder and "
+        "plots. Without --desired the desired response is a pseudo-field response: the rig's "
+        "response to a road-like random drive (triangular PSD over the simulation band).",
+    )
+    rec.add_argument("--rig", required=True, help="rig name (see `vrig rigs`) or rig file")
+    rec.add_argument(
+        "--method",
+        choices=_METHODS,
+        default="arx",
+        help="inverse model: arx (QanTiM), narx, split (split spectra), frf (H1, RPC-style); "
+        "default arx",
+    )
+    rec.add_argument("--order", type=int, help="model order (arx/narx/split; default 4)")
+    rec.add_argument(
+        "--degree",
+        type=int,
+        help="NARX polynomial degree (narx: default 2; split: makes the low band NARX)",
+    )
+    rec.add_argument(
+        "--split-hz",
+        type=float,
+        help="split frequency [Hz] (split; default: geometric mean of the band, or a quarter of "
+        "its upper edge for a band from 0 Hz)",
+    )
+    rec.add_argument(
+        "--desired",
+        metavar="FILE",
+        help="desired response (.rsp/.drv/.tim RPC III, .csv, .mat, .npz) with the rig's "
+        "response channels at the rig's sample rate",
+    )
+    rec.add_argument("--iterations", type=int, default=5, help="iterations after IT00 (default 5)")
+    rec.add_argument(
+        "--gain", type=float, default=0.8, help="iteration gain in (0, 2] (default 0.8)"
+    )
+    rec.add_argument(
+        "--band",
+        type=float,
+        nargs=2,
+        metavar=("LOW", "HIGH"),
+        help="simulation bandwidth [Hz] (default: the rig's test band; shaker 10-60 Hz because "
+        "its accelerometer is deaf below 10 Hz)",
+    )
+    rec.add_argument(
+        "--seconds",
+        type=float,
+        help="length of the pseudo-field record (default 30 s); with --desired, use only the "
+        "first SECONDS of the file",
+    )
+    rec.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+    rec.add_argument(
+        "--format",
+        dest="fmt",
+        choices=("rsp", "csv", "mat", "npz"),
+        default="rsp",
+        help="record format of the test folder (default rsp: RPC III .drv/.rsp)",
+    )
+    rec.add_argument("--out", help="results folder (default ./results/<rig>-<method>)")
+    rec.add_argument(
+        "--overwrite", action="store_true", help="replace the records of an existing results folder"
+    )
+
+    rep = sub.add_parser(
+        "repeatability",
+        help="play one random drive several times: repeatability and SNR per channel",
+    )
+    rep.add_argument("--rig", required=True, help="rig name (see `vrig rigs`) or rig file")
+    rep.add_argument("--runs", type=int, default=5, help="number of runs (default 5, as §3.1)")
+    rep.add_argument("--seconds", type=float, default=20.0, help="drive length (default 20 s)")
+    rep.add_argument(
+        "--band",
+        type=float,
+        nargs=2,
+        metavar=("LOW", "HIGH"),
+        help="drive band [Hz] (default as for reconstruct)",
+    )
+    rep.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+    rep.add_argument("--out", help="folder of the plot (default ./results/<rig>-repeatability)")
     return p
+
+
+# ---------------------------------------------------------------------------------------------
+# helpers
+# ---------------------------------------------------------------------------------------------
+def _load_rig(name: str, *, seed: int = 0):
+    from . import list_rigs, load_rig
+
+    if not name.endswith((".json", ".xml")) and name not in list_rigs():
+        raise _UsageError(f"unknown rig {name!r}; available rigs: {', '.join(list_rigs())}")
+    if name.endswith((".json", ".xml")) and not Path(name).exists():
+        raise _UsageError(f"no rig file {name}")
+    return load_rig(name, seed=seed)
+
+
+def _band(rig, band) -> tuple[float, float]:
+    if band is None:
+        return tuple(DEFAULT_BANDS.get(rig.name, rig.bandwidth))
+    lo, hi = (float(b) for b in band)
+    if not (np.isfinite(lo) and np.isfinite(hi) and 0 <= lo < hi < rig.fs / 2):
+        raise _UsageError(
+            f"--band {lo:g} {hi:g}: need 0 <= LOW < HIGH < fs/2 = {rig.fs / 2:g} Hz for rig "
+            f"{rig.name!r}"
+        )
+    return lo, hi
+
+
+def pseudo_field(rig, band: tuple[float, float], seconds: float, *, seed: int = 0):
+    """A pseudo-field drive and the rig's response to it (reference text §6.5).
+
+    The drive has a triangular PSD over ``band`` (the QanTiM road-like shape), a 1 s fade-in and
+    fade-out, and 10 % of each drive channel's full scale RMS; the level is halved (up to four
+    times) until the rig runs it without an interlock trip and every response peaks below two
+    thirds of its transducer range (room for the iterations to overshoot).
+
+    Returns
+    -------
+    (drive, response) : TimeHistory, TimeHistory
+        DESDRV and the raw response (FIELD) at the rig's fs.
+    """
+    from scipy.signal.windows import tukey
+
+    from .errors import RigLimitError
+    from .signals import random_drive, triangular_psd
+
+    n = round(seconds * rig.fs)
+    full = np.array([c.full_scale for c in rig.inputs])
+    out_full = np.array([c.full_scale for c in rig.outputs])
+    fade = tukey(n, min(1.0, 2 * _FADE_S / seconds))[:, None]
+    fraction = _FIELD_FRACTION
+    last_error = None
+    for _attempt in range(5):
+        drive = random_drive(
+            triangular_psd(band),
+            n,
+            rig.fs,
+            channels=len(rig.inputs),
+            rms=fraction * full,
+            seed=seed,
+            names=[c.name for c in rig.inputs],
+            unit=rig.inputs[0].unit,
+        )
+        drive = drive.with_data((drive.data - drive.data.mean(axis=0)) * fade)
+        drive = type(drive)(drive.data, drive.fs, drive.names, [c.unit for c in rig.inputs])
+        try:
+            response = rig.run(drive, seed=seed + 10_000)
+        except RigLimitError as exc:
+            last_error = exc
+        else:
+            swing = np.abs(response.data - response.data.mean(axis=0)).max(axis=0)
+            if np.all(swing <= _FIELD_HEADROOM * out_full):
+                return drive, response
+            last_error = None
+        fraction /= 2
+    if last_error is not None:
+        raise last_error
+    return drive, response
+
+
+def _check_desired(desired, rig):
+    """Match a read desired record to the rig's responses (by name, else by position)."""
+    names = [c.name for c in rig.outputs]
+    if abs(desired.fs - rig.fs) > 1e-6 * rig.fs:
+        raise _UsageError(
+            f"--desired is sampled at {desired.fs:g} Hz but rig {rig.name!r} runs at "
+            f"{rig.fs:g} Hz: resample it first"
+        )
+    desired = type(desired)(desired.data, rig.fs, desired.names, desired.units)  # exact fs
+    notes = []
+    if all(n in desired.names for n in names):
+        if list(desired.names) != names:
+            notes.append(f"using channels {names} of the {desired.n_channels} in the file")
+        desired = desired[names]
+    elif desired.n_channels == len(names):
+        notes.append(
+            f"channel names {list(desired.names)} differ from the rig's responses {names}: "
+            "matched by position"
+        )
+        desired = type(desired)(desired.data, desired.fs, names, desired.units)
+    else:
+        raise _UsageError(
+            f"--desired has {desired.n_channels} channels {list(desired.names)} but rig "
+            f"{rig.name!r} has {len(names)} responses {names}"
+        )
+    units = [c.unit for c in rig.outputs]
+    if list(desired.units) != units:
+        notes.append(f"units {list(desired.units)} differ from the rig's {units}")
+    return desired, notes
+
+
+def _method(args, band):
+    from .reconstruction import InverseArx, InverseNarx, SplitSpectra
+
+    m = args.method
+    if args.order is not None and m == "frf":
+        raise _UsageError("--order applies to arx, narx and split, not frf")
+    if args.degree is not None and m not in ("narx", "split"):
+        raise _UsageError("--degree applies to narx and split (a NARX low band), not " + m)
+    if args.split_hz is not None and m != "split":
+        raise _UsageError("--split-hz applies to --method split only")
+    order = 4 if args.order is None else args.order
+    if not 1 <= order <= 20:
+        raise _UsageError(f"--order must be 1..20, got {order}")
+    if args.degree is not None and not 1 <= args.degree <= 5:
+        raise _UsageError(f"--degree must be 1..5, got {args.degree}")
+    if m == "arx":
+        return InverseArx(order), f"arx order {order}"
+    if m == "narx":
+        degree = 2 if args.degree is None else args.degree
+        return InverseNarx(order, degree), f"narx order {order} degree {degree}"
+    if m == "split":
+        lo, hi = band
+        split = args.split_hz
+        if split is None:
+            split = float(np.sqrt(lo * hi)) if lo > 0 else hi / 4
+        if not lo < split < hi:
+            raise _UsageError(
+                f"--split-hz must lie inside the band {lo:g}-{hi:g} Hz, got {split:g}"
+            )
+        low = InverseNarx(order, args.degree) if args.degree else InverseArx(order)
+        kind = f"narx degree {args.degree}" if args.degree else "arx"
+        return (
+            SplitSpectra(split, low=low, high=InverseArx(order)),
+            f"split spectra at {split:g} Hz (low {kind} order {order}, high arx order {order})",
+        )
+    return "frf", "frf (H1, truncated-SVD/Tikhonov inverse)"
+
+
+def _out_dir(out, default: str, overwrite: bool) -> Path:
+    path = Path(out) if out else Path("results") / default
+    if path.exists() and not path.is_dir():
+        raise _UsageError(f"--out {path} is a file, not a folder")
+    if path.is_dir() and any(path.iterdir()) and not overwrite:
+        raise _UsageError(
+            f"results folder {path} is not empty: pass --overwrite to replace its records, or "
+            "choose another --out"
+        )
+    return path
+
+
+# ---------------------------------------------------------------------------------------------
+# commands
+# ---------------------------------------------------------------------------------------------
+def _cmd_rigs(args) -> int:
+    from .rigs import list_rigs, rig_path
+    from .rigs.spec import read_description
+
+    names = list_rigs()
+    width = max((len(n) for n in names), default=0)
+    for name in names:
+        try:
+            d = read_description(rig_path(name))
+            lo, hi = d.bandwidth
+            line = (
+                f"{d.title}  [{len(d.inputs)} drive(s) -> {len(d.outputs)} response(s), "
+                f"fs {d.fs:g} Hz, band {lo:g}-{hi:g} Hz]"
+            )
+        except Exception as exc:  # a broken side-car file must not hide the others
+            line = f"(description unreadable: {exc})"
+        print(f"{name:<{width}}  {line}")
+    print(f"\n{len(names)} rigs; `vrig describe RIG` for channels, limits and parameters")
+    return 0
+
+
+def _cmd_describe(args) -> int:
+    rig = _load_rig(args.rig)
+    print(rig.describe())
+    return 0
+
+
+def _cmd_reconstruct(args) -> int:
+    from . import io
+    from .plots import save_reconstruction_plots
+    from .reconstruction import reconstruct
+    from .testfolder import TestFolder
+
+    t_start = time.perf_counter()
+    if args.iterations < 0 or args.iterations > 99:
+        raise _UsageError(f"--iterations must be 0..99, got {args.iterations}")
+    if not 0 < args.gain <= 2:
+        raise _UsageError(f"--gain must lie in (0, 2], got {args.gain:g}")
+    if args.seconds is not None and not (np.isfinite(args.seconds) and 2 <= args.seconds <= 3600):
+        raise _UsageError(f"--seconds must be 2..3600, got {args.seconds:g}")
+    if args.desired is not None and not Path(args.desired).is_file():
+        raise _UsageError(f"--desired: no file {args.desired}")
+    rig = _load_rig(args.rig, seed=args.seed)
+    band = _band(rig, args.band)
+    method, method_text = _method(args, band)
+    out = _out_dir(args.out, f"{Path(rig.name).stem}-{args.method}", args.overwrite)
+
+    records = {}
+    if args.desired is not None:
+        try:
+            field = io.read(args.desired)
+        except (ValueError, OSError) as exc:
+            raise _UsageError(f"--desired: cannot read {args.desired}: {exc}") from None
+        field, notes = _check_desired(field, rig)
+        if args.seconds is not None:
+            if args.seconds > field.duration:
+                raise _UsageError(
+                    f"--seconds {args.seconds:g} is longer than the {field.duration:g} s in "
+                    f"{args.desired}"
+                )
+            field = field.window(0.0, args.seconds)
+        source = f"{args.desired} ({field.duration:g} s)"
+        for note in notes:
+            print(f"note: {note}")
+    else:
+        seconds = 30.0 if args.seconds is None else args.seconds
+        desdrv, field = pseudo_field(rig, band, seconds, seed=args.seed)
+        records["DESDRV"] = desdrv
+        rms = np.sqrt(np.mean(desdrv.data**2, axis=0)) / [c.full_scale for c in rig.inputs]
+        source = (
+            f"pseudo-field response to a {seconds:g} s random drive (triangular PSD "
+            f"{band[0]:g}-{band[1]:g} Hz, {100 * rms.max():.3g} % of full scale rms, seed "
+            f"{args.seed})"
+        )
+    print(f"rig       {rig.name}: {rig.description.title}")
+    print(f"method    {method_text}, gain {args.gain:g}, {args.iterations} iterations")
+    print(f"band      {band[0]:g}-{band[1]:g} Hz (simulation bandwidth)")
+    print(f"desired   {source}")
+
+    try:
+        result = reconstruct(
+            rig,
+            field,
+            method=method,
+            iterations=args.iterations,
+            gain=args.gain,
+            bandwidth=band,
+            seed=args.seed,
+            progress=True,
+        )
+    except ValueError as exc:  # e.g. a desired record too short for the model
+        raise _Failure(str(exc)) from exc
+    print()
+    print(result.table())
+    best = result.best_iteration
+    print(
+        f"\nbest      IT{best:02d}: η0 "
+        + ", ".join(
+            f"{n} {e:.2f} %" for n, e in zip(result.desired.names, result.errors[best], strict=True)
+        )
+        + "; RMS error "
+        + ", ".join(f"{e:.2f} %" for e in result.rms_errors[best])
+        + "; damage ratio "
+        + ", ".join(f"{d:.3g}" for d in result.damage_ratio[best])
+    )
+    print(f"stopped   {result.stopped or f'after all {args.iterations} iterations'}")
+
+    settings = {
+        "command": "vrig reconstruct",
+        "argv": args.argv,
+        "method": method_text,
+        "gain": args.gain,
+        "iterations": args.iterations,
+        "seed": args.seed,
+        "desired": source,
+    }
+    folder = TestFolder(out)
+    written = folder.save(
+        result,
+        field=field,
+        fmt=args.fmt,
+        rig=rig,
+        records=records,
+        settings=settings,
+        overwrite=args.overwrite,
+    )
+    plots = save_reconstruction_plots(result, out, rig=rig)
+    print(
+        f"\ntest folder {out}/ ({len(written)} files: "
+        + ", ".join(p.name for p in written[:6])
+        + ", ..., "
+        + ", ".join(p.name for p in written[-5:])
+        + ")"
+    )
+    print("plots      " + ", ".join(str(p) for p in plots))
+    print(f"time       {time.perf_counter() - t_start:.1f} s")
+    return 0
+
+
+def _cmd_repeatability(args) -> int:
+    from tqdm.auto import tqdm
+
+    from .plots import repeatability_plot
+    from .repeatability import repeatability_function, repeatability_number, signal_to_noise
+
+    if not 2 <= args.runs <= 50:
+        raise _UsageError(f"--runs must be 2..50 (the text uses 5), got {args.runs}")
+    if not (np.isfinite(args.seconds) and 2 <= args.seconds <= 3600):
+        raise _UsageError(f"--seconds must be 2..3600, got {args.seconds:g}")
+    rig = _load_rig(args.rig, seed=args.seed)
+    band = _band(rig, args.band)
+    out = Path(args.out) if args.out else Path("results") / f"{Path(rig.name).stem}-repeatability"
+    if out.exists() and not out.is_dir():
+        raise _UsageError(f"--out {out} is a file, not a folder")
+
+    drive, first = pseudo_field(rig, band, args.seconds, seed=args.seed)
+    rms = np.sqrt(np.mean(drive.data**2, axis=0)) / [c.full_scale for c in rig.inputs]
+    print(f"rig    {rig.name}: {rig.description.title}")
+    print(
+        f"drive  {args.seconds:g} s random, triangular PSD {band[0]:g}-{band[1]:g} Hz, "
+        f"{100 * rms.max():.3g} % of full scale rms, played {args.runs} times"
+    )
+    runs = [first]
+    for k in tqdm(range(1, args.runs), desc=f"{rig.name}: runs", leave=False):
+        runs.append(rig.run(drive, seed=args.seed + 10_000 + k))
+    number = repeatability_number(runs)
+    nperseg = int(min(drive.n_samples // 4, 2 ** np.ceil(np.log2(2 * rig.fs))))
+    f, rf = repeatability_function(runs, rig.fs, nperseg=nperseg)
+    _, snr = signal_to_noise(runs, rig.fs, nperseg=nperseg)
+    inband = (f >= band[0]) & (f <= band[1]) & (f > 0)
+    names = runs[0].names
+    width = max(len(n) for n in names)
+    print(f"\n{'channel':<{width}}  repeatability  R_f in band (mean)  SNR in band: mean   min")
+    for k, name in enumerate(names):
+        print(
+            f"{name:<{width}}  {number[k]:>12.2f}%  {np.nanmean(rf[inband, k]):>17.1f}%  "
+            f"{np.mean(snr[inband, k]):>15.1f} dB {np.min(snr[inband, k]):>5.1f} dB"
+        )
+    out.mkdir(parents=True, exist_ok=True)
+    fig = repeatability_plot(
+        f,
+        rf,
+        snr,
+        names,
+        band=band,
+        title=f"{rig.name}: repeatability of {args.runs} runs of one drive",
+    )
+    path = out / "repeatability.png"
+    fig.savefig(path, dpi=110)
+    print(f"\nplot   {path}")
+    return 0
+
+
+_COMMANDS = {
+    "rigs": _cmd_rigs,
+    "describe": _cmd_describe,
+    "reconstruct": _cmd_reconstruct,
+    "repeatability": _cmd_repeatability,
+}
 
 
 def main(argv: list[str] | None = None) -> int:
     args = _parser().parse_args(argv)
+    args.argv = list(sys.argv[1:] if argv is None else argv)
     if args.command == "demo":
         from .demo import run_demo
 
@@ -39,7 +531,32 @@ def main(argv: list[str] | None = None) -> int:
             print("vrig demo: --noise must be in [0, 1)", file=sys.stderr)
             return 2
         run_demo(seed=args.seed, n_samples=args.samples, noise=args.noise)
-    return 0
+        return 0
+    from identification.errors import IdentificationError, SimulationDivergedError
+
+    from .errors import RigLimitError, RigModelError, SimulationInstabilityError
+
+    try:
+        return _COMMANDS[args.command](args)
+    except _UsageError as exc:
+        print(f"vrig {args.command}: {exc}", file=sys.stderr)
+        return 2
+    except RigModelError as exc:
+        print(f"vrig {args.command}: {exc}", file=sys.stderr)
+        return 2
+    except (
+        _Failure,
+        RigLimitError,
+        SimulationInstabilityError,
+        IdentificationError,
+        SimulationDivergedError,
+    ) as exc:
+        print(
+            f"vrig {args.command}: failed: {exc}\n(try a narrower --band, a lower --order or "
+            "--gain, or a smaller desired response)",
+            file=sys.stderr,
+        )
+        return 1
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -1,0 +1,396 @@
+"""Figures of a reconstruction (matplotlib): desired in red, achieved in blue, as in the
+reference text.
+
+Every function builds and returns a :class:`matplotlib.figure.Figure` that is not registered with
+``pyplot`` (no global figure state is touched, nothing needs closing; PNGs are rendered with the
+Agg canvas): show one in a notebook by leaving it as the cell's value, or save it with
+``fig.savefig(path)``.
+
+* :func:`overlay` — desired vs achieved time histories, one axes per channel;
+* :func:`psd_compare` — their PSDs (Welch, log scale);
+* :func:`error_vs_iteration` — η0 per channel against the iteration, best iteration marked;
+* :func:`drive_vs_limits` — a drive with the ± full-scale lines of the rig's drive channels;
+* :func:`repeatability_plot` — ``R_f(f)`` and the signal-to-noise ratio against frequency;
+* :func:`save_reconstruction_plots` — the PNGs of a :class:`~vrig.reconstruction.ReconstructionResult`.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from pathlib import Path
+
+import numpy as np
+from matplotlib.figure import Figure
+from scipy import signal
+
+from .timehistory import TimeHistory
+
+__all__ = [
+    "ACHIEVED_COLOR",
+    "DESIRED_COLOR",
+    "drive_vs_limits",
+    "error_vs_iteration",
+    "overlay",
+    "psd_compare",
+    "repeatability_plot",
+    "save_reconstruction_plots",
+]
+
+DESIRED_COLOR = "red"
+"""Colour of desired records (DESRES), as in the reference text's figures."""
+ACHIEVED_COLOR = "blue"
+"""Colour of achieved records (ITxxRES, FINRES)."""
+_LIMIT_COLOR = "black"
+_ROW_HEIGHT = 2.2
+_WIDTH = 10.0
+
+
+def _label(name: str, unit: str) -> str:
+    return f"{name} [{unit}]"
+
+
+def _psd_unit(unit: str) -> str:
+    if unit in ("", "-"):
+        return "1/Hz"
+    return f"({unit})²/Hz" if any(c in unit for c in "/^*· ") else f"{unit}²/Hz"
+
+
+def _check_pair(desired: TimeHistory, achieved: TimeHistory) -> None:
+    for what, th in (("desired", desired), ("achieved", achieved)):
+        if not isinstance(th, TimeHistory):
+            raise TypeError(f"{what} must be a vrig.TimeHistory, got {type(th).__name__}")
+    if desired.n_channels != achieved.n_channels:
+        raise ValueError(
+            f"desired has {desired.n_channels} channels but achieved has {achieved.n_channels}"
+        )
+    if desired.fs != achieved.fs:
+        raise ValueError(
+            f"desired is sampled at {desired.fs:g} Hz but achieved at {achieved.fs:g} Hz"
+        )
+
+
+def _rows(n: int, *, sharex: bool = True) -> tuple[Figure, list]:
+    fig = Figure(figsize=(_WIDTH, 1.0 + _ROW_HEIGHT * n), layout="constrained")
+    axes = fig.subplots(n, 1, sharex=sharex, squeeze=False)[:, 0]
+    return fig, list(axes)
+
+
+def overlay(
+    desired: TimeHistory,
+    achieved: TimeHistory,
+    *,
+    window: tuple[float, float] | None = None,
+    errors: Sequence[float] | None = None,
+    labels: tuple[str, str] = ("desired", "achieved"),
+    title: str | None = None,
+) -> Figure:
+    """Desired (red) and achieved (blue) time histories, one axes per channel.
+
+    Parameters
+    ----------
+    desired, achieved : TimeHistory
+        Same sample rate and number of channels (matched by position; the axes are labelled with
+        the desired record's names and units).
+    window : (start, stop) seconds, optional
+        Show only this part of the records (default: all of it).
+    errors : sequence of float, optional
+        η0 [%] per channel, written in each axes' title.
+    labels : (str, str)
+        Legend entries of the desired and the achieved record.
+    title : str, optional
+        Figure title.
+
+    Returns
+    -------
+    Figure
+        ``n_channels`` axes, each with two lines: desired first (red), achieved second (blue).
+    """
+    _check_pair(desired, achieved)
+    if errors is not None and len(errors) != desired.n_channels:
+        raise ValueError(f"{len(errors)} errors for {desired.n_channels} channels")
+    n = min(desired.n_samples, achieved.n_samples)
+    t = np.arange(n) / desired.fs
+    sel = slice(None)
+    if window is not None:
+        t0, t1 = window
+        if not 0 <= t0 < t1:
+            raise ValueError(
+                f"window must be (start, stop) seconds with 0 <= start < stop, got {window}"
+            )
+        sel = (t >= t0) & (t < t1)
+        if not sel.any():
+            raise ValueError(f"window {window} s holds no samples of the {t[-1]:g} s records")
+    fig, axes = _rows(desired.n_channels)
+    for k, ax in enumerate(axes):
+        ax.plot(t[sel], desired.data[:n, k][sel], color=DESIRED_COLOR, lw=0.9, label=labels[0])
+        ax.plot(t[sel], achieved.data[:n, k][sel], color=ACHIEVED_COLOR, lw=0.9, label=labels[1])
+        ax.set_ylabel(_label(desired.names[k], desired.units[k]))
+        ax.grid(True, alpha=0.3)
+        if errors is not None:
+            ax.set_title(f"{desired.names[k]}: η0 = {errors[k]:.2f} %", fontsize="medium")
+    axes[0].legend(loc="upper right", fontsize="small")
+    axes[-1].set_xlabel("time [s]")
+    if title:
+        fig.suptitle(title)
+    return fig
+
+
+def psd_compare(
+    desired: TimeHistory,
+    achieved: TimeHistory,
+    *,
+    nperseg: int | None = None,
+    band: tuple[float, float] | None = None,
+    labels: tuple[str, str] = ("desired", "achieved"),
+    title: str | None = None,
+) -> Figure:
+    """PSDs (Welch, log scale) of desired (red) and achieved (blue), one axes per channel.
+
+    Parameters
+    ----------
+    desired, achieved : TimeHistory
+    nperseg : int, optional
+        Welch segment length (default: about 0.5 Hz resolution, at most the record length).
+    band : (low, high) Hz, optional
+        The simulation band: shaded, and the frequency axis ends at twice its upper edge.
+
+    Returns
+    -------
+    Figure
+        ``n_channels`` axes with two lines each (desired first).
+    """
+    _check_pair(desired, achieved)
+    fs = desired.fs
+    n = min(desired.n_samples, achieved.n_samples)
+    if nperseg is None:
+        nperseg = int(2 ** np.ceil(np.log2(2 * fs)))
+    nperseg = max(8, min(int(nperseg), n))
+    f, p_des = signal.welch(desired.data[:n], fs=fs, nperseg=nperseg, axis=0)
+    _, p_ach = signal.welch(achieved.data[:n], fs=fs, nperseg=nperseg, axis=0)
+    fmax = fs / 2 if band is None else min(fs / 2, 2 * band[1])
+    keep = (f > 0) & (f <= fmax)
+    fig, axes = _rows(desired.n_channels)
+    for k, ax in enumerate(axes):
+        ax.semilogy(
+            f[keep],
+            np.maximum(p_des[keep, k], 1e-300),
+            color=DESIRED_COLOR,
+            lw=1.0,
+            label=labels[0],
+        )
+        ax.semilogy(
+            f[keep],
+            np.maximum(p_ach[keep, k], 1e-300),
+            color=ACHIEVED_COLOR,
+            lw=1.0,
+            label=labels[1],
+        )
+        if band is not None:
+            ax.axvspan(band[0], band[1], color="0.9", zorder=0)
+        ax.set_ylabel(f"{desired.names[k]}\nPSD [{_psd_unit(desired.units[k])}]")
+        ax.grid(True, which="both", alpha=0.3)
+    axes[0].legend(loc="upper right", fontsize="small")
+    axes[-1].set_xlabel("frequency [Hz]")
+    axes[-1].set_xlim(0, fmax)
+    if title:
+        fig.suptitle(title)
+    return fig
+
+
+def error_vs_iteration(result, *, title: str | None = None) -> Figure:
+    """η0 [%] per channel against the iteration number, the best iteration marked.
+
+    Parameters
+    ----------
+    result : ReconstructionResult
+        Uses ``errors`` (iterations + 1, n_outputs), ``best_iteration`` and ``desired.names``.
+
+    Returns
+    -------
+    Figure
+        One axes: a line per channel, a dashed black mean line when there is more than one
+        channel, and a grey vertical line at the best iteration (the last line).
+    """
+    errors = np.asarray(result.errors, dtype=float)
+    if errors.ndim != 2 or errors.shape[0] == 0:
+        raise ValueError(f"result.errors must be (iterations + 1, channels), got {errors.shape}")
+    names = result.desired.names
+    its = np.arange(errors.shape[0])
+    fig = Figure(figsize=(8.0, 4.5), layout="constrained")
+    ax = fig.add_subplot()
+    for k in range(errors.shape[1]):
+        ax.plot(its, errors[:, k], marker="o", label=names[k])
+    if errors.shape[1] > 1:
+        ax.plot(its, errors.mean(axis=1), "k--", marker="s", label="mean")
+    best = int(result.best_iteration)
+    ax.axvline(
+        best, color="0.5", ls=":", lw=1.5, label=f"best IT{best:02d} ({errors[best].mean():.2f} %)"
+    )
+    finite = errors[np.isfinite(errors)]
+    if finite.size and finite.min() > 0 and finite.max() / finite.min() > 10:
+        ax.set_yscale("log")
+    ax.set_xlabel("iteration")
+    ax.set_ylabel("η0 [%]")
+    ax.set_xticks(its, [f"IT{i:02d}" for i in its])
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend(fontsize="small")
+    ax.set_title(title or "QanTiM error η0 (eq. 5-28) of ITxxRES against DESRES")
+    return fig
+
+
+def drive_vs_limits(drive: TimeHistory, rig_inputs, *, title: str | None = None) -> Figure:
+    """A drive with the ± full-scale lines of the rig's drive channels.
+
+    Parameters
+    ----------
+    drive : TimeHistory
+    rig_inputs : sequence of ChannelSpec
+        ``rig.inputs``; matched to the drive's channels by name, else by position.
+
+    Returns
+    -------
+    Figure
+        One axes per drive channel: the drive (blue) then the +full-scale and -full-scale lines.
+    """
+    if not isinstance(drive, TimeHistory):
+        raise TypeError(f"drive must be a vrig.TimeHistory, got {type(drive).__name__}")
+    specs = list(rig_inputs)
+    by_name = {c.name: c for c in specs}
+    if all(n in by_name for n in drive.names):
+        specs = [by_name[n] for n in drive.names]
+    elif len(specs) != drive.n_channels:
+        raise ValueError(
+            f"the drive has {drive.n_channels} channels {list(drive.names)} but the rig has "
+            f"{len(specs)} drives {[c.name for c in specs]}"
+        )
+    fig, axes = _rows(drive.n_channels)
+    t = drive.time
+    for k, ax in enumerate(axes):
+        c = specs[k]
+        x = drive.data[:, k]
+        ax.plot(t, x, color=ACHIEVED_COLOR, lw=0.8, label=drive.names[k])
+        ax.axhline(c.full_scale, color=_LIMIT_COLOR, ls="--", lw=1.0, label="± full scale")
+        ax.axhline(-c.full_scale, color=_LIMIT_COLOR, ls="--", lw=1.0)
+        ax.set_ylim(-1.15 * c.full_scale, 1.15 * c.full_scale)
+        ax.set_ylabel(_label(drive.names[k], drive.units[k]))
+        peak = float(np.abs(x).max())
+        ax.set_title(
+            f"{drive.names[k]}: peak {peak:.4g} {drive.units[k]} = "
+            f"{100 * peak / c.full_scale:.1f} % of full scale ±{c.full_scale:g} {c.unit}",
+            fontsize="medium",
+        )
+        ax.grid(True, alpha=0.3)
+    axes[0].legend(loc="upper right", fontsize="small")
+    axes[-1].set_xlabel("time [s]")
+    if title:
+        fig.suptitle(title)
+    return fig
+
+
+def repeatability_plot(
+    f: np.ndarray,
+    rf: np.ndarray,
+    snr: np.ndarray,
+    names: Sequence[str],
+    *,
+    band: tuple[float, float] | None = None,
+    title: str | None = None,
+) -> Figure:
+    """Frequency-related repeatability ``R_f(f)`` [%] and signal-to-noise ratio [dB].
+
+    Parameters
+    ----------
+    f : array (F,)
+        Frequencies [Hz] (from :func:`vrig.repeatability.repeatability_function`).
+    rf, snr : arrays (F, channels)
+        ``R_f`` [%] and :func:`vrig.repeatability.signal_to_noise` [dB].
+    names : channel names.
+    band : (low, high) Hz, optional
+        Shaded; the frequency axis ends at twice its upper edge.
+
+    Returns
+    -------
+    Figure
+        Two axes (R_f on top, SNR below), a line per channel in each.
+    """
+    f = np.asarray(f, dtype=float)
+    rf = np.asarray(rf, dtype=float).reshape(f.size, -1)
+    snr = np.asarray(snr, dtype=float).reshape(f.size, -1)
+    if rf.shape != snr.shape or rf.shape[1] != len(names):
+        raise ValueError(
+            f"rf {rf.shape} and snr {snr.shape} must both be (F, {len(names)} channels)"
+        )
+    fmax = f[-1] if band is None else min(f[-1], 2 * band[1])
+    fig, (ax_r, ax_s) = _rows(2)
+    for k, name in enumerate(names):
+        ax_r.plot(f, rf[:, k], lw=1.0, label=name)
+        ax_s.plot(f, snr[:, k], lw=1.0, label=name)
+    for ax in (ax_r, ax_s):
+        if band is not None:
+            ax.axvspan(band[0], band[1], color="0.9", zorder=0)
+        ax.grid(True, alpha=0.3)
+    ax_r.set_ylabel("R_f(f) [%]")
+    ax_r.set_ylim(max(-100.0, np.nanmin(rf[f <= fmax]) - 5) if np.isfinite(rf).any() else 0, 102)
+    ax_s.set_ylabel("SNR [dB]")
+    ax_s.set_xlabel("frequency [Hz]")
+    ax_s.set_xlim(0, fmax)
+    ax_r.legend(fontsize="small")
+    ax_r.set_title(title or "repeatability: PSD spread R_f(f) and repeatable/non-repeatable power")
+    return fig
+
+
+def save_reconstruction_plots(result, folder, rig=None, *, dpi: int = 110) -> list[Path]:
+    """Write the PNGs of a reconstruction into ``folder`` (created if missing).
+
+    Files: ``overlay.png`` (FINRES vs DESRES, whole record), ``overlay_zoom.png`` (a few
+    seconds in the middle), ``psd.png``, ``error_vs_iteration.png`` and, when ``rig`` is given,
+    ``drive_vs_limits.png`` (FINDRV against the rig's drive full scales). Existing files of these
+    names are replaced.
+
+    Returns
+    -------
+    list of Path
+        The files written.
+    """
+    folder = Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
+    best = int(result.best_iteration)
+    desired, achieved = result.desired, result.final_response
+    errors = np.asarray(result.errors)[best]
+    labels = ("desired (DESRES)", f"achieved (IT{best:02d}RES = FINRES)")
+    band = tuple(result.bandwidth) if result.bandwidth is not None else None
+    figures = {
+        "overlay.png": overlay(
+            desired,
+            achieved,
+            errors=errors,
+            labels=labels,
+            title=f"response reconstruction: best iteration IT{best:02d}",
+        ),
+    }
+    span = min(desired.duration, max(0.5, 30.0 / band[1] if band and band[1] > 0 else 2.0))
+    mid = desired.duration / 2
+    figures["overlay_zoom.png"] = overlay(
+        desired,
+        achieved,
+        window=(max(0.0, mid - span / 2), mid + span / 2),
+        errors=errors,
+        labels=labels,
+        title=f"response reconstruction (detail): IT{best:02d}",
+    )
+    figures["psd.png"] = psd_compare(
+        desired, achieved, band=band, labels=labels, title="PSD of desired and achieved response"
+    )
+    figures["error_vs_iteration.png"] = error_vs_iteration(result)
+    if rig is not None:
+        figures["drive_vs_limits.png"] = drive_vs_limits(
+            result.final_drive,
+            rig.inputs,
+            title=f"final drive FINDRV (IT{best:02d}DRV) and the rig's limits",
+        )
+    written = []
+    for name, fig in figures.items():
+        path = folder / name
+        fig.savefig(path, dpi=dpi)
+        written.append(path)
+    return written

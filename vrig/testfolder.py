@@ -1,0 +1,431 @@
+"""A reconstruction on disk: the QanTiM test folder (reference text App. G, DESIGN §4).
+
+:class:`TestFolder` writes every record of a :class:`~vrig.reconstruction.ReconstructionResult`
+under its QanTiM name, so a run can be inspected with any RPC III tool and later resumed:
+
+=============  ========================================================================
+IDDRV, IDRES   identification drive and (raw) response
+FIELD01        the measured (or pseudo-) field response, when given
+DESRES01       the desired response (processed: GPREPRO over the simulation bandwidth)
+ITxxDRV        the drive of iteration xx (IT00DRV = inverse model of DESRES)
+RITxxRES       the raw rig response to ITxxDRV
+ITxxRES        the processed response (compared with DESRES01)
+FINDRV01       the best iteration's drive
+FINRES01       the best iteration's processed response
+=============  ========================================================================
+
+plus the inverse model(s) (``model.npz``; ``model_low.npz``/``model_high.npz`` for split
+spectra; see :meth:`identification.Narx.load`) and ``summary.json`` (method, bandwidth,
+per-iteration errors, best iteration, stop reason, rig, files).
+
+Records are RPC III by default (drives ``.drv`` with ``TIME_TYPE = DRIVE``, responses ``.rsp``,
+``FLOATING_POINT``: float32, so they read back to float32 precision), or ``.csv``, ``.mat`` or
+``.npz`` (exact). An existing non-empty folder is never overwritten unless ``overwrite=True``.
+
+>>> folder = TestFolder("results/shock-absorber-arx")          # doctest: +SKIP
+>>> folder.save(result, field=field, rig=rig)                  # doctest: +SKIP
+>>> folder.load_iteration(3).response                          # doctest: +SKIP
+"""
+
+from __future__ import annotations
+
+import datetime
+import json
+import re
+from collections.abc import Mapping
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from . import io
+from .timehistory import TimeHistory
+
+__all__ = ["FORMATS", "IterationRecord", "TestFolder"]
+
+FORMATS = ("rsp", "csv", "mat", "npz")
+"""Record formats of :meth:`TestFolder.save` (``rsp``: RPC III ``.drv``/``.rsp``)."""
+
+SUMMARY = "summary.json"
+_FORMAT_ID = "vrig-testfolder"
+_VERSION = 1
+# QanTiM record names; the order of the patterns is the order of the process
+_NAME_PATTERNS = (
+    r"DESDRV",
+    r"IDDRV",
+    r"IDRES",
+    r"FIELD\d\d",
+    r"DESRES\d\d",
+    r"R?IT\d\d(?:DRV|RES)",
+    r"FINDRV\d\d",
+    r"FINRES\d\d",
+)
+_RECORD = re.compile(
+    r"^(" + "|".join(_NAME_PATTERNS) + r")\.(drv|rsp|csv|mat|npz)$", flags=re.IGNORECASE
+)
+_MODEL = re.compile(r"^model(_low|_high)?\.npz$")
+
+
+def _is_drive(name: str) -> bool:
+    return "DRV" in name.upper()
+
+
+def _order_key(name: str) -> tuple:
+    """Process order: IDDRV, IDRES, FIELD, DESRES, IT00DRV, RIT00RES, IT00RES, IT01..., FIN."""
+    n = name.upper()
+    m = re.fullmatch(r"(R?)IT(\d\d)(DRV|RES)", n)
+    if m:
+        within = 0 if m.group(3) == "DRV" else (1 if m.group(1) else 2)
+        return (5, int(m.group(2)), within, n)
+    for rank, prefix in enumerate(("DESDRV", "IDDRV", "IDRES", "FIELD", "DESRES"), start=0):
+        if n.startswith(prefix):
+            return (rank, 0, 0, n)
+    return (6, 0, 0 if n.startswith("FINDRV") else 1, n)
+
+
+def _plain(value):
+    """JSON-safe copy (numpy scalars/arrays to lists, non-finite floats to None)."""
+    if isinstance(value, Mapping):
+        return {str(k): _plain(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_plain(v) for v in value]
+    if isinstance(value, np.ndarray):
+        return _plain(value.tolist())
+    if isinstance(value, (np.integer,)):
+        return int(value)
+    if isinstance(value, (float, np.floating)):
+        v = float(value)
+        return v if np.isfinite(v) else None
+    if isinstance(value, (str, int, bool)) or value is None:
+        return value
+    return str(value)
+
+
+def _inverse_models(method) -> dict:
+    """``{file stem: InverseModel}`` of a method (``model``, or ``model_low``/``model_high``)."""
+    if hasattr(method, "inverse"):
+        return {"model": method.inverse}
+    low, high = getattr(method, "low", None), getattr(method, "high", None)
+    if hasattr(low, "inverse") and hasattr(high, "inverse"):
+        return {"model_low": low.inverse, "model_high": high.inverse}
+    return {}
+
+
+def _method_summary(method) -> dict:
+    out = {"name": getattr(method, "name", type(method).__name__), "class": type(method).__name__}
+    try:
+        out["description"] = method.describe()
+    except Exception:  # a user method without describe(), or not identified
+        out["description"] = type(method).__name__
+    for key in ("order", "degree", "kind", "split_hz", "nperseg", "rcond", "tikhonov"):
+        if hasattr(method, key):
+            out[key] = _plain(getattr(method, key))
+    if hasattr(method, "inverse") and hasattr(method.inverse, "lead_"):
+        out["lead"] = int(method.inverse.lead_)
+    for part in ("low", "high"):
+        sub = getattr(method, part, None)
+        if sub is not None and hasattr(sub, "identify"):
+            out[part] = _method_summary(sub)
+    return out
+
+
+@dataclass(frozen=True)
+class IterationRecord:
+    """The records and scores of one iteration read back from a test folder.
+
+    Attributes
+    ----------
+    index : int
+        Iteration number xx.
+    drive, raw_response, response : TimeHistory
+        ITxxDRV, RITxxRES and ITxxRES.
+    eta0, rms_error, damage_ratio : ndarray (n_outputs,)
+        η0 [%], RMS error [%] and pseudo-damage ratio of ITxxRES against DESRES (from the
+        summary).
+    """
+
+    index: int
+    drive: TimeHistory
+    raw_response: TimeHistory
+    response: TimeHistory
+    eta0: np.ndarray
+    rms_error: np.ndarray
+    damage_ratio: np.ndarray
+
+
+class TestFolder:
+    """A QanTiM test folder (see the module docstring).
+
+    Parameters
+    ----------
+    path : str or Path
+        The folder; :meth:`save` creates it.
+    """
+
+    __test__ = False  # not a pytest test class despite its name
+
+    def __init__(self, path):
+        self.path = Path(path)
+
+    def __repr__(self) -> str:
+        return f"TestFolder({str(self.path)!r})"
+
+    # ------------------------------------------------------------------ writing
+    def save(
+        self,
+        result,
+        *,
+        field: TimeHistory | None = None,
+        fmt: str = "rsp",
+        rig=None,
+        records: Mapping[str, TimeHistory] | None = None,
+        settings: Mapping | None = None,
+        overwrite: bool = False,
+    ) -> list[Path]:
+        """Write a reconstruction as QanTiM files and ``summary.json``.
+
+        Parameters
+        ----------
+        result : ReconstructionResult
+        field : TimeHistory, optional
+            The field (or pseudo-field) response the desired response was made from: FIELD01.
+        fmt : {"rsp", "csv", "mat", "npz"}
+            Record format; ``"rsp"`` writes RPC III drives as ``.drv`` and responses as ``.rsp``
+            (``FLOATING_POINT``).
+        rig : rig or str, optional
+            The rig (or its name), recorded in the summary.
+        records : mapping of str to TimeHistory, optional
+            Further records under QanTiM names, e.g. ``{"DESDRV": drive}`` (the drive that made a
+            pseudo-field response, §6.5).
+        settings : mapping, optional
+            Run settings to keep in the summary (gain, seed, command line...).
+        overwrite : bool
+            Allow writing into a non-empty folder: the QanTiM records, models and summary of
+            a previous save are removed first (other files are left alone).
+
+        Returns
+        -------
+        list of Path
+            The files written, in process order, ``summary.json`` last.
+
+        Raises
+        ------
+        FileExistsError
+            If the folder exists and is not empty and ``overwrite`` is false, or the path is a
+            file.
+        ValueError
+            For an unknown ``fmt`` or a record name that is not a QanTiM name.
+        """
+        if fmt not in FORMATS:
+            raise ValueError(f"fmt must be one of {FORMATS}, got {fmt!r}")
+        extra = dict(records or {})
+        for name, th in extra.items():
+            if not _RECORD.match(f"{name}.npz"):
+                raise ValueError(
+                    f"record name {name!r} is not a QanTiM name (IDDRV, FIELDnn, DESDRV, ...)"
+                )
+            if not isinstance(th, TimeHistory):
+                raise TypeError(f"record {name!r} must be a TimeHistory")
+        if not result.drives:
+            raise ValueError("the result holds no iteration: nothing to save")
+        self._prepare(overwrite)
+
+        todo: dict[str, TimeHistory] = {
+            "IDDRV": result.id_drive,
+            "IDRES": result.id_response,
+        }
+        if field is not None:
+            if not isinstance(field, TimeHistory):
+                raise TypeError("field must be a TimeHistory")
+            todo["FIELD01"] = field
+        todo["DESRES01"] = result.desired
+        for it, (drv, raw, res) in enumerate(
+            zip(result.drives, result.raw_responses, result.responses, strict=True)
+        ):
+            todo[f"IT{it:02d}DRV"] = drv
+            todo[f"RIT{it:02d}RES"] = raw
+            todo[f"IT{it:02d}RES"] = res
+        todo["FINDRV01"] = result.final_drive
+        todo["FINRES01"] = result.final_response
+        for name, th in extra.items():
+            todo[name.upper()] = th
+
+        written, files = [], {}
+        for name in sorted(todo, key=_order_key):
+            path = self._write(name, todo[name], fmt)
+            files[name] = path.name
+            written.append(path)
+
+        models, model_note = {}, ""
+        inverses = _inverse_models(result.method)
+        if inverses:
+            for stem, inverse in inverses.items():
+                path = inverse.model.save(self.path / f"{stem}.npz")
+                models[stem] = {"file": path.name, "lead": int(getattr(inverse, "lead_", 0))}
+                written.append(path)
+            model_note = (
+                "inverse model(s) from responses to drives: identification.Arx/Narx.load(file); "
+                "the drive at t is modelled from responses up to t + lead samples, at the "
+                "model sample rate"
+            )
+        else:
+            model_note = (
+                f"the method {type(result.method).__name__} has no time-domain inverse model "
+                "to save (frequency-domain or user method): not saved"
+            )
+
+        decimation = getattr(result, "decimation", None)
+        decimation_note = "recorded by reconstruct"
+        if decimation is None:  # reconstruct's default (ReconstructionResult does not keep it)
+            from .processing import identification_band
+
+            fs = result.desired.fs
+            decimation = max(1, int(fs // (8 * identification_band(result.bandwidth, fs=fs)[1])))
+            decimation_note = "reconstruct's default for this band (not recorded in the result)"
+        errors = np.asarray(result.errors)
+        n_run = errors.shape[0]
+        best = int(result.best_iteration)
+        summary = {
+            "format": _FORMAT_ID,
+            "version": _VERSION,
+            "created": datetime.datetime.now().isoformat(timespec="seconds"),
+            "rig": None if rig is None else (rig if isinstance(rig, str) else rig.name),
+            "method": _method_summary(result.method),
+            "bandwidth_hz": _plain(result.bandwidth),
+            "fs": result.desired.fs,
+            "n_samples": result.desired.n_samples,
+            "duration_s": result.desired.duration,
+            "model_decimation": int(decimation),
+            "model_fs": result.desired.fs / int(decimation),
+            "model_decimation_note": decimation_note,
+            "drives": {"names": list(result.id_drive.names), "units": list(result.id_drive.units)},
+            "responses": {"names": list(result.desired.names), "units": list(result.desired.units)},
+            "iterations_run": n_run - 1,
+            "best_iteration": best,
+            "stopped": result.stopped,
+            "stop_reason": result.stopped or f"completed all {n_run - 1} iterations",
+            "best": {
+                "eta0_percent": _plain(errors[best]),
+                "rms_error_percent": _plain(np.asarray(result.rms_errors)[best]),
+                "damage_ratio": _plain(np.asarray(result.damage_ratio)[best]),
+            },
+            "errors": {
+                "eta0_percent": _plain(errors),
+                "rms_error_percent": _plain(result.rms_errors),
+                "damage_ratio": _plain(result.damage_ratio),
+            },
+            "table": result.table().splitlines(),
+            "record_format": fmt,
+            "files": files,
+            "models": models,
+            "model_note": model_note,
+            "settings": _plain(dict(settings or {})),
+        }
+        path = self.path / SUMMARY
+        path.write_text(json.dumps(summary, indent=2, ensure_ascii=False) + "\n", encoding="utf-8")
+        written.append(path)
+        return written
+
+    def _prepare(self, overwrite: bool) -> None:
+        p = self.path
+        if p.exists() and not p.is_dir():
+            raise FileExistsError(f"{p} exists and is not a folder")
+        if p.is_dir() and any(p.iterdir()):
+            if not overwrite:
+                raise FileExistsError(
+                    f"test folder {p} is not empty; pass overwrite=True to replace its records, "
+                    "or choose another folder"
+                )
+            for f in p.iterdir():
+                if f.is_file() and (
+                    _RECORD.match(f.name) or _MODEL.match(f.name) or f.name == SUMMARY
+                ):
+                    f.unlink()
+        p.mkdir(parents=True, exist_ok=True)
+
+    def _write(self, name: str, th: TimeHistory, fmt: str) -> Path:
+        if fmt == "rsp":
+            drive = _is_drive(name)
+            return io.write_rpc3(
+                self.path / f"{name}.{'drv' if drive else 'rsp'}",
+                th,
+                data_type="FLOATING_POINT",
+                time_type="DRIVE" if drive else "RESPONSE",
+                extra_header={"OPERATION": f"vrig {name}"},
+            )
+        return io.write(self.path / f"{name}.{fmt}", th)
+
+    # ------------------------------------------------------------------ reading
+    def files(self) -> dict[str, Path]:
+        """QanTiM records in the folder, ``{name: path}`` in process order (IDDRV, IDRES,
+        FIELD01, DESRES01, IT00DRV, RIT00RES, IT00RES, ..., FINDRV01, FINRES01)."""
+        if not self.path.is_dir():
+            raise FileNotFoundError(f"no test folder at {self.path}")
+        found = {}
+        for f in self.path.iterdir():
+            m = _RECORD.match(f.name)
+            if m and f.is_file():
+                name = m.group(1).upper()
+                if name in found:
+                    raise ValueError(
+                        f"{self.path}: record {name} is stored twice ({found[name].name}, {f.name})"
+                    )
+                found[name] = f
+        return {k: found[k] for k in sorted(found, key=_order_key)}
+
+    def read(self, name: str) -> TimeHistory:
+        """One record by QanTiM name (``"IDDRV"``, ``"IT03RES"``, ``"FINDRV01"``...)."""
+        files = self.files()
+        key = name.upper()
+        if key not in files:
+            raise KeyError(f"{self.path} holds no record {name!r}; records: {list(files)}")
+        return io.read(files[key])
+
+    def summary(self) -> dict:
+        """The contents of ``summary.json``."""
+        path = self.path / SUMMARY
+        if not path.exists():
+            raise FileNotFoundError(f"{self.path} has no {SUMMARY} (not a vrig test folder?)")
+        data = json.loads(path.read_text(encoding="utf-8"))
+        if data.get("format") != _FORMAT_ID:
+            raise ValueError(f"{path} is not a vrig test-folder summary")
+        return data
+
+    @property
+    def iterations(self) -> list[int]:
+        """Iteration numbers with a stored drive (ITxxDRV)."""
+        return sorted(
+            int(m.group(1)) for k in self.files() if (m := re.fullmatch(r"IT(\d\d)DRV", k))
+        )
+
+    def load_iteration(self, xx: int) -> IterationRecord:
+        """ITxxDRV, RITxxRES, ITxxRES and the iteration's scores."""
+        if not isinstance(xx, (int, np.integer)) or not 0 <= xx <= 99:
+            raise ValueError(f"iteration must be an integer 0..99, got {xx!r}")
+        its = self.iterations
+        if xx not in its:
+            raise KeyError(f"{self.path} holds no iteration {xx:02d}; iterations: {its}")
+        summary = self.summary()
+        errs = summary["errors"]
+
+        def row(key):
+            return np.array([np.nan if v is None else v for v in errs[key][xx]], dtype=float)
+
+        return IterationRecord(
+            index=int(xx),
+            drive=self.read(f"IT{xx:02d}DRV"),
+            raw_response=self.read(f"RIT{xx:02d}RES"),
+            response=self.read(f"IT{xx:02d}RES"),
+            eta0=row("eta0_percent"),
+            rms_error=row("rms_error_percent"),
+            damage_ratio=row("damage_ratio"),
+        )
+
+    def load_models(self) -> dict:
+        """The saved inverse model(s), ``{stem: (model, lead)}`` (empty when none was saved)."""
+        from identification import Narx
+
+        out = {}
+        for stem, info in self.summary().get("models", {}).items():
+            out[stem] = (Narx.load(self.path / info["file"]), int(info["lead"]))
+        return out
