@@ -153,14 +153,15 @@ class InverseModel:
     def simulate(self, response, *, bound=None) -> np.ndarray:
         """Drive (N, n_drives) that the inverse model predicts for ``response`` (N, n_resp).
 
-        The response is advanced by ``lead_`` samples; the last ``lead_`` drive samples are
-        computed with zero response beyond the record's end.
+        The response is advanced by ``lead_`` samples; for the last ``lead_`` drive samples the
+        response beyond the record's end is held at its last value.
         """
         if not hasattr(self, "lead_"):
             raise IdentificationError(
                 "this InverseModel is not fitted yet; call fit(drive, response)"
             )
         r = as_signal(response, "response", n_channels=self.model.n_inputs_)
-        shifted = np.zeros_like(r)
-        shifted[: r.shape[0] - self.lead_] = r[self.lead_ :]
+        # beyond the record's end the response is held at its last value (a step to zero there
+        # would make the inverse put a spike at the end of the drive)
+        shifted = np.concatenate([r[self.lead_ :], np.repeat(r[-1:], self.lead_, axis=0)])
         return self.model.simulate(shifted, bound=bound)

@@ -239,6 +239,7 @@ def reconstruct(
     errs, rmss, dmgs = [], [], []
     names = [c.name for c in rig.inputs]
     units = [c.unit for c in rig.inputs]
+    failure: Exception | None = None
     bar = tqdm(
         total=iterations + 1, desc=f"{rig.name}: iterations", disable=not progress, leave=False
     )
@@ -246,13 +247,13 @@ def reconstruct(
         try:
             _check_drive(rig, drive, f"IT{it:02d}DRV")
         except RigLimitError as exc:
-            result.stopped = f"IT{it:02d}: {exc}"
+            result.stopped, failure = f"IT{it:02d}: {exc}", exc
             break
         drv = TimeHistory(drive, rig.fs, names, units)
         try:
             raw = rig.run(drv, seed=seed + 1 + it)
         except RigLimitError as exc:
-            result.stopped = f"IT{it:02d}: {exc}"
+            result.stopped, failure = f"IT{it:02d}: {exc}", exc
             break
         res = gprepro(raw, band)
         e, r, d = _scores(desres, res)
@@ -276,15 +277,8 @@ def reconstruct(
             target = method.drive(down(desres))
         drive = drive + gain * up(target - method.drive(down(res)), n)
     bar.close()
-    if not errs:
-        raise RigLimitError(
-            "drive",
-            names[0],
-            float("nan"),
-            float(np.abs(drive).max()),
-            float(full[0]),
-            hint=f"(IT00DRV exceeds the rig's limits: {result.stopped})",
-        )
+    if not errs:  # IT00 itself could not be played: report why
+        raise failure
     result.errors, result.rms_errors, result.damage_ratio = (
         np.array(errs),
         np.array(rmss),
