@@ -3,6 +3,8 @@
 Every step is vectorised over the whole record (no loop per sample):
 
 1. transducer dynamics: an accelerometer's high-pass (AC coupling, ``highpass_hz``), first order;
+   the filters start in their steady state for the first value, as on a rig whose conditioning
+   was powered before the test (no start-up transient from gravity or preload);
 2. gain: the transducer's physical quantity per MuJoCo sensor unit (e.g. microstrain per metre of
    spring deflection);
 3. additive noise (white at the physics rate, ``noise_rms`` in channel units after the
@@ -95,8 +97,9 @@ def acquire(
     x = np.empty_like(raw)
     for j, t in enumerate(transducers):
         col = raw[:, j] * t.gain
-        if t.highpass_hz > 0:
-            col = signal.sosfilt(_highpass_sos(t.highpass_hz, physics_rate), col)
+        if t.highpass_hz > 0:  # started in its steady state for the initial value (powered before)
+            sos = _highpass_sos(t.highpass_hz, physics_rate)
+            col, _ = signal.sosfilt(sos, col, zi=signal.sosfilt_zi(sos) * col[0])
         x[:, j] = col
     # noise: white at the physics rate, scaled so its RMS after the anti-alias filter is noise_rms
     rms = np.array([t.noise_rms for t in transducers])
@@ -108,7 +111,9 @@ def acquire(
             x[:, j] += t.mains_amplitude * np.sin(
                 2 * np.pi * t.mains_hz * time + rng.uniform(0, 2 * np.pi)
             )
-    x = signal.sosfilt(aa.sos(fs, physics_rate), x, axis=0)
+    sos = aa.sos(fs, physics_rate)
+    zi = signal.sosfilt_zi(sos)[:, :, None] * x[0][None, None, :]
+    x, _ = signal.sosfilt(sos, x, axis=0, zi=zi)
     sampled = x[::decimation].copy()
     peak = np.abs(sampled).max(axis=0)
     for j, t in enumerate(transducers):
