@@ -78,11 +78,14 @@ def main(argv=None) -> int:
     )
     for name in names:
         r = measure(name, args.seconds)
-        target = 5.0 if r["inputs"] >= 7 else 20.0
-        ok = r["rtf_run"] >= target and r["ratio"] >= 0.5
+        # the targets: RTF >= 20 for single-input rigs, >= 5 for the 7-channel rig; other
+        # multi-input rigs (fuel-tank-2ch) have no stated RTF target and are reported only
+        target = 20.0 if r["inputs"] == 1 else 5.0 if r["inputs"] >= 7 else None
+        ok = r["ratio"] >= 0.5 and (target is None or r["rtf_run"] >= target)
+        rule = f"RTF >= {target:g}, " if target else "RTF reported, "
         print(
             f"{name:<20} {r['inputs']:>3} {r['timestep_ms']:>6.2f} {r['rtf_run']:>9.1f} "
-            f"{r['rtf_rollout']:>12.1f} {r['ratio']:>6.2f}  RTF >= {target:g}, ratio >= 0.5: "
+            f"{r['rtf_rollout']:>12.1f} {r['ratio']:>6.2f}  {rule}ratio >= 0.5: "
             f"{'PASS' if ok else 'MISS'}"
         )
         rows.append({**r, "target_rtf": target, "pass": ok})
