@@ -36,7 +36,7 @@ __all__ = [
     "term_count_combinatorial",
 ]
 
-TERM_KINDS = ("full", "pure", "quasi-static")
+TERM_KINDS = ("full", "pure", "quasi-static", "input-polynomial")
 
 
 @dataclass(frozen=True, eq=False)
@@ -153,6 +153,9 @@ def polynomial_terms(
         (purely quadratic NARX, eq. 5-24, generalised to degree L).
         ``"quasi-static"``: linear terms plus pure powers of the static (lag-0) input regressors
         only (quasi-static NARX, eq. 5-25).
+        ``"input-polynomial"``: linear terms plus every monomial of degree 2..L of the *input*
+        regressors only: the outputs enter linearly, so the free run is stable exactly when its
+        linear autoregressive part is (useful for inverse models).
     constant : bool
         Add the constant term (first row, all factors 0).
     ny : int
@@ -175,6 +178,13 @@ def polynomial_terms(
     if constant:
         rows.append([0] * L)
     rows += [[0] * (L - 1) + [i] for i in range(1, R + 1)]
+    if kind == "input-polynomial":
+        inputs = [i + 1 for i, (src, _lag) in enumerate(regressors) if src >= ny]
+        for d in range(2, L + 1):
+            rows += [
+                [0] * (L - d) + list(c) for c in itertools.combinations_with_replacement(inputs, d)
+            ]
+        return np.array(rows, dtype=np.int64).reshape(-1, L)
     if kind == "pure":
         powered = range(1, R + 1)
     else:  # quasi-static: lag-0 input regressors

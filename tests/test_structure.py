@@ -148,3 +148,15 @@ def test_terms_rows_are_sorted_and_within_range():
     assert np.all(np.diff(t, axis=1) >= 0)
     assert t.min() >= 0 and t.max() == regs.shape[0]
     assert len({tuple(r) for r in t}) == t.shape[0]
+
+
+def test_input_polynomial_terms_keep_the_outputs_linear():
+    m = _fit_tiny(Narx(order=1, degree=2, kind="input-polynomial"), ny=1, nu=1)
+    assert m.term_names()[0] == [
+        "y1(t-1)",
+        "u1(t)",
+        "u1(t-1)",
+        "u1(t)*u1(t)",
+        "u1(t)*u1(t-1)",
+        "u1(t-1)*u1(t-1)",
+    ]
