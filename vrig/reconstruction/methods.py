@@ -145,17 +145,21 @@ class InverseFrf:
         self.fs = fs
 
     def drive(self, response: TimeHistory) -> np.ndarray:
+        """Drive for a response: the record is zero-padded to twice its length (no circular
+        wrap-around of the inverse's impulse response) and the DC line is left out."""
         r = response.data
         n = r.shape[0]
-        R = np.fft.rfft(r, axis=0)
-        fr = np.fft.rfftfreq(n, 1.0 / self.fs)
+        n_fft = 2 * n
+        R = np.fft.rfft(r, n=n_fft, axis=0)
+        fr = np.fft.rfftfreq(n_fft, 1.0 / self.fs)
         Hi = np.empty((fr.size, *self.Hinv.shape[1:]), dtype=complex)
         for i in range(self.Hinv.shape[1]):
             for j in range(self.Hinv.shape[2]):
                 Hi[:, i, j] = np.interp(fr, self.f, self.Hinv[:, i, j].real) + 1j * np.interp(
                     fr, self.f, self.Hinv[:, i, j].imag
                 )
-        return np.fft.irfft(np.einsum("fij,fj->fi", Hi, R), n=n, axis=0)
+        Hi[0] = 0.0
+        return np.fft.irfft(np.einsum("fij,fj->fi", Hi, R), n=n_fft, axis=0)[:n]
 
     def describe(self) -> str:
         return f"frf: H1 with {self.f.size} lines, truncated-SVD/Tikhonov inverse"
