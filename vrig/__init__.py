@@ -5,20 +5,26 @@ signals, processing, reconstruction workflow, gymnasium environments and CLI liv
 """
 
 from .errors import RigLimitError, RigModelError, SimulationInstabilityError
-from .rigs import ChannelSpec, MujocoRig, list_rigs, load_rig, rig_path
+from .reconstruction import ReconstructionResult, reconstruct
+from .rigs import ChannelSpec, FileRig, MujocoRig, list_rigs, load_rig, rig_path
+from .testfolder import TestFolder
 from .timehistory import TimeHistory
 
 __version__ = "0.1.0"
 
 __all__ = [
     "ChannelSpec",
+    "FileRig",
     "MujocoRig",
+    "ReconstructionResult",
     "RigLimitError",
     "RigModelError",
     "SimulationInstabilityError",
+    "TestFolder",
     "TimeHistory",
     "__version__",
     "list_rigs",
     "load_rig",
+    "reconstruct",
     "rig_path",
 ]
