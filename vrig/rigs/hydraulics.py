@@ -235,6 +235,7 @@ def _build_callback():
 
 
 _CALLBACK = None
+_LIVE = None
 
 
 @dataclass
@@ -243,14 +244,22 @@ class _Installed:
     index: np.ndarray
 
 
-def install(model: mujoco.MjModel, data: mujoco.MjData, channels, dt: float) -> _Installed:
+def install(
+    model: mujoco.MjModel,
+    data: mujoco.MjData,
+    channels,
+    dt: float,
+    *,
+    states: np.ndarray | None = None,
+) -> _Installed:
     """Point the global control callback at ``data`` for the given hydraulic ``channels``.
 
     ``channels``: sequence of (HydraulicActuator, cmd ctrl index, noise ctrl index, force ctrl
     index, qpos address, dof address). Returns the parameter/index buffers (keep a reference
-    while the rollout runs). Resets the callback's states in ``data.userdata``.
+    while the rollout runs). Resets the callback's states in ``data.userdata`` to zero, or to
+    ``states`` (from :func:`channel_states`, e.g. of a settled rig).
     """
-    global _CALLBACK
+    global _CALLBACK, _LIVE
     n = len(channels)
     if n > MAX_CHANNELS:
         raise ValueError(f"at most {MAX_CHANNELS} hydraulic channels are supported, got {n}")
@@ -263,6 +272,8 @@ def install(model: mujoco.MjModel, data: mujoco.MjData, channels, dt: float) -> 
         params[c] = act.as_row(dt)
         index[c, :5] = [i_cmd, i_noise, i_force, qadr, dadr]
     data.userdata[:] = 0.0
+    if states is not None:
+        data.userdata[_UD_HEADER : _UD_HEADER + states.size] = states
     _CTX[:] = 0
     _CTX[1:7] = [
         data.ctrl.ctypes.data,
@@ -277,7 +288,10 @@ def install(model: mujoco.MjModel, data: mujoco.MjData, channels, dt: float) -> 
     if _CALLBACK is None:
         _CALLBACK = _build_callback()
         mujoco.set_mjcb_control(_CALLBACK.ctypes)
-    return _Installed(params, index)
+    # the callback reads these buffers through raw pointers: keep them alive until the next
+    # install, whatever the caller does with the return value
+    _LIVE = _Installed(params, index)
+    return _LIVE
 
 
 def uninstall() -> None:
@@ -293,6 +307,7 @@ def trip_record(data: mujoco.MjData):
     return TRIP_KINDS[int(ud[1])], int(ud[2]), int(ud[3]), float(ud[4]), float(ud[5])
 
 
-def valve_states(data: mujoco.MjData, n: int) -> np.ndarray:
-    """Current (spool, spool velocity, load pressure, integrator, ...) per channel (for tests)."""
-    return data.userdata[_UD_HEADER : _UD_HEADER + _UD_PER_CHANNEL * n].reshape(n, _UD_PER_CHANNEL)
+def channel_states(data: mujoco.MjData, n: int) -> np.ndarray:
+    """A copy of the callback's states (spool, spool velocity, load pressure, integrator, previous
+    error, held valve command) of ``n`` channels, to restore with ``install(states=...)``."""
+    return data.userdata[_UD_HEADER : _UD_HEADER + _UD_PER_CHANNEL * n].copy()

@@ -98,6 +98,7 @@ class MujocoRig:
                 f"of fs = {desc.fs:g} Hz{hint}"
             )
         self._bind()
+        self._presettle()
         self._rng = np.random.default_rng(seed)
         self.seed = seed
 
@@ -217,6 +218,28 @@ class MujocoRig:
             mujoco.mj_resetData(m, self.data)
         self._state0 = np.empty(mujoco.mj_stateSize(m, _STATE))
         mujoco.mj_getState(m, self.data, self._state0, _STATE)
+
+    def _presettle(self) -> None:
+        """Start every run from static equilibrium: play ``settle_time`` of zero drive once
+        (no noise) and keep the final mechanical state and servo-loop states, so no run begins
+        with the rig sagging under gravity from its model pose."""
+        self._hyd_states = None
+        steps = round(self._desc.settle_time / self.timestep)
+        if steps == 0:
+            return
+        m, d = self.model, self.data
+        for w in d.warning:
+            w.number = 0
+        hydraulics.install(m, d, self._hyd, self.timestep)
+        try:
+            state, _ = rollout.rollout(m, d, self._state0[None, :], np.zeros((1, steps, m.nu)))
+        finally:
+            hydraulics.uninstall()
+        if hydraulics.trip_record(d) is not None or any(w.number for w in d.warning):
+            raise RigModelError(f"{self.name}: the rig does not settle under gravity at rest")
+        self._state0 = state[0, -1].copy()
+        self._state0[0] = 0.0  # time
+        self._hyd_states = hydraulics.channel_states(d, len(self._hyd))
 
     # ------------------------------------------------------------------ public
     @property
@@ -369,7 +392,7 @@ class MujocoRig:
                 ctrl[0, :, i_noise] += c.noise_rms * rng.standard_normal(n_steps)
         for w in d.warning:
             w.number = 0
-        installed = hydraulics.install(m, d, self._hyd, self.timestep)
+        installed = hydraulics.install(m, d, self._hyd, self.timestep, states=self._hyd_states)
         try:
             _, sensordata = rollout.rollout(m, d, self._state0[None, :], ctrl)
         finally:
