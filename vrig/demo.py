@@ -1,8 +1,8 @@
 """Identification demo: a generated non-linear MIMO system identified and simulated.
 
-Run with ``vrig demo`` (or ``python -m vrig.demo``). It stands in for the full reconstruction job
-until the virtual rigs land: it prints per-channel free-run errors (QanTiM η0, eq. 5-28) and the
-timings of the fit and the free-run simulation.
+Run with ``vrig demo`` (or ``python -m vrig.demo``): a quick look at the identification library
+on its own; it prints per-channel free-run errors (QanTiM η0, eq. 5-28) and the timings of the
+fit and the free-run simulation.
 """
 
 from __future__ import annotations

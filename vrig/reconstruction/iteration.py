@@ -209,17 +209,10 @@ def reconstruct(
             _check_drive(rig, iddrv.data, "the identification drive")
             idres = rig.run(iddrv, seed=seed)
             break
-        except RigLimitError:
-            rms = rms / 2
+        except RigLimitError as exc:  # halve the amplitude and try again
+            rms, last_trip = rms / 2, exc
     else:
-        raise RigLimitError(
-            "drive",
-            rig.inputs[0].name,
-            float("nan"),
-            float(rms[0]),
-            0.0,
-            hint="(no identification drive amplitude ran without a trip)",
-        )
+        raise last_trip  # even at 1/8 of the amplitude the identification drive trips
     method.identify(down(gprepro(iddrv, id_band)), down(gprepro(idres, id_band)))
 
     desres = gprepro(desired, band)

@@ -19,6 +19,7 @@ from mujoco import rollout
 from ..errors import RigLimitError, RigModelError, SimulationInstabilityError
 from ..timehistory import TimeHistory
 from . import hydraulics
+from .daq import acquire
 from .spec import (
     ChannelSpec,
     InputDef,
@@ -452,8 +453,6 @@ class MujocoRig:
         )
 
     def _acquire(self, raw, full, rng):
-        from .daq import acquire
-
         return acquire(
             raw,
             [o.transducer for o in self._outputs],
