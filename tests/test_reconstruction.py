@@ -133,3 +133,30 @@ def test_shock_absorber_arx_iteration_lowers_the_error_by_a_third():
     )
     assert res.errors.shape[0] == 6
     assert res.errors[5, 0] <= 0.7 * res.errors[0, 0]
+
+
+# --- per-band gains (the drive update of the gym environments)
+
+
+def test_band_gains_scale_each_band_of_a_two_tone_record():
+    from vrig.reconstruction import band_gains
+
+    fs, n = 512.0, 4096
+    t = np.arange(n) / fs
+    lo, hi = np.sin(2 * np.pi * 8.0 * t), np.sin(2 * np.pi * 40.0 * t)  # integer periods
+    x = np.column_stack([lo + hi, lo + hi])
+    g = np.array([[0.5, 1.5], [1.0, 0.0]])
+    y = band_gains(x, fs, g, [0.0, 20.0, fs / 2])
+    mid = slice(n // 8, -n // 8)  # away from the record's ends (zero-padded spectrum)
+    np.testing.assert_allclose(y[mid, 0], (0.5 * lo + 1.5 * hi)[mid], atol=2e-2)
+    np.testing.assert_allclose(y[mid, 1], lo[mid], atol=2e-2)
+
+
+def test_band_gains_equal_across_bands_are_a_plain_gain():
+    from vrig.reconstruction import band_gains
+
+    x = np.random.default_rng(0).normal(size=(1000, 2))
+    g = np.array([[0.8, 0.8, 0.8], [0.3, 0.3, 0.3]])
+    np.testing.assert_array_equal(band_gains(x, 100.0, g, [0, 5, 20, 50]), x * [0.8, 0.3])
+    with pytest.raises(ValueError, match="n_bands"):
+        band_gains(x, 100.0, g[:, :2], [0, 5, 20, 50])

@@ -274,14 +274,8 @@ class TestFolder:
                 "to save (frequency-domain or user method): not saved"
             )
 
-        decimation = getattr(result, "decimation", None)
+        decimation = int(result.decimation)
         decimation_note = "recorded by reconstruct"
-        if decimation is None:  # reconstruct's default (ReconstructionResult does not keep it)
-            from .processing import identification_band
-
-            fs = result.desired.fs
-            decimation = max(1, int(fs // (8 * identification_band(result.bandwidth, fs=fs)[1])))
-            decimation_note = "reconstruct's default for this band (not recorded in the result)"
         errors = np.asarray(result.errors)
         n_run = errors.shape[0]
         best = int(result.best_iteration)
@@ -298,6 +292,9 @@ class TestFolder:
             "model_decimation": int(decimation),
             "model_fs": result.desired.fs / int(decimation),
             "model_decimation_note": decimation_note,
+            "gain": _plain(result.gain),
+            "strategy": result.strategy,
+            "seed": int(result.seed),
             "drives": {"names": list(result.id_drive.names), "units": list(result.id_drive.units)},
             "responses": {"names": list(result.desired.names), "units": list(result.desired.units)},
             "iterations_run": n_run - 1,

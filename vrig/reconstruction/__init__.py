@@ -1,15 +1,23 @@
 """Response reconstruction: inverse-model methods and the drive-iteration loop."""
 
-from .iteration import ReconstructionResult, pseudo_damage, reconstruct
+from .iteration import (
+    DriveIteration,
+    ReconstructionResult,
+    band_gains,
+    pseudo_damage,
+    reconstruct,
+)
 from .methods import METHODS, InverseArx, InverseFrf, InverseNarx, SplitSpectra, make_method
 
 __all__ = [
     "METHODS",
+    "DriveIteration",
     "InverseArx",
     "InverseFrf",
     "InverseNarx",
     "ReconstructionResult",
     "SplitSpectra",
+    "band_gains",
     "make_method",
     "pseudo_damage",
     "reconstruct",

@@ -27,7 +27,7 @@ from ..signals import random_drive, triangular_psd
 from ..timehistory import TimeHistory
 from .methods import make_method
 
-__all__ = ["ReconstructionResult", "pseudo_damage", "reconstruct"]
+__all__ = ["DriveIteration", "ReconstructionResult", "band_gains", "pseudo_damage", "reconstruct"]
 
 
 def pseudo_damage(x: np.ndarray, *, slope: float = 5.0) -> float:
@@ -68,6 +68,10 @@ class ReconstructionResult:
     raw_responses: list = field(default_factory=list)
     best_iteration: int = 0
     stopped: str = ""
+    decimation: int = 1
+    gain: np.ndarray | None = None
+    strategy: str = "fixed"
+    seed: int = 0
 
     @property
     def final_drive(self) -> TimeHistory:
@@ -106,6 +110,171 @@ def _scores(desired: TimeHistory, response: TimeHistory):
 
 def _check_drive(rig, drive: np.ndarray, what: str) -> None:
     check_drive_limits(rig.inputs, drive, fs=rig.fs, what=what)
+
+
+def band_gains(x: np.ndarray, fs: float, gains: np.ndarray, edges) -> np.ndarray:
+    """Scale each frequency band of each channel of ``x`` by its own gain.
+
+    ``gains`` is (n_channels, n_bands); band ``b`` holds the frequencies in
+    ``[edges[b], edges[b + 1])`` (the first band starts at 0 Hz, the last runs to Nyquist,
+    whatever ``edges[0]`` / ``edges[-1]`` say). The scaling is a piecewise-constant weighting of the
+    record's (zero-padded) spectrum, so gains equal across bands give exactly ``gain * x``.
+    """
+    x = np.asarray(x, dtype=float)
+    gains = np.asarray(gains, dtype=float)
+    edges = np.asarray(edges, dtype=float)
+    if gains.ndim != 2 or gains.shape[0] != x.shape[1] or gains.shape[1] != edges.size - 1:
+        raise ValueError(
+            f"gains must be (n_channels={x.shape[1]}, n_bands={edges.size - 1}), got {gains.shape}"
+        )
+    if np.all(gains == gains[:, :1]):
+        return x * gains[:, 0]
+    n = x.shape[0]
+    X = np.fft.rfft(x, n=2 * n, axis=0)
+    f = np.fft.rfftfreq(2 * n, 1.0 / fs)
+    band = np.clip(np.searchsorted(edges, f, side="right") - 1, 0, edges.size - 2)
+    return np.fft.irfft(X * gains[:, band].T, n=2 * n, axis=0)[:n]
+
+
+class DriveIteration:
+    """One reconstruction, step by step: the engine of :func:`reconstruct` and of the gymnasium
+    environments (so a policy's fixed gain reproduces ``reconstruct`` exactly).
+
+    >>> it = DriveIteration(rig, desired, method="arx", seed=0)     # doctest: +SKIP
+    >>> it.identify()                                               # IDDRV -> IDRES -> model
+    >>> drive = it.first_drive()                                    # IT00DRV = inverse(DESRES)
+    >>> raw, res, (eta0, rms, damage) = it.play(drive, 0)            # RIT00RES, IT00RES, scores
+    >>> drive = it.next_drive(drive, res, gain=0.8)                 # IT01DRV
+
+    Parameters are those of :func:`reconstruct`. ``play`` raises :class:`~vrig.RigLimitError`
+    for a drive beyond the rig's limits *before* sending it, or when the rig trips.
+    """
+
+    def __init__(
+        self,
+        rig,
+        desired: TimeHistory,
+        *,
+        method="arx",
+        bandwidth: tuple[float, float] | None = None,
+        id_duration: float | None = None,
+        id_rms: float | None = None,
+        decimation: int | None = None,
+        seed: int = 0,
+        **method_options,
+    ):
+        if not isinstance(desired, TimeHistory):
+            raise TypeError("desired must be a vrig.TimeHistory")
+        if desired.fs != rig.fs:
+            raise ValueError(f"desired is sampled at {desired.fs:g} Hz, the rig at {rig.fs:g} Hz")
+        if desired.n_channels != len(rig.outputs):
+            raise ValueError(
+                f"desired has {desired.n_channels} channels, the rig {len(rig.outputs)} responses"
+            )
+        self.rig = rig
+        self.seed = int(seed)
+        self.band = tuple(bandwidth) if bandwidth is not None else tuple(rig.bandwidth)
+        self.id_band = identification_band(self.band, fs=rig.fs)
+        self.method = make_method(method, **method_options)
+        if decimation is None:
+            decimation = max(1, int(rig.fs // (8 * self.id_band[1])))
+        if not isinstance(decimation, (int, np.integer)) or decimation < 1:
+            raise ValueError(f"decimation must be a positive integer, got {decimation!r}")
+        self.decimation = int(decimation)
+        self.n_inputs = len(rig.inputs)
+        full = np.array([c.full_scale for c in rig.inputs])
+        self.id_rms = np.broadcast_to(
+            np.asarray(id_rms if id_rms is not None else 0.05 * full, float), (self.n_inputs,)
+        )
+        self.id_samples = round((id_duration or desired.duration) * rig.fs)
+        self.desres = gprepro(desired, self.band)
+        self.n = self.desres.n_samples
+        self.names = [c.name for c in rig.inputs]
+        self.units = [c.unit for c in rig.inputs]
+        self.id_drive: TimeHistory | None = None
+        self.id_response: TimeHistory | None = None
+        self.target: np.ndarray | None = None
+
+    # -- resampling between the rig rate and the model rate
+    def down(self, th: TimeHistory) -> TimeHistory:
+        return decimate(th, self.decimation)
+
+    def up(self, x: np.ndarray) -> np.ndarray:
+        if self.decimation == 1:
+            return x
+        return signal.resample_poly(x, self.decimation, 1, axis=0)[: self.n]
+
+    def identify(self) -> None:
+        """IDDRV (triangular PSD over the identification band) -> IDRES -> inverse model.
+
+        The drive RMS is halved (up to three times) while the rig refuses or trips on it."""
+        rig, rms = self.rig, self.id_rms
+        shape = triangular_psd((max(self.id_band[0], 0.0), self.id_band[1]))
+        for _attempt in range(4):
+            iddrv = random_drive(
+                shape,
+                self.id_samples,
+                rig.fs,
+                channels=self.n_inputs,
+                rms=rms,
+                seed=self.seed,
+                names=self.names,
+                unit=rig.inputs[0].unit,
+            )
+            try:
+                _check_drive(rig, iddrv.data, "the identification drive")
+                idres = rig.run(iddrv, seed=self.seed)
+                break
+            except RigLimitError as exc:  # halve the amplitude and try again
+                rms, last_trip = rms / 2, exc
+        else:
+            raise last_trip  # even at 1/8 of the amplitude the identification drive trips
+        self.id_drive, self.id_response = iddrv, idres
+        self._fit(iddrv, idres)
+
+    def reidentify(self, drive: TimeHistory, raw: TimeHistory) -> None:
+        """Adaptive strategy: re-fit the inverse from the latest drive / raw response pair."""
+        self._fit(drive, raw)
+
+    def _fit(self, drive: TimeHistory, response: TimeHistory) -> None:
+        self.method.identify(
+            self.down(gprepro(drive, self.id_band)), self.down(gprepro(response, self.id_band))
+        )
+        self.target = self.method.drive(self.down(self.desres))
+
+    def first_drive(self) -> np.ndarray:
+        """IT00DRV = inverse(DESRES), at the rig rate."""
+        if self.target is None:
+            raise RuntimeError("identify() first")
+        return self.up(self.target)
+
+    def play(self, drive: np.ndarray, iteration: int):
+        """Check and send ``drive`` (ITxxDRV); returns (drive, raw, processed, (η0, rms, damage)).
+
+        Raises RigLimitError (nothing is sent when the drive itself is beyond the limits)."""
+        what = f"IT{iteration:02d}DRV"
+        _check_drive(self.rig, drive, what)
+        drv = TimeHistory(drive, self.rig.fs, self.names, self.units)
+        raw = self.rig.run(drv, seed=self.seed + 1 + iteration)
+        res = gprepro(raw, self.band)
+        return drv, raw, res, _scores(self.desres, res)
+
+    def correction(self, response: TimeHistory) -> np.ndarray:
+        """``inverse(DESRES) - inverse(ITxxRES)`` at the rig rate (the un-scaled update)."""
+        return self.up(self.target - self.method.drive(self.down(response)))
+
+    def next_drive(self, drive: np.ndarray, response: TimeHistory, gain, edges=None) -> np.ndarray:
+        """``ITn+1DRV = ITnDRV + gain * (inverse(DESRES) - inverse(ITnRES))``.
+
+        ``gain`` is a scalar, one value per drive channel, or (channels, bands) with band
+        ``edges`` [Hz] (see :func:`band_gains`)."""
+        corr = self.correction(response)
+        g = np.asarray(gain, dtype=float)
+        if g.ndim == 2:
+            if edges is None:
+                raise ValueError("per-band gains need the band edges")
+            return drive + band_gains(corr, self.rig.fs, g, edges)
+        return drive + np.broadcast_to(g, (self.n_inputs,)) * corr
 
 
 def reconstruct(
@@ -159,97 +328,51 @@ def reconstruct(
     seed : int
         Seeds the identification drive and every rig run (reproducible).
     """
-    if not isinstance(desired, TimeHistory):
-        raise TypeError("desired must be a vrig.TimeHistory")
-    if desired.fs != rig.fs:
-        raise ValueError(f"desired is sampled at {desired.fs:g} Hz, the rig at {rig.fs:g} Hz")
-    if desired.n_channels != len(rig.outputs):
-        raise ValueError(
-            f"desired has {desired.n_channels} channels, the rig {len(rig.outputs)} responses"
-        )
     if strategy not in ("fixed", "adaptive"):
         raise ValueError(f"strategy must be 'fixed' or 'adaptive', got {strategy!r}")
-    if not isinstance(iterations, int) or iterations < 0:
+    if not isinstance(iterations, (int, np.integer)) or iterations < 0:
         raise ValueError(f"iterations must be a non-negative integer, got {iterations!r}")
-    n_in = len(rig.inputs)
-    gain = np.broadcast_to(np.asarray(gain, dtype=float), (n_in,))
-    if np.any(gain <= 0) or np.any(gain > 2):
+    gain = np.broadcast_to(np.asarray(gain, dtype=float), (len(rig.inputs),)).copy()
+    if np.any(~np.isfinite(gain)) or np.any(gain <= 0) or np.any(gain > 2):
         raise ValueError(f"gain must lie in (0, 2], got {gain}")
-    band = tuple(bandwidth) if bandwidth is not None else tuple(rig.bandwidth)
-    id_band = identification_band(band, fs=rig.fs)
-    method = make_method(method, **method_options)
-    if decimation is None:
-        decimation = max(1, int(rig.fs // (8 * id_band[1])))
-    if not isinstance(decimation, int) or decimation < 1:
-        raise ValueError(f"decimation must be a positive integer, got {decimation!r}")
-
-    def down(th: TimeHistory) -> TimeHistory:
-        return decimate(th, decimation)
-
-    def up(x: np.ndarray, n: int) -> np.ndarray:
-        return x if decimation == 1 else signal.resample_poly(x, decimation, 1, axis=0)[:n]
-
-    # identification
-    n_id = round((id_duration or desired.duration) * rig.fs)
-    full = np.array([c.full_scale for c in rig.inputs])
-    rms = np.broadcast_to(np.asarray(id_rms if id_rms is not None else 0.05 * full, float), (n_in,))
-    shape = triangular_psd((max(id_band[0], 0.0), id_band[1]))
-    for _attempt in range(4):
-        iddrv = random_drive(
-            shape,
-            n_id,
-            rig.fs,
-            channels=n_in,
-            rms=rms,
-            seed=seed,
-            names=[c.name for c in rig.inputs],
-            unit=rig.inputs[0].unit,
-        )
-        try:
-            _check_drive(rig, iddrv.data, "the identification drive")
-            idres = rig.run(iddrv, seed=seed)
-            break
-        except RigLimitError as exc:  # halve the amplitude and try again
-            rms, last_trip = rms / 2, exc
-    else:
-        raise last_trip  # even at 1/8 of the amplitude the identification drive trips
-    method.identify(down(gprepro(iddrv, id_band)), down(gprepro(idres, id_band)))
-
-    desres = gprepro(desired, band)
-    n = desres.n_samples
-    target = method.drive(down(desres))
-    drive = up(target, n)
-    result = ReconstructionResult(
-        desired=desres,
-        id_drive=iddrv,
-        id_response=idres,
+    engine = DriveIteration(
+        rig,
+        desired,
         method=method,
-        bandwidth=band,
+        bandwidth=bandwidth,
+        id_duration=id_duration,
+        id_rms=id_rms,
+        decimation=decimation,
+        seed=seed,
+        **method_options,
+    )
+    engine.identify()
+    drive = engine.first_drive()
+    result = ReconstructionResult(
+        desired=engine.desres,
+        id_drive=engine.id_drive,
+        id_response=engine.id_response,
+        method=engine.method,
+        bandwidth=engine.band,
         errors=np.empty((0, desired.n_channels)),
         rms_errors=np.empty((0, desired.n_channels)),
         damage_ratio=np.empty((0, desired.n_channels)),
+        decimation=engine.decimation,
+        gain=gain,
+        strategy=strategy,
+        seed=int(seed),
     )
     errs, rmss, dmgs = [], [], []
-    names = [c.name for c in rig.inputs]
-    units = [c.unit for c in rig.inputs]
     failure: Exception | None = None
     bar = tqdm(
         total=iterations + 1, desc=f"{rig.name}: iterations", disable=not progress, leave=False
     )
     for it in range(iterations + 1):
         try:
-            _check_drive(rig, drive, f"IT{it:02d}DRV")
+            drv, raw, res, (e, r, d) = engine.play(drive, it)
         except RigLimitError as exc:
             result.stopped, failure = f"IT{it:02d}: {exc}", exc
             break
-        drv = TimeHistory(drive, rig.fs, names, units)
-        try:
-            raw = rig.run(drv, seed=seed + 1 + it)
-        except RigLimitError as exc:
-            result.stopped, failure = f"IT{it:02d}: {exc}", exc
-            break
-        res = gprepro(raw, band)
-        e, r, d = _scores(desres, res)
         result.drives.append(drv)
         result.raw_responses.append(raw)
         result.responses.append(res)
@@ -266,9 +389,8 @@ def reconstruct(
         if it == iterations:
             break
         if strategy == "adaptive":
-            method.identify(down(gprepro(drv, id_band)), down(gprepro(raw, id_band)))
-            target = method.drive(down(desres))
-        drive = drive + gain * up(target - method.drive(down(res)), n)
+            engine.reidentify(drv, raw)
+        drive = engine.next_drive(drive, res, gain)
     bar.close()
     if not errs:  # IT00 itself could not be played: report why
         raise failure
