@@ -5,6 +5,7 @@ signals, processing, reconstruction workflow, gymnasium environments and CLI liv
 """
 
 from .errors import RigLimitError, RigModelError, SimulationInstabilityError
+from .field import pseudo_field
 from .reconstruction import ReconstructionResult, reconstruct
 from .rigs import ChannelSpec, FileRig, MujocoRig, list_rigs, load_rig, rig_path
 from .testfolder import TestFolder
@@ -25,6 +26,7 @@ __all__ = [
     "__version__",
     "list_rigs",
     "load_rig",
+    "pseudo_field",
     "reconstruct",
     "rig_path",
 ]
