@@ -160,6 +160,7 @@ class DriveIteration:
         id_duration: float | None = None,
         id_rms: float | None = None,
         decimation: int | None = None,
+        taper: float = 0.25,
         seed: int = 0,
         **method_options,
     ):
@@ -181,6 +182,9 @@ class DriveIteration:
         if not isinstance(decimation, (int, np.integer)) or decimation < 1:
             raise ValueError(f"decimation must be a positive integer, got {decimation!r}")
         self.decimation = int(decimation)
+        if not (np.isfinite(taper) and taper >= 0):
+            raise ValueError(f"taper must be a non-negative duration [s], got {taper!r}")
+        self.taper = float(taper)
         self.n_inputs = len(rig.inputs)
         full = np.array([c.full_scale for c in rig.inputs])
         self.id_rms = np.broadcast_to(
@@ -242,11 +246,26 @@ class DriveIteration:
         )
         self.target = self.method.drive(self.down(self.desres))
 
+    def shape(self, x: np.ndarray) -> np.ndarray:
+        """A drive (or drive correction) as it may be sent: band-limited to the identification
+        band (zero-phase, as every other record: what the model does outside the band it was
+        identified in is drift, not information) and tapered to zero over the first and last
+        ``taper`` seconds (the rig starts and ends at rest; a step at the start would trip the
+        following-error interlock)."""
+        th = TimeHistory(x, self.rig.fs, self.names, self.units)
+        y = np.array(gprepro(th, self.id_band, detrend=False).data)
+        m = min(round(self.taper * self.rig.fs), self.n // 4)
+        if m > 0:
+            ramp = 0.5 - 0.5 * np.cos(np.pi * np.arange(m) / m)
+            y[:m] *= ramp[:, None]
+            y[self.n - m :] *= ramp[::-1, None]
+        return y
+
     def first_drive(self) -> np.ndarray:
-        """IT00DRV = inverse(DESRES), at the rig rate."""
+        """IT00DRV = inverse(DESRES), band-limited and tapered (:meth:`shape`), at the rig rate."""
         if self.target is None:
             raise RuntimeError("identify() first")
-        return self.up(self.target)
+        return self.shape(self.up(self.target))
 
     def play(self, drive: np.ndarray, iteration: int):
         """Check and send ``drive`` (ITxxDRV); returns (drive, raw, processed, (η0, rms, damage)).
@@ -260,8 +279,9 @@ class DriveIteration:
         return drv, raw, res, _scores(self.desres, res)
 
     def correction(self, response: TimeHistory) -> np.ndarray:
-        """``inverse(DESRES) - inverse(ITxxRES)`` at the rig rate (the un-scaled update)."""
-        return self.up(self.target - self.method.drive(self.down(response)))
+        """``inverse(DESRES) - inverse(ITxxRES)`` at the rig rate (the un-scaled update),
+        band-limited and tapered like the drive (:meth:`shape`)."""
+        return self.shape(self.up(self.target - self.method.drive(self.down(response))))
 
     def next_drive(self, drive: np.ndarray, response: TimeHistory, gain, edges=None) -> np.ndarray:
         """``ITn+1DRV = ITnDRV + gain * (inverse(DESRES) - inverse(ITnRES))``.
@@ -291,6 +311,7 @@ def reconstruct(
     divergence: float = 1.5,
     min_increase: float = 1.0,
     decimation: int | None = None,
+    taper: float = 0.25,
     seed: int = 0,
     progress: bool = False,
     **method_options,
@@ -325,6 +346,9 @@ def reconstruct(
         drives are interpolated back to fs before they are sent). Default: the largest integer
         keeping at least 8 samples per period of the identification band's upper edge: a record
         sampled far above its band makes the lagged regressors nearly collinear (Table 5.1).
+    taper : float
+        Every drive and correction is band-limited to the identification band and tapered to
+        zero over its first and last ``taper`` seconds (:meth:`DriveIteration.shape`).
     seed : int
         Seeds the identification drive and every rig run (reproducible).
     """
@@ -343,6 +367,7 @@ def reconstruct(
         id_duration=id_duration,
         id_rms=id_rms,
         decimation=decimation,
+        taper=taper,
         seed=seed,
         **method_options,
     )
