@@ -16,7 +16,7 @@ import numpy as np
 from . import metrics
 from ._validation import as_signal, check_same_length
 from .errors import IdentificationError, SimulationDivergedError
-from .models import Narx
+from .models import Arx, Narx
 
 __all__ = ["InverseModel", "estimate_delay"]
 
@@ -88,6 +88,12 @@ class InverseModel:
         Largest delay considered by the delay estimate.
     lead_search : int
         Extra leads tried by ``"auto"``.
+    max_radius : float or None
+        Linear (ARX) inverses with a pole outside this radius are contracted to it
+        (:meth:`~identification.models.Arx.stabilise`): inverting an acceleration or a
+        high-passed response to a displacement drive puts poles at ``z ~ 1`` that estimation
+        noise pushes outside the unit circle. ``None`` keeps the estimate as it is. The factor
+        applied is ``contraction_`` (1: untouched).
 
     Examples
     --------
@@ -96,7 +102,13 @@ class InverseModel:
     """
 
     def __init__(
-        self, model: Narx, *, lead: int | str = "auto", max_lead: int = 32, lead_search: int = 3
+        self,
+        model: Narx,
+        *,
+        lead: int | str = "auto",
+        max_lead: int = 32,
+        lead_search: int = 3,
+        max_radius: float | None = 0.995,
     ):
         if not isinstance(model, Narx):
             raise IdentificationError(
@@ -110,6 +122,11 @@ class InverseModel:
         self.lead = lead
         self.max_lead = max_lead
         self.lead_search = lead_search
+        if max_radius is not None and not 0 < max_radius <= 1:
+            raise IdentificationError(
+                f"max_radius must lie in (0, 1] or be None, got {max_radius!r}"
+            )
+        self.max_radius = max_radius
 
     def fit(self, drive, response, *, drive_names=None, response_names=None):
         """Fit the inverse from an identification drive (N, n_drives) and response (N, n_resp)."""
@@ -136,8 +153,11 @@ class InverseModel:
                 input_names=response_names,
                 output_names=drive_names,
             )
+            rho = 1.0
+            if self.max_radius is not None and isinstance(model, Arx):
+                rho = model.stabilise(self.max_radius)
             if len(candidates) == 1:
-                best = (0.0, lead, model)
+                best = (0.0, lead, model, rho)
                 break
             try:
                 sim = model.simulate(response[lead:])
@@ -145,9 +165,10 @@ class InverseModel:
             except SimulationDivergedError:
                 score = np.inf
             if best is None or score < best[0]:
-                best = (score, lead, model)
+                best = (score, lead, model, rho)
         self.lead_ = best[1]
         self.model = best[2]
+        self.contraction_ = best[3]
         return self
 
     def simulate(self, response, *, bound=None) -> np.ndarray:

@@ -98,3 +98,53 @@ def test_inverse_model_bad_input():
         InverseModel(Arx(order=2)).simulate(np.ones(10))
     with pytest.raises(IdentificationError, match="samples"):
         estimate_delay(np.ones(20), np.ones(20), max_lag=10)
+
+
+# --- pole contraction (inverse models with near-integrator poles)
+
+
+def _ar2(poles, u):
+    return signal.lfilter([0.0, 1.0], np.real(np.poly(poles)), u)
+
+
+def test_pole_radius_is_the_generating_systems_largest_pole():
+    u = band_limited_noise(4000, 1, cutoff=0.8, seed=5)[:, 0]
+    poles = [0.95 * np.exp(0.3j), 0.95 * np.exp(-0.3j)]
+    m = Arx(order=2).fit(u, _ar2(poles, u))
+    assert m.pole_radius() == pytest.approx(0.95, abs=1e-6)
+
+
+def test_stabilise_scales_every_pole_by_the_same_factor():
+    u = band_limited_noise(4000, 1, cutoff=0.8, seed=6)[:, 0]
+    m = Arx(order=2).fit(u, _ar2([0.9, 0.5], u))
+    assert m.stabilise(0.95) == 1.0  # already inside: untouched
+    rho = m.stabilise(0.6)
+    assert rho == pytest.approx(0.6 / 0.9, rel=1e-6)
+    # contracted poles: 0.9 rho and 0.5 rho -> the free run equals the filter with those poles
+    np.testing.assert_allclose(
+        m.simulate(u)[:, 0], _ar2([0.9 * rho, 0.5 * rho], u), rtol=1e-6, atol=1e-9
+    )
+
+
+def test_an_unstable_inverse_is_contracted_to_a_bounded_one():
+    # the plant is a differentiator (zero at z = 1): its exact inverse integrates, a pole on the
+    # unit circle that noise pushes outside; the contracted inverse stays bounded and still
+    # reproduces the band-limited drive
+    rng = np.random.default_rng(7)
+    drive = band_limited_noise(6000, 1, cutoff=0.3, seed=7)
+    response = np.diff(drive, axis=0, prepend=0.0) + 1e-3 * rng.normal(size=drive.shape)
+    raw = InverseModel(Arx(order=2), lead=0, max_radius=None).fit(drive, response)
+    assert raw.model.pole_radius() > 0.99
+    inv = InverseModel(Arx(order=2), lead=0, max_radius=0.99).fit(drive, response)
+    assert inv.model.pole_radius() <= 0.99 + 1e-9
+    assert inv.contraction_ <= 1.0
+    # a fresh record: above the leaky integrator's corner the drive is reproduced
+    new = band_limited_noise(20000, 1, cutoff=0.3, seed=8)
+    sim = inv.simulate(np.diff(new, axis=0, prepend=0.0))
+    hp = signal.butter(4, 0.02, btype="highpass", output="sos")
+    fit = metrics.qantim_fit_dc(
+        signal.sosfiltfilt(hp, new, axis=0), signal.sosfiltfilt(hp, sim, axis=0)
+    )
+    assert fit[0] < 10.0
+    with pytest.raises(IdentificationError, match="max_radius"):
+        InverseModel(Arx(order=2), max_radius=1.5)
