@@ -16,7 +16,7 @@ import numpy as np
 from . import metrics
 from ._validation import as_signal, check_same_length
 from .errors import IdentificationError, SimulationDivergedError
-from .models import Arx, Narx
+from .models import Narx
 
 __all__ = ["InverseModel", "estimate_delay"]
 
@@ -89,8 +89,8 @@ class InverseModel:
     lead_search : int
         Extra leads tried by ``"auto"``.
     max_radius : float or None
-        Linear (ARX) inverses with a pole outside this radius are contracted to it
-        (:meth:`~identification.models.Arx.stabilise`): inverting an acceleration or a
+        Inverses linear in their past outputs (ARX, ``kind="input-polynomial"`` NARX) with a
+        pole outside this radius are contracted to it (:meth:`~identification.Narx.stabilise`): inverting an acceleration or a
         high-passed response to a displacement drive puts poles at ``z ~ 1`` that estimation
         noise pushes outside the unit circle. ``None`` keeps the estimate as it is. The factor
         applied is ``contraction_`` (1: untouched).
@@ -154,7 +154,7 @@ class InverseModel:
                 output_names=drive_names,
             )
             rho = 1.0
-            if self.max_radius is not None and isinstance(model, Arx):
+            if self.max_radius is not None and model.is_output_affine():
                 rho = model.stabilise(self.max_radius)
             if len(candidates) == 1:
                 best = (0.0, lead, model, rho)

@@ -254,6 +254,71 @@ class Narx:
         self.fit_time_ = time.perf_counter() - t0
         return self
 
+    def is_output_affine(self) -> bool:
+        """True when past outputs enter only linearly (ARX, ``kind="input-polynomial"``, or a
+        selected model without output products): then the free run is a linear recursion
+        driven by a polynomial of the inputs, with poles :meth:`pole_radius` can bound."""
+        try:
+            self._output_lag_terms()
+        except IdentificationError:
+            return False
+        return True
+
+    def _output_lag_terms(self):
+        """(channel, term, source output, lag) of every autoregressive (output-lag) term."""
+        self._check_fitted()
+        ny = self.n_outputs_
+        out = []
+        for k, ch in enumerate(self.channels_):
+            for t, row in enumerate(ch.terms):
+                factors = [ch.regressors[i - 1] for i in row if i > 0]
+                outs = [(src, lag) for src, lag in factors if src < ny]
+                if not outs:
+                    continue
+                if len(factors) > 1:
+                    raise IdentificationError(
+                        "the model has products with past outputs: its poles are not defined "
+                        "(only models linear in the outputs, e.g. ARX or kind='input-polynomial')"
+                    )
+                out.append((k, t, *outs[0]))
+        return out
+
+    def pole_radius(self) -> float:
+        """Spectral radius of the autoregressive part: the largest pole magnitude (< 1: stable).
+
+        The poles are the eigenvalues of the block companion matrix of the output-lag
+        coefficient matrices ``A_1 .. A_p`` (ny x ny each)."""
+        ny, p = self.n_outputs_, self.max_lag_
+        if p == 0:
+            return 0.0
+        comp = np.zeros((ny * p, ny * p))
+        for k, t, src, lag in self._output_lag_terms():
+            comp[k, (lag - 1) * ny + src] += self.coef_[k][t]
+        comp[ny:, :-ny] = np.eye(ny * (p - 1))
+        return float(np.max(np.abs(np.linalg.eigvals(comp)))) if comp.size else 0.0
+
+    def stabilise(self, max_radius: float = 0.995) -> float:
+        """Contract the poles radially so none lies outside ``max_radius``; returns the factor.
+
+        Every output-lag coefficient matrix ``A_l`` becomes ``rho**l A_l``, which scales every
+        pole by exactly ``rho`` (``rho = max_radius / pole_radius()``, 1 when already inside):
+        the LPC "bandwidth expansion". It is how an inverse model with near-integrator poles
+        (an acceleration response inverted to a displacement drive) is kept bounded: a pole at
+        ``z = 1.002`` becomes a leaky integrator whose corner lies below the identification band.
+        """
+        if not 0 < max_radius <= 1:
+            raise IdentificationError(f"max_radius must lie in (0, 1], got {max_radius!r}")
+        radius = self.pole_radius()
+        if radius <= max_radius:
+            return 1.0
+        rho = max_radius / radius
+        coef = [np.array(c, dtype=float) for c in self.coef_]
+        for k, t, _src, lag in self._output_lag_terms():
+            coef[k][t] *= rho**lag
+        self.coef_ = tuple(coef)
+        self._plan = None
+        return rho
+
     # ------------------------------------------------------------------ use
     def _check_fitted(self):
         if not hasattr(self, "coef_"):
@@ -490,53 +555,6 @@ class Arx(Narx):
             err_tol=err_tol,
             bound_factor=bound_factor,
         )
-
-    def _output_lag_terms(self):
-        """(channel, term, source output, lag) of every autoregressive (output-lag) term."""
-        self._check_fitted()
-        out = []
-        for k, ch in enumerate(self.channels_):
-            for t, row in enumerate(ch.terms):
-                src, lag = ch.regressors[row[-1] - 1]
-                if src < self.n_outputs_ and lag > 0:
-                    out.append((k, t, src, lag))
-        return out
-
-    def pole_radius(self) -> float:
-        """Spectral radius of the autoregressive part: the largest pole magnitude (< 1: stable).
-
-        The poles are the eigenvalues of the block companion matrix of the output-lag
-        coefficient matrices ``A_1 .. A_p`` (ny x ny each)."""
-        ny, p = self.n_outputs_, self.max_lag_
-        if p == 0:
-            return 0.0
-        comp = np.zeros((ny * p, ny * p))
-        for k, t, src, lag in self._output_lag_terms():
-            comp[k, (lag - 1) * ny + src] += self.coef_[k][t]
-        comp[ny:, :-ny] = np.eye(ny * (p - 1))
-        return float(np.max(np.abs(np.linalg.eigvals(comp)))) if comp.size else 0.0
-
-    def stabilise(self, max_radius: float = 0.995) -> float:
-        """Contract the poles radially so none lies outside ``max_radius``; returns the factor.
-
-        Every output-lag coefficient matrix ``A_l`` becomes ``rho**l A_l``, which scales every
-        pole by exactly ``rho`` (``rho = max_radius / pole_radius()``, 1 when already inside):
-        the LPC "bandwidth expansion". It is how an inverse model with near-integrator poles
-        (an acceleration response inverted to a displacement drive) is kept bounded: a pole at
-        ``z = 1.002`` becomes a leaky integrator whose corner lies below the identification band.
-        """
-        if not 0 < max_radius <= 1:
-            raise IdentificationError(f"max_radius must lie in (0, 1], got {max_radius!r}")
-        radius = self.pole_radius()
-        if radius <= max_radius:
-            return 1.0
-        rho = max_radius / radius
-        coef = [np.array(c, dtype=float) for c in self.coef_]
-        for k, t, _src, lag in self._output_lag_terms():
-            coef[k][t] *= rho**lag
-        self.coef_ = tuple(coef)
-        self._plan = None
-        return rho
 
     def to_statespace(self, dt: float = 1.0):
         """Discrete MIMO state-space model (eq. 4-14) as a ``control.StateSpace``.

@@ -148,3 +148,17 @@ def test_an_unstable_inverse_is_contracted_to_a_bounded_one():
     assert fit[0] < 10.0
     with pytest.raises(IdentificationError, match="max_radius"):
         InverseModel(Arx(order=2), max_radius=1.5)
+
+
+def test_poles_of_a_model_linear_in_its_outputs_and_none_for_output_products():
+    u = band_limited_noise(4000, 1, cutoff=0.8, seed=9)[:, 0]
+    y = np.zeros_like(u)
+    for t in range(1, u.size):  # y(t) = 0.9 y(t-1) + u(t-1) + 0.5 u(t-1)^2
+        y[t] = 0.9 * y[t - 1] + u[t - 1] + 0.5 * u[t - 1] ** 2
+    m = Narx(order=1, degree=2, kind="input-polynomial").fit(u, y)
+    assert m.is_output_affine()
+    assert m.pole_radius() == pytest.approx(0.9, abs=1e-6)
+    full = Narx(order=1, degree=2).fit(u, y)
+    assert not full.is_output_affine()
+    with pytest.raises(IdentificationError, match="products with past outputs"):
+        full.pole_radius()

@@ -159,6 +159,7 @@ class DriveIteration:
         bandwidth: tuple[float, float] | None = None,
         id_duration: float | None = None,
         id_rms: float | None = None,
+        id_psd=None,
         decimation: int | None = None,
         taper: float = 0.25,
         seed: int = 0,
@@ -190,6 +191,7 @@ class DriveIteration:
         self.id_rms = np.broadcast_to(
             np.asarray(id_rms if id_rms is not None else 0.05 * full, float), (self.n_inputs,)
         )
+        self.id_psd = id_psd
         self.id_samples = round((id_duration or desired.duration) * rig.fs)
         self.desres = gprepro(desired, self.band)
         self.n = self.desres.n_samples
@@ -209,11 +211,14 @@ class DriveIteration:
         return signal.resample_poly(x, self.decimation, 1, axis=0)[: self.n]
 
     def identify(self) -> None:
-        """IDDRV (triangular PSD over the identification band) -> IDRES -> inverse model.
+        """IDDRV (``id_psd``, default triangular over the identification band) -> IDRES ->
+        inverse model.
 
         The drive RMS is halved (up to three times) while the rig refuses or trips on it."""
         rig, rms = self.rig, self.id_rms
-        shape = triangular_psd((max(self.id_band[0], 0.0), self.id_band[1]))
+        shape = self.id_psd
+        if shape is None:
+            shape = triangular_psd((max(self.id_band[0], 0.0), self.id_band[1]))
         for _attempt in range(4):
             iddrv = random_drive(
                 shape,
@@ -308,6 +313,7 @@ def reconstruct(
     strategy: str = "fixed",
     id_duration: float | None = None,
     id_rms: float | None = None,
+    id_psd=None,
     divergence: float = 1.5,
     min_increase: float = 1.0,
     decimation: int | None = None,
@@ -338,6 +344,10 @@ def reconstruct(
     id_duration, id_rms : float
         Identification drive length [s] (default: the desired record's) and RMS per channel
         (default: 5 % of full scale, halved until the rig accepts it).
+    id_psd : callable or list of callables, optional
+        PSD shape of the identification drive (one per drive channel allowed), e.g. the
+        rig-specific PSDs of Algorithm 3.1 (:func:`vrig.signals.rig_specific_psd`). Default:
+        triangular over the identification band (QanTiM).
     divergence, min_increase : float
         Stop when the mean η0 exceeds ``divergence`` times the best so far and by more than
         ``min_increase`` percentage points (so scatter at the noise floor is not divergence).
@@ -366,6 +376,7 @@ def reconstruct(
         bandwidth=bandwidth,
         id_duration=id_duration,
         id_rms=id_rms,
+        id_psd=id_psd,
         decimation=decimation,
         taper=taper,
         seed=seed,

@@ -35,24 +35,34 @@ class _InverseTimeDomain:
     def _model(self):  # pragma: no cover - abstract
         raise NotImplementedError
 
-    def __init__(self, *, lead="auto", max_lead: int = 32):
+    def __init__(self, *, lead="auto", max_lead: int = 32, responses=None, max_radius=0.995):
         self.lead = lead
         self.max_lead = max_lead
+        self.responses = _names(responses, "responses")
+        self.max_radius = max_radius
+
+    def _select(self, th: TimeHistory) -> TimeHistory:
+        return th if self.responses is None else th[self.responses]
 
     def identify(self, iddrv: TimeHistory, idres: TimeHistory) -> None:
         lead = (
             self.lead if self.lead == "auto" or not hasattr(self, "inverse") else self.inverse.lead_
         )
-        self.inverse = InverseModel(self._model(), lead=lead, max_lead=self.max_lead).fit(
-            iddrv.data, idres.data, drive_names=iddrv.names, response_names=idres.names
-        )
+        idres = self._select(idres)
+        self.inverse = InverseModel(
+            self._model(), lead=lead, max_lead=self.max_lead, max_radius=self.max_radius
+        ).fit(iddrv.data, idres.data, drive_names=iddrv.names, response_names=idres.names)
 
     def drive(self, response: TimeHistory) -> np.ndarray:
-        return self.inverse.simulate(response.data, bound=np.inf)
+        return self.inverse.simulate(self._select(response).data, bound=np.inf)
 
     def describe(self) -> str:
         m = self.inverse.model
-        return f"{self.name}: {type(m).__name__} {m.n_terms_.tolist()} terms, lead {self.inverse.lead_}"
+        src = "" if self.responses is None else f" from {self.responses}"
+        return (
+            f"{self.name}: {type(m).__name__} {m.n_terms_.tolist()} terms, "
+            f"lead {self.inverse.lead_}{src}"
+        )
 
 
 class InverseArx(_InverseTimeDomain):
@@ -87,28 +97,58 @@ class SplitSpectra:
 
     ``low`` and ``high`` are methods (e.g. a non-linear low band and a linear high band); the
     identification and response records are split at ``split_hz`` with complementary zero-phase
-    filters.
+    filters. ``low_responses`` / ``high_responses`` (response channel names) let each band's
+    inverse use its own transducers: the multiple-transducer split spectra of §3.2.2 (the
+    motorcycle's coil-spring strain gauge below the split, its spindle accelerometer above).
     """
 
     name = "split"
 
-    def __init__(self, split_hz: float, low=None, high=None):
+    def __init__(
+        self, split_hz: float, low=None, high=None, *, low_responses=None, high_responses=None
+    ):
+        if not split_hz > 0:
+            raise ValueError(f"split_hz must be > 0 Hz, got {split_hz!r}")
         self.split_hz = split_hz
         self.low = low or InverseArx(4)
         self.high = high or InverseArx(4)
+        self.low_responses = _names(low_responses, "low_responses")
+        self.high_responses = _names(high_responses, "high_responses")
+
+    @staticmethod
+    def _select(th: TimeHistory, names):
+        return th if names is None else th[names]
 
     def identify(self, iddrv: TimeHistory, idres: TimeHistory) -> None:
         d_lo, d_hi = band_split(iddrv, self.split_hz)
         r_lo, r_hi = band_split(idres, self.split_hz)
-        self.low.identify(d_lo, r_lo)
-        self.high.identify(d_hi, r_hi)
+        self.low.identify(d_lo, self._select(r_lo, self.low_responses))
+        self.high.identify(d_hi, self._select(r_hi, self.high_responses))
 
     def drive(self, response: TimeHistory) -> np.ndarray:
         r_lo, r_hi = band_split(response, self.split_hz)
-        return self.low.drive(r_lo) + self.high.drive(r_hi)
+        return self.low.drive(self._select(r_lo, self.low_responses)) + self.high.drive(
+            self._select(r_hi, self.high_responses)
+        )
 
     def describe(self) -> str:
-        return f"split at {self.split_hz:g} Hz: low [{self.low.describe()}], high [{self.high.describe()}]"
+        lo = "" if self.low_responses is None else f" from {self.low_responses}"
+        hi = "" if self.high_responses is None else f" from {self.high_responses}"
+        return (
+            f"split at {self.split_hz:g} Hz: low [{self.low.describe()}{lo}], "
+            f"high [{self.high.describe()}{hi}]"
+        )
+
+
+def _names(names, what):
+    if names is None:
+        return None
+    if isinstance(names, str):
+        return [names]
+    names = list(names)
+    if not names or not all(isinstance(n, str) for n in names):
+        raise ValueError(f"{what} must be response channel names, got {names!r}")
+    return names
 
 
 class InverseFrf:

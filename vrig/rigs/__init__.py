@@ -16,6 +16,7 @@ from .file_rig import FileRig
 from .hydraulics import HydraulicActuator
 from .mujoco_rig import MujocoRig, _models_dir
 from .spec import ChannelSpec, read_description
+from .subset import OutputSubset
 
 __all__ = [
     "COMMON_DIR",
@@ -24,6 +25,7 @@ __all__ = [
     "FileRig",
     "HydraulicActuator",
     "MujocoRig",
+    "OutputSubset",
     "Transducer",
     "list_rigs",
     "load_rig",
