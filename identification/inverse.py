@@ -80,14 +80,19 @@ class InverseModel:
     lead : int, "delay" or "auto"
         Time shift in samples: the drive at t is modelled from responses up to t + lead.
         ``"delay"`` uses the rig delay from :func:`estimate_delay`. ``"auto"`` (default) tries
-        leads 0 .. ``lead_search``, the delay estimate and one more, and keeps the one whose
+        leads 0 .. ``lead_search`` and the delay estimate plus each ``preview``, and keeps the one whose
         inverse model reproduces the identification drive best in free run: a transducer or
         anti-alias lag makes the first response coefficient small, and an inverse built on it is
         unstable, while one more sample of lead is not.
     max_lead : int
         Largest delay considered by the delay estimate.
     lead_search : int
-        Extra leads tried by ``"auto"``.
+        ``"auto"`` tries every lead 0 .. ``lead_search``.
+    preview : tuple of int
+        ... and the delay estimate plus each of these samples. A rig with non-minimum-phase
+        dynamics (MIMO transmission zeros outside the unit circle, e.g. a multi-actuator rig's
+        cross-coupling) has no stable causal inverse: a preview of a few samples lets the ARX
+        inverse approximate the anti-causal part and is what makes it stable.
     max_radius : float or None
         Inverses linear in their past outputs (ARX, ``kind="input-polynomial"`` NARX) with a
         pole outside this radius are contracted to it (:meth:`~identification.Narx.stabilise`): inverting an acceleration or a
@@ -108,6 +113,7 @@ class InverseModel:
         lead: int | str = "auto",
         max_lead: int = 32,
         lead_search: int = 3,
+        preview: tuple = (1, 2, 4, 8, 12, 16),
         max_radius: float | None = 0.995,
     ):
         if not isinstance(model, Narx):
@@ -122,6 +128,9 @@ class InverseModel:
         self.lead = lead
         self.max_lead = max_lead
         self.lead_search = lead_search
+        if any(not isinstance(p, (int, np.integer)) or p < 0 for p in preview):
+            raise IdentificationError(f"preview must be non-negative integers, got {preview!r}")
+        self.preview = tuple(int(p) for p in preview)
         if max_radius is not None and not 0 < max_radius <= 1:
             raise IdentificationError(
                 f"max_radius must lie in (0, 1] or be None, got {max_radius!r}"
@@ -138,13 +147,17 @@ class InverseModel:
             delay = estimate_delay(drive, response, max_lag=self.max_lead)
             if self.lead == "delay":
                 candidates = [delay]
-            else:  # short leads and the delay estimate (with one more sample), by free-run error
-                candidates = sorted({*range(self.lead_search + 1), delay, delay + 1})
+            else:  # short leads, the delay estimate and longer previews, by free-run error
+                candidates = sorted(
+                    {*range(self.lead_search + 1), delay, *(delay + p for p in self.preview)}
+                )
         else:
             candidates = [int(self.lead)]
         best = None
         for lead in candidates:
             if lead >= N // 2:
+                if self.lead == "auto" and best is not None:
+                    continue  # a long preview candidate on a short record: skip it
                 raise IdentificationError(f"lead {lead} is too long for a record of {N} samples")
             model = copy.deepcopy(self.model)
             model.fit(
