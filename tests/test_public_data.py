@@ -1,0 +1,223 @@
+"""Public benchmark data (benchmarks/public_data.py): loaders, splits, scoring protocol.
+
+Expected values come from outside this code: the SOURCE.md of each data folder (sample counts,
+sampling rates), the split indices of the official ``nonlinear_benchmarks`` loader, the figures
+printed by SysIdentPy's tutorials (Silverbox 7.727682 mV, F-16 RRSE 0.2910), hand computations
+and known synthetic systems. Tests that need a data folder skip when it is absent (folder
+``../shared/external-data/`` next to the repository, or ``$VRIG_EXTERNAL_DATA``).
+"""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+if str(ROOT) not in sys.path:  # benchmarks/ is a source-checkout package, not in the wheel
+    sys.path.insert(0, str(ROOT))
+
+from benchmarks import public_data as pdata  # noqa: E402
+from identification import Narx  # noqa: E402
+
+
+def _need(folder: str, name: str) -> Path:
+    path = pdata.data_file(folder, name)
+    if path is None:
+        pytest.skip(
+            f"external data {folder}/{name} not found under {pdata.external_data_root()} "
+            f"(set {pdata.ENV_VAR} to the external-data folder)"
+        )
+    return path
+
+
+@pytest.fixture(scope="module")
+def silverbox():
+    return pdata.load_silverbox(_need(pdata.SILVERBOX_FOLDER, pdata.SILVERBOX_FILE))
+
+
+@pytest.fixture(scope="module")
+def tanks():
+    return pdata.load_cascaded_tanks(_need(pdata.TANKS_FOLDER, pdata.TANKS_FILE))
+
+
+@pytest.fixture(scope="module")
+def f16():
+    return pdata.load_f16(_need(pdata.F16_FOLDER, pdata.F16_FILE))
+
+
+@pytest.fixture(scope="module")
+def mr_damper():
+    return pdata.load_mr_damper(_need(pdata.MR_FOLDER, pdata.MR_FILE))
+
+
+# ---------------------------------------------------------------- data location (no data needed)
+def test_root_from_env_var(monkeypatch, tmp_path):
+    monkeypatch.setenv(pdata.ENV_VAR, str(tmp_path))
+    assert pdata.external_data_root() == tmp_path
+    assert pdata.data_file("silverbox", "SNLS80mV.csv") is None
+    (tmp_path / "silverbox").mkdir()
+    (tmp_path / "silverbox" / "SNLS80mV.csv").write_text("x")
+    assert pdata.data_file("silverbox", "SNLS80mV.csv") == tmp_path / "silverbox" / "SNLS80mV.csv"
+
+
+def test_default_root_is_next_to_the_repository(monkeypatch):
+    monkeypatch.delenv(pdata.ENV_VAR, raising=False)
+    assert pdata.external_data_root() == ROOT.parent / "shared" / "external-data"
+
+
+def test_absent_data_sets_are_skipped_with_a_reason(tmp_path):
+    report = pdata.run(quick=True, root=tmp_path, use_sysidentpy=False)
+    assert {r.dataset for r in report.rows} == {
+        "Silverbox",
+        "Cascaded Tanks",
+        "F-16 subset",
+        "MR damper",
+    }
+    for r in report.rows:
+        assert r.status.startswith("skipped:") and "not found" in r.status
+        assert r.vrig is None
+    table = pdata.format_table(report, None)
+    assert table.count("skipped:") == 4
+
+
+# ---------------------------------------------------------------- metrics and helpers
+def test_scores_against_hand_computation():
+    y = np.array([0.001, -0.002, 0.003, 0.0])
+    yhat = np.zeros(4)
+    # RMSE in mV: sqrt((1 + 4 + 9 + 0) / 4) = sqrt(3.5)
+    assert pdata._score("rmse_mv", y, yhat) == pytest.approx(np.sqrt(3.5))
+    y = np.array([1.0, 2.0, 3.0, 6.0])  # mean 3, sum of squared deviations 4 + 1 + 0 + 9 = 14
+    yhat = np.array([1.0, 3.0, 3.0, 4.0])  # squared errors 0 + 1 + 0 + 4 = 5
+    assert pdata._score("rrse", y, yhat) == pytest.approx(np.sqrt(5 / 14))
+    # NRMSE = RMSE / std(y) = sqrt(5 / 4) / sqrt(14 / 4)
+    assert pdata._score("nrmse", y, yhat) == pytest.approx(np.sqrt(5 / 14))
+    assert pdata._score("rmse", y, yhat) == pytest.approx(np.sqrt(5 / 4))
+
+
+def test_advance_shifts_inputs_by_one_sample():
+    u = np.arange(10.0).reshape(5, 2)
+    v = pdata.advance(u, 1)
+    assert v.shape == u.shape
+    np.testing.assert_array_equal(v[:-1], u[1:])
+    np.testing.assert_array_equal(v[-1], u[-1])
+    assert pdata.advance(u, 0) is not None and np.array_equal(pdata.advance(u, 0), u)
+
+
+def test_selection_finds_the_degree_of_a_known_system():
+    # y(t) = 0.5 y(t-1) + u(t-1) + 0.3 u(t-1)^2: quadratic, one lag
+    rng = np.random.default_rng(3)
+    u = rng.uniform(-1, 1, 3000)
+    y = np.zeros_like(u)
+    for t in range(1, len(u)):
+        y[t] = 0.5 * y[t - 1] + u[t - 1] + 0.3 * u[t - 1] ** 2
+    cands = pdata.grid((1, 2), (1, 2), (3, 4, 6))
+    sel = pdata.select_and_fit(u[:2000], y[:2000], cands, "rrse", 5)
+    assert sel.best.degree == 2
+    assert sel.n_tried == len(cands)
+    # ties go to fewer terms: the true model has 3 terms (plus a constant candidate)
+    assert int(sel.model.n_terms_[0]) <= 4
+    sim = pdata.free_run(sel.model, u[2000:], y[2000:])
+    assert pdata._score("rrse", y[2005:], sim[5:]) < 1e-6
+    # a term budget is respected
+    small = pdata.select_and_fit(u[:2000], y[:2000], cands, "rrse", 5, max_terms=3)
+    assert int(small.model.n_terms_[0]) <= 3
+
+
+# ---------------------------------------------------------------- loaders against SOURCE.md
+def test_silverbox_loader(silverbox):
+    u, y = silverbox
+    # SOURCE.md: 131072 rows, V1 input, V2 output; fs = 1e7 / 2^14 ~ 610.35 Hz
+    assert u.shape == y.shape == (131072,)
+    assert pdata.SILVERBOX_FS == pytest.approx(610.35, abs=0.01)
+    assert np.all(np.isfinite(u)) and np.all(np.isfinite(y))
+
+
+def test_silverbox_split_is_the_official_one():
+    # nonlinear_benchmarks.Silverbox: multisine = data[40650:127400] (86750 samples), first
+    # int(0.75 * 86750) = 65062 train; arrow = data[100:40575]; no-extrapolation = first 32000
+    sp = pdata.silverbox_splits()
+    assert sp["train"] == (40650, 40650 + 65062)
+    assert sp["test_multisine"] == (40650 + 65062, 127400)
+    assert sp["test_multisine"][1] - sp["test_multisine"][0] == 21688
+    assert sp["test_arrow_full"] == (100, 40575)
+    assert sp["test_arrow_no_extrapolation"] == (100, 32100)
+    assert pdata.SILVERBOX_INIT == 50
+
+
+def test_cascaded_tanks_loader(tanks):
+    # SOURCE.md: 1024 rows of uEst, uVal, yEst, yVal; Ts = 4 s in row 1 only
+    for key in ("uEst", "uVal", "yEst", "yVal"):
+        assert tanks[key].shape == (1024,)
+        assert np.all(np.isfinite(tanks[key]))
+    assert tanks["Ts"] == 4.0 == pdata.TANKS_TS
+
+
+def test_f16_loader_and_split(f16):
+    u, y = f16
+    # SOURCE.md: 32768 rows, x1, x2 inputs and y output, each column scaled to (about) max 1
+    assert u.shape == (32768, 2) and y.shape == (32768,)
+    np.testing.assert_allclose(u.max(axis=0), 1.0)
+    assert 0.95 < y.max() <= 1.0
+    # identification on rows 0:16384, validation on 16384: (half and half)
+    assert pdata.F16_SPLIT == 16384 == len(y) // 2
+
+
+def test_mr_damper_loader_and_split(mr_damper):
+    d = mr_damper
+    # SOURCE.md: 74068 rows, ~24.65 s, fs = 3004.8 Hz (dt = 3.328e-4 s)
+    for key in ("t", "D", "Y", "F"):
+        assert d[key].shape == (74068,)
+    assert d["fs"] == pytest.approx(3004.8)
+    # t is printed with 4 decimals, so check the mean step
+    assert (d["t"][-1] - d["t"][0]) / (len(d["t"]) - 1) == pytest.approx(3.328e-4, rel=1e-4)
+    assert 1 / d["fs"] == pytest.approx(3.328e-4, rel=1e-4)
+    assert d["t"][-1] == pytest.approx(24.65, abs=0.01)
+    # first 70 %: int(0.7 * 74068) = 51847 samples train, 22221 test
+    cut = pdata.mr_damper_split(len(d["F"]))
+    assert (cut, len(d["F"]) - cut) == (51847, 22221)
+
+
+# ---------------------------------------------------------------- published figures reproduced
+def test_f16_published_structure_reproduces_sysidentpy_figure(f16):
+    # SOURCE.md / SysIdentPy F-16 tutorial: degree 1, ylag 20, xlag 1..9 for both inputs,
+    # 30 terms, identification 0:16384, free-run RRSE 0.2910 on 16384:
+    u, y = f16
+    n = pdata.F16_SPLIT
+    model = pdata.Candidate(1, 20, 9, 30).model().fit(u[:n], y[:n])
+    assert int(model.n_terms_[0]) == 30
+    rrse = pdata._score("rrse", y[n:], pdata.free_run(model, u[n:], y[n:]))
+    assert rrse == pytest.approx(0.2910, abs=5e-4)
+
+
+def test_silverbox_published_structure_reproduces_sysidentpy_figure(silverbox):
+    # SysIdentPy Silverbox tutorial: degree 2, xlag = ylag = 7, err_tol 0.999, trained on the
+    # multisine training part, free run continuing from the training record: 7.727682 mV
+    u, y = silverbox
+    (a, b), (c, d) = pdata.silverbox_splits()["train"], pdata.silverbox_splits()["test_multisine"]
+    model = Narx(na=7, nb=7, nk=1, degree=2, constant=True, n_terms=40, err_tol=1e-3)
+    model.fit(u[a:b], y[a:b])
+    p = model.max_lag_
+    sim = pdata.free_run(model, u[c - p : d], y[c - p : d])
+    rmse_mv = pdata._score("rmse_mv", y[c + 50 : d], sim[p + 50 :])
+    assert rmse_mv == pytest.approx(7.727682, abs=0.01)
+
+
+def test_sysidentpy_mirror_with_current_input_matches_vrig():
+    # the nk = 0 mirror (inputs advanced one sample) must give SysIdentPy the same candidate set
+    pytest.importorskip("sysidentpy", reason="sysidentpy not installed (optional)")
+    sip = pdata.get_sysidentpy()
+    rng = np.random.default_rng(5)
+    u = rng.uniform(-1, 1, (1500, 2))
+    y = np.zeros(1500)
+    for t in range(1, 1500):
+        y[t] = 0.6 * y[t - 1] + 0.8 * u[t, 0] - 0.4 * u[t - 1, 1] + 0.2 * u[t, 0] * u[t, 1]
+    cand = pdata.Candidate(2, 1, 2, 5, nk=0)
+    vm = cand.model().fit(u[:1000], y[:1000])
+    sm, _ = sip.mirror(cand, 2, u[:1000], y[:1000])
+    vs = pdata.free_run(vm, u[1000:], y[1000:])
+    ss = sip.free_run(sm, u[1000:], y[1000:], nk=0)
+    assert pdata._score("rrse", y[1002:], vs[2:]) < 1e-8
+    np.testing.assert_allclose(ss[2:], vs[2:], atol=1e-8)
