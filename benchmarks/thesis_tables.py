@@ -81,7 +81,7 @@ TABLES = [
         ["damper_load"],
         [
             Row("QanTiM 6th order (inverse)", _arx(6), thesis=(57,)),
-            Row("NARX 4th order quadratic (inverse)", _narx(4, 2), thesis=(24,)),
+            Row("NARX 4th order quadratic (inverse)", _narx(4, 2, kind="full"), thesis=(24,)),
             Row(
                 "vrig: NARX 4th order quadratic, input-polynomial",
                 _narx(4, 2, kind="input-polynomial"),
@@ -99,7 +99,7 @@ TABLES = [
         [
             Row("QanTiM 4th order (inverse) IT00", _arx(4), thesis=(27,), key="arx"),
             Row("QanTiM 4th order (inverse) IT05", _arx(4), iteration=5, thesis=(17,), key="arx"),
-            Row("NARX 4th order cubic (inverse) IT00", _narx(4, 3), thesis=(18,)),
+            Row("NARX 4th order cubic (inverse) IT00", _narx(4, 3, kind="full"), thesis=(18,)),
             Row(
                 "vrig: NARX 4th order cubic, input-polynomial, IT00",
                 _narx(4, 3, kind="input-polynomial"),
@@ -122,11 +122,13 @@ TABLES = [
             ),
             Row(
                 "NARX 6th order quadratic (inverse), top tank",
-                _narx(6, 2, responses=["toptank_acc"]),
+                _narx(6, 2, kind="full", responses=["toptank_acc"]),
                 thesis=(16, None),
             ),
             Row(
-                "Non-square NARX 6th order quadratic, top tank + base", _narx(6, 2), thesis=(14, 12)
+                "Non-square NARX 6th order quadratic, top tank + base",
+                _narx(6, 2, kind="full"),
+                thesis=(14, 12),
             ),
         ],
         "v[2][0] <= v[1][0] < v[0][0]",
@@ -197,10 +199,7 @@ def run_table(table: Table, *, seconds: float, id_seconds: float, cache: dict, l
     import vrig
 
     rig = vrig.load_rig(table.rig, seed=0)
-    desdrv, desired = _pseudo_field(rig, table.band, seconds, cache)
-    # the identification drive covers the desired response's amplitude range (a polynomial
-    # model is only trusted inside the range it was identified on): the pseudo-field drive's RMS
-    id_rms = desdrv.data.std(axis=0)
+    _desdrv, desired = _pseudo_field(rig, table.band, seconds, cache)
     runs, values = {}, []
     for row in table.rows:
         key = row.key or row.label
@@ -215,7 +214,6 @@ def run_table(table: Table, *, seconds: float, id_seconds: float, cache: dict, l
                     iterations=iterations,
                     bandwidth=table.band,
                     id_duration=id_seconds,
-                    id_rms=id_rms,
                     seed=0,
                 )
                 log(

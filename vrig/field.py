@@ -32,8 +32,10 @@ def pseudo_field(rig, band: tuple[float, float], seconds: float, *, seed: int = 
 
     The drive has a triangular PSD over ``band`` (the QanTiM road-like shape), a 1 s fade-in and
     fade-out, and 10 % of each drive channel's full scale RMS; the level is halved (up to four
-    times) until the rig runs it without an interlock trip and every response peaks below two
-    thirds of its transducer range (room for the iterations to overshoot).
+    times) until every response peaks below two thirds of its transducer range and the rig runs
+    1.5 times the drive without an interlock trip (room for the iterations to overshoot: a
+    desired response made right at the following-error limit cannot be reached by any drive
+    that differs from the original).
 
     Returns
     -------
@@ -71,8 +73,14 @@ def pseudo_field(rig, band: tuple[float, float], seconds: float, *, seed: int = 
         else:
             swing = np.abs(response.data - response.data.mean(axis=0)).max(axis=0)
             if np.all(swing <= _FIELD_HEADROOM * out_full):
-                return drive, response
-            last_error = None
+                try:  # the same headroom on the interlocks: 1.5x the drive must run too
+                    rig.run(drive.with_data(drive.data / _FIELD_HEADROOM), seed=seed + 10_000)
+                except RigLimitError as exc:
+                    last_error = exc
+                else:
+                    return drive, response
+            else:
+                last_error = None
         fraction /= 2
     if last_error is not None:
         raise last_error
