@@ -4,6 +4,7 @@ The identification library lives in the sibling package :mod:`identification`; t
 signals, processing, reconstruction workflow, gymnasium environments and CLI live here.
 """
 
+from . import envs as _envs  # noqa: F401  (registers the vrig/ gymnasium environments)
 from .errors import RigLimitError, RigModelError, SimulationInstabilityError
 from .field import pseudo_field
 from .reconstruction import ReconstructionResult, reconstruct

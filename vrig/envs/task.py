@@ -1,0 +1,171 @@
+"""Task of the drive-iteration environments: observation, reward and termination.
+
+Nothing here runs the rig (that is :mod:`vrig.envs.physics`); the task turns the records of one
+iteration (processed desired response, processed response, drive) into the observation, scores a
+transition and says when the episode is over.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from gymnasium import spaces
+
+__all__ = ["IterationTask", "band_edges", "band_error_ratios"]
+
+LOG_RATIO_RANGE = (-6.0, 3.0)
+"""Range of the log10 band-error ratios in the observation (values beyond are clipped)."""
+LOG_CHANGE_RANGE = (-3.0, 3.0)
+"""Range of the log10 band-error changes in the observation (values beyond are clipped)."""
+PERCENT_MAX = 1000.0
+"""η0 and RMS errors above this [%] are clipped in the observation (``info`` has the raw ones)."""
+
+
+def band_edges(band: tuple[float, float], n_bands: int) -> np.ndarray:
+    """``n_bands + 1`` log-spaced band edges [Hz] over the simulation ``band``.
+
+    A band starting at 0 Hz gets ``[0, hi / 2**(n-1), ..., hi / 2, hi]`` (octaves below ``hi``,
+    the first band reaching down to DC); otherwise ``geomspace(lo, hi, n_bands + 1)``. As in
+    :func:`vrig.reconstruction.band_gains`, the first band also holds everything below
+    ``edges[1]`` and the last everything above ``edges[-2]``.
+    """
+    if not isinstance(n_bands, (int, np.integer)) or n_bands < 1:
+        raise ValueError(f"n_bands must be a positive integer, got {n_bands!r}")
+    lo, hi = float(band[0]), float(band[1])
+    if not (0 <= lo < hi):
+        raise ValueError(f"band must satisfy 0 <= low < high, got {band}")
+    if lo <= 0:
+        return np.concatenate([[0.0], hi / 2.0 ** np.arange(n_bands - 1, -1, -1)])
+    return np.geomspace(lo, hi, n_bands + 1)
+
+
+def band_error_ratios(desired: np.ndarray, response: np.ndarray, fs: float, edges) -> np.ndarray:
+    """Per channel and band: RMS of ``desired - response`` over RMS of ``desired`` in the band.
+
+    Returns (n_channels, n_bands); bands are assigned as in :func:`band_edges` (the first from
+    0 Hz, the last to Nyquist). A band where the desired response has no power gets the ratio of
+    the error's band power to the desired response's total power.
+    """
+    d = np.asarray(desired, dtype=float)
+    e = d - np.asarray(response, dtype=float)
+    edges = np.asarray(edges, dtype=float)
+    n_bands = edges.size - 1
+    f = np.fft.rfftfreq(d.shape[0], 1.0 / fs)
+    band = np.clip(np.searchsorted(edges, f, side="right") - 1, 0, n_bands - 1)
+    pd = np.abs(np.fft.rfft(d, axis=0)) ** 2
+    pe = np.abs(np.fft.rfft(e, axis=0)) ** 2
+    sd = np.zeros((n_bands, d.shape[1]))
+    se = np.zeros((n_bands, d.shape[1]))
+    np.add.at(sd, band, pd)
+    np.add.at(se, band, pe)
+    floor = np.maximum(sd.sum(axis=0), 1e-300)
+    sd = np.where(sd > 1e-12 * floor, sd, floor)
+    return np.sqrt(se / sd).T
+
+
+@dataclass(frozen=True)
+class IterationTask:
+    """Observation, reward and termination of a drive-iteration episode.
+
+    Parameters
+    ----------
+    edges : ndarray
+        Band edges [Hz] of the observation bands (and of per-band gains).
+    tolerance : float
+        The episode terminates (success) when every channel's η0 is at or below this [%].
+    trip_penalty : float
+        Reward of a step whose drive was refused or tripped the rig (the episode terminates).
+    energy_penalty : float
+        Weight of ``max(0, ln(E_n / E_n-1))``, the growth of the drive energy
+        ``E = sum_channels (drive RMS / full scale)^2``, subtracted from the reward.
+    step_penalty : float
+        Constant subtracted from every step's reward (a price per iteration).
+    """
+
+    edges: np.ndarray
+    tolerance: float = 1.0
+    trip_penalty: float = 5.0
+    energy_penalty: float = 0.1
+    step_penalty: float = 0.0
+
+    @property
+    def n_bands(self) -> int:
+        return len(self.edges) - 1
+
+    def observation_space(self, n_inputs: int, n_outputs: int, max_iterations: int) -> spaces.Dict:
+        f32 = np.float32
+        nb = self.n_bands
+        return spaces.Dict(
+            {
+                "band_error": spaces.Box(*LOG_RATIO_RANGE, shape=(n_outputs, nb), dtype=f32),
+                "band_error_change": spaces.Box(
+                    *LOG_CHANGE_RANGE, shape=(n_outputs, nb), dtype=f32
+                ),
+                "eta0": spaces.Box(0.0, PERCENT_MAX, shape=(n_outputs,), dtype=f32),
+                "rms_error": spaces.Box(0.0, PERCENT_MAX, shape=(n_outputs,), dtype=f32),
+                "drive_rms": spaces.Box(0.0, 1.0, shape=(n_inputs,), dtype=f32),
+                "drive_peak": spaces.Box(0.0, 1.0, shape=(n_inputs,), dtype=f32),
+                "iteration": spaces.Box(0.0, float(max_iterations), shape=(1,), dtype=f32),
+            }
+        )
+
+    def measure(self, desres: np.ndarray, response: np.ndarray, fs: float) -> np.ndarray:
+        """log10 band-error ratios (n_outputs, n_bands), unclipped."""
+        ratio = band_error_ratios(desres, response, fs, self.edges)
+        return np.log10(np.maximum(ratio, 1e-300))
+
+    def observe(
+        self,
+        *,
+        log_band_error: np.ndarray,
+        previous_log_band_error: np.ndarray | None,
+        eta0: np.ndarray,
+        rms_error: np.ndarray,
+        drive: np.ndarray,
+        full_scale: np.ndarray,
+        iteration: int,
+    ) -> dict:
+        """The observation dictionary (fresh float32 arrays, clipped to the space)."""
+        change = (
+            np.zeros_like(log_band_error)
+            if previous_log_band_error is None
+            else log_band_error - previous_log_band_error
+        )
+        rms = np.sqrt(np.mean(np.asarray(drive) ** 2, axis=0)) / full_scale
+        peak = np.max(np.abs(drive), axis=0) / full_scale
+
+        def box(x, lo, hi):
+            return np.clip(np.nan_to_num(np.asarray(x, float), nan=hi), lo, hi).astype(np.float32)
+
+        return {
+            "band_error": box(log_band_error, *LOG_RATIO_RANGE),
+            "band_error_change": box(change, *LOG_CHANGE_RANGE),
+            "eta0": box(eta0, 0.0, PERCENT_MAX),
+            "rms_error": box(rms_error, 0.0, PERCENT_MAX),
+            "drive_rms": box(rms, 0.0, 1.0),
+            "drive_peak": box(peak, 0.0, 1.0),
+            "iteration": np.array([iteration], dtype=np.float32),
+        }
+
+    @staticmethod
+    def drive_energy(drive: np.ndarray, full_scale: np.ndarray) -> float:
+        return float(np.sum(np.mean(np.asarray(drive) ** 2, axis=0) / full_scale**2))
+
+    def reward(
+        self,
+        eta_before: np.ndarray,
+        eta_after: np.ndarray,
+        energy_before: float,
+        energy_after: float,
+    ) -> float:
+        """``ln(mean η0 before) - ln(mean η0 after) - energy_penalty * max(0, ln(E_after /
+        E_before)) - step_penalty``."""
+        gain = np.log(max(float(np.mean(eta_before)), 1e-12)) - np.log(
+            max(float(np.mean(eta_after)), 1e-12)
+        )
+        growth = max(0.0, np.log(max(energy_after, 1e-300) / max(energy_before, 1e-300)))
+        return float(gain - self.energy_penalty * growth - self.step_penalty)
+
+    def success(self, eta0: np.ndarray) -> bool:
+        return bool(np.all(np.asarray(eta0) <= self.tolerance))

@@ -1,0 +1,246 @@
+"""Drive-iteration policies for the ``vrig/`` gymnasium environments, and a gradient-free trainer.
+
+A policy is built for one environment (it reads the env's :class:`~vrig.envs.ActionLayout`),
+``reset()`` at the start of each episode and called with each observation; it returns a valid
+flat action (gains in the env's range). All of them work on any action mode (``bands``,
+``channels``, ``scalar``): band-wise decisions are averaged where the mode has no bands.
+
+* :class:`FixedGain` - the classic: the same gain every iteration.
+* :class:`DecreasingGain` - ``max(floor, start * decay**n)``.
+* :class:`AdaptiveBandGain` - per band: cut the gain when the band's error grew, raise it
+  slowly while it falls.
+* :class:`BandRatioPolicy` - the learned one: per band ``g_b = exp(theta_b + alpha * change_b +
+  beta * (error_b + 1) + gamma * n)`` from the observed log10 band-error ratio (``error_b``), its
+  change over the last iteration (``change_b``) and the iteration index ``n``; parameters found
+  by :func:`cross_entropy_search` (``benchmarks/learned_iteration.py`` trains it). No GPU, no
+  deep-learning library.
+
+:func:`run_episode` plays one episode and returns an :class:`EpisodeResult`.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass, field
+
+import numpy as np
+
+__all__ = [
+    "AdaptiveBandGain",
+    "BandRatioPolicy",
+    "DecreasingGain",
+    "EpisodeResult",
+    "FixedGain",
+    "Policy",
+    "cross_entropy_search",
+    "run_episode",
+]
+
+
+class Policy:
+    """Base class: ``reset()`` per episode, ``policy(obs) -> action``."""
+
+    name = "policy"
+
+    def __init__(self, env):
+        self.layout = env.unwrapped.layout
+
+    def reset(self) -> None:
+        """Forget the episode's state (called by :func:`run_episode` after ``env.reset``)."""
+
+    def gains(self, obs) -> np.ndarray:  # pragma: no cover - abstract
+        """Gains per drive channel and band (n_inputs, n_bands), or anything broadcasting."""
+        raise NotImplementedError
+
+    def reidentify(self, obs) -> bool:
+        return False
+
+    def __call__(self, obs) -> np.ndarray:
+        lay = self.layout
+        g = np.broadcast_to(np.asarray(self.gains(obs), float), (lay.n_inputs, lay.n_bands))
+        if lay.mode == "channels":
+            g = g.mean(axis=1)
+        elif lay.mode == "scalar":
+            g = np.array([g.mean()])
+        return lay.action(np.clip(g, lay.low, lay.high), self.reidentify(obs))
+
+    def __repr__(self) -> str:
+        return self.name
+
+
+class FixedGain(Policy):
+    """The same gain every iteration (what :func:`vrig.reconstruct` does)."""
+
+    def __init__(self, env, gain: float = 0.8):
+        super().__init__(env)
+        self.gain = float(gain)
+        self.name = f"fixed {self.gain:g}"
+
+    def gains(self, obs):
+        return self.gain
+
+
+class DecreasingGain(Policy):
+    """``gain_n = max(floor, start * decay**(n))`` for the update after iteration n."""
+
+    def __init__(self, env, start: float = 1.2, decay: float = 0.85, floor: float = 0.5):
+        super().__init__(env)
+        self.start, self.decay, self.floor = float(start), float(decay), float(floor)
+        self.name = f"decreasing {self.start:g}x{self.decay:g}^n"
+
+    def gains(self, obs):
+        n = float(obs["iteration"][0])
+        return max(self.floor, self.start * self.decay**n)
+
+
+class AdaptiveBandGain(Policy):
+    """Per band: multiply the gain by ``shrink`` when the band's error grew in the last
+    iteration (any output channel), else by ``grow``; gains kept in [``low``, ``high``]."""
+
+    def __init__(
+        self,
+        env,
+        start: float = 0.8,
+        shrink: float = 0.5,
+        grow: float = 1.1,
+        low: float = 0.1,
+        high: float = 1.2,
+    ):
+        super().__init__(env)
+        self.start, self.shrink, self.grow = float(start), float(shrink), float(grow)
+        self.low, self.high = float(low), float(high)
+        self.name = "adaptive per band"
+        self.reset()
+
+    def reset(self):
+        self._g = None
+
+    def gains(self, obs):
+        lay = self.layout
+        if self._g is None or float(obs["iteration"][0]) == 0:
+            self._g = np.full((lay.n_inputs, lay.n_bands), self.start)
+            return self._g.copy()
+        grew = np.asarray(obs["band_error_change"]).max(axis=0) > 0  # (n_bands,)
+        self._g = np.clip(
+            self._g * np.where(grew, self.shrink, self.grow)[None, :], self.low, self.high
+        )
+        return self._g.copy()
+
+
+class BandRatioPolicy(Policy):
+    """Learned per-band gains as a function of the observed band-error ratios.
+
+    ``g_b = clip(exp(theta_b + alpha * change_b + beta * (error_b + 1) + gamma * n))``, with
+    ``error_b`` the log10 band-error ratio and ``change_b`` its change over the last iteration
+    (both taken as the maximum over output channels) and ``n`` the iteration index.
+    ``params = [theta_1 .. theta_B, alpha, beta, gamma]``.
+    """
+
+    def __init__(self, env, params):
+        super().__init__(env)
+        p = np.asarray(params, dtype=float)
+        if p.shape != (self.n_params(env),):
+            raise ValueError(f"params must have shape ({self.n_params(env)},), got {p.shape}")
+        self.params = p
+        self.name = "learned (CEM)"
+
+    @staticmethod
+    def n_params(env) -> int:
+        return env.unwrapped.layout.n_bands + 3
+
+    @staticmethod
+    def initial(env, gain: float = 0.8) -> np.ndarray:
+        """Parameters of the fixed gain ``gain`` (a starting point for the search)."""
+        p = np.zeros(BandRatioPolicy.n_params(env))
+        p[:-3] = np.log(gain)
+        return p
+
+    def gains(self, obs):
+        nb = self.layout.n_bands
+        theta, (alpha, beta, gamma) = self.params[:nb], self.params[nb:]
+        err = np.asarray(obs["band_error"], float).max(axis=0)
+        change = np.asarray(obs["band_error_change"], float).max(axis=0)
+        n = float(obs["iteration"][0])
+        x = theta + alpha * change + beta * (err + 1.0) + gamma * n
+        return np.exp(np.clip(x, -20, 5))[None, :]
+
+
+@dataclass
+class EpisodeResult:
+    """One episode: ``iterations`` steps played, ``success`` (tolerance met), the mean η0 per
+    iteration (IT00 first), the final η0 per channel, the total reward and why it ended."""
+
+    iterations: int
+    success: bool
+    mean_eta0: list = field(default_factory=list)
+    final_eta0: np.ndarray | None = None
+    total_reward: float = 0.0
+    reason: str = ""
+
+    def iterations_to_tolerance(self, budget: int) -> int:
+        """Iterations after IT00 until the tolerance was met; ``budget + 1`` if never."""
+        return self.iterations if self.success else budget + 1
+
+
+def run_episode(env, policy, *, seed=None, options=None) -> EpisodeResult:
+    """Play one episode of ``policy`` on ``env``."""
+    obs, info = env.reset(seed=seed, options=options)
+    policy.reset()
+    res = EpisodeResult(0, bool(info["success"]), [info["mean_eta0"]], info["eta0"])
+    done = False
+    while not done:
+        obs, reward, terminated, truncated, info = env.step(policy(obs))
+        res.iterations += 1
+        res.total_reward += float(reward)
+        res.mean_eta0.append(info["mean_eta0"])
+        res.final_eta0, res.success, res.reason = (
+            info["eta0"],
+            bool(info["success"]),
+            info["reason"],
+        )
+        done = terminated or truncated
+    return res
+
+
+def cross_entropy_search(
+    objective: Callable[[np.ndarray], float],
+    mean,
+    std,
+    *,
+    generations: int = 8,
+    population: int = 12,
+    elite: int = 3,
+    seed: int = 0,
+    callback: Callable[[int, np.ndarray, float], None] | None = None,
+    map_fn: Callable = map,
+):
+    """Minimise ``objective(params)`` by the cross-entropy method.
+
+    Each generation samples ``population`` parameter vectors from a diagonal Gaussian, keeps
+    the ``elite`` best and refits the mean and standard deviation to them (the std is kept
+    above 5 % of its initial value). The best vector ever evaluated is returned with its score.
+    ``map_fn(objective, candidates)`` evaluates a generation (e.g. a process pool's ``map``; the
+    objective must then be picklable).
+
+    Returns
+    -------
+    (best_params, best_score, history) : ndarray, float, list of (generation, mean score of the
+    elite, best score so far)
+    """
+    rng = np.random.default_rng(seed)
+    mean = np.asarray(mean, dtype=float).copy()
+    std = np.broadcast_to(np.asarray(std, dtype=float), mean.shape).copy()
+    std_min = 0.05 * std
+    best, best_score, history = mean.copy(), float(objective(mean)), []
+    for gen in range(generations):
+        cands = mean + std * rng.standard_normal((population, mean.size))
+        scores = np.array(list(map_fn(objective, list(cands))), dtype=float)
+        order = np.argsort(scores, kind="stable")[:elite]
+        if scores[order[0]] < best_score:
+            best, best_score = cands[order[0]].copy(), float(scores[order[0]])
+        mean = cands[order].mean(axis=0)
+        std = np.maximum(cands[order].std(axis=0), std_min)
+        history.append((gen, float(scores[order].mean()), best_score))
+        if callback is not None:
+            callback(gen, best, best_score)
+    return best, best_score, history
