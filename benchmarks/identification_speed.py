@@ -237,27 +237,48 @@ def problem_a(report: Report, repeats: int, sip: SysIdentPy | None) -> None:
         if models[name].n_terms_[0] != A_N_TERMS:
             raise RuntimeError(f"vrig model has {models[name].n_terms_[0]} terms, not {A_N_TERMS}")
         rrse[name] = float(metrics.rrse(y_val, free_run(models[name]))[0])
-        label = "vrig fit, full QR (solver='qr', default)" if name == "qr" else (
-            f"vrig fit, solver={name!r}"
+        label = (
+            "vrig fit, full QR (solver='qr', default)"
+            if name == "qr"
+            else (f"vrig fit, solver={name!r}")
         )
         notes = sorted({type(w.message).__name__ for w in caught})
         report.add("A", f"vrig_fit_s.{name}", label, fit_s[name], "s", note=", ".join(notes))
     t_frols, frols = best_of(lambda: vrig_model(n_terms=A_N_TERMS).fit(u_id, y_id), repeats)
     if frols.n_terms_[0] != A_N_TERMS:
         raise RuntimeError(f"vrig FROLS kept {frols.n_terms_[0]} terms, not {A_N_TERMS}")
-    report.add("A", "vrig_fit_s.frols", f"vrig fit, FROLS ordering all {A_N_TERMS} terms",
-               t_frols, "s")
+    report.add(
+        "A", "vrig_fit_s.frols", f"vrig fit, FROLS ordering all {A_N_TERMS} terms", t_frols, "s"
+    )
 
     model = models["qr"]
     progress("problem A: vrig simulation")
     t_long, _ = best_of(lambda: model.simulate(u_long), repeats)
-    report.add("A", "vrig_simulate_rate.long", f"vrig free run, {A_N_SIM:,} samples",
-               A_N_SIM / t_long, "samples/s", at_least=TARGET_SIM_RATE)
+    report.add(
+        "A",
+        "vrig_simulate_rate.long",
+        f"vrig free run, {A_N_SIM:,} samples",
+        A_N_SIM / t_long,
+        "samples/s",
+        at_least=TARGET_SIM_RATE,
+    )
     t_val, y_vrig = best_of(lambda: free_run(model), repeats)
-    report.add("A", "vrig_simulate_rate.validation", f"vrig free run, {A_N_VAL:,} samples",
-               A_N_VAL / t_val, "samples/s", at_least=TARGET_SIM_RATE)
-    report.add("A", "vrig_rrse", "vrig free-run RRSE on validation (solver='qr')",
-               rrse["qr"], "", at_most=TARGET_RRSE)
+    report.add(
+        "A",
+        "vrig_simulate_rate.validation",
+        f"vrig free run, {A_N_VAL:,} samples",
+        A_N_VAL / t_val,
+        "samples/s",
+        at_least=TARGET_SIM_RATE,
+    )
+    report.add(
+        "A",
+        "vrig_rrse",
+        "vrig free-run RRSE on validation (solver='qr')",
+        rrse["qr"],
+        "",
+        at_most=TARGET_RRSE,
+    )
     spread = max(rrse.values()) - min(rrse.values())
     report.add("A", "vrig_rrse_spread", "RRSE spread over the six solvers", spread, "")
 
@@ -275,20 +296,51 @@ def problem_a(report: Report, repeats: int, sip: SysIdentPy | None) -> None:
             lambda: smodel.predict(X=u_val, y=y_val, steps_ahead=None), repeats
         )
     y_sip = np.asarray(y_sip).reshape(-1, 1)
-    report.add("A", "sysidentpy_fit_s", f"SysIdentPy {sip.version} fit, FROLS + LeastSquares",
-               t_sip, "s", note=SYSIDENTPY_FIT_BEFORE)
-    report.add("A", "speedup.fit_qr", "speed-up, fit: vrig qr vs SysIdentPy",
-               t_sip / fit_s["qr"], "x", at_least=TARGET_SPEEDUP)
-    report.add("A", "speedup.fit_frols", "speed-up, fit: vrig FROLS vs SysIdentPy",
-               t_sip / t_frols, "x")
-    report.add("A", "sysidentpy_simulate_rate", f"SysIdentPy free run, {A_N_VAL:,} samples",
-               A_N_VAL / t_sip_sim, "samples/s", note=SYSIDENTPY_SIM_BEFORE)
-    report.add("A", "speedup.simulate", "speed-up, free run (validation record)",
-               t_sip_sim / t_val, "x")
-    report.add("A", "sysidentpy_rrse", "SysIdentPy free-run RRSE on validation",
-               float(metrics.rrse(y_val, y_sip)[0]), "", at_most=TARGET_RRSE)
-    report.add("A", "max_abs_diff", "max |y_vrig - y_SysIdentPy|, free run",
-               float(np.max(np.abs(y_vrig - y_sip))), "")
+    report.add(
+        "A",
+        "sysidentpy_fit_s",
+        f"SysIdentPy {sip.version} fit, FROLS + LeastSquares",
+        t_sip,
+        "s",
+        note=SYSIDENTPY_FIT_BEFORE,
+    )
+    report.add(
+        "A",
+        "speedup.fit_qr",
+        "speed-up, fit: vrig qr vs SysIdentPy",
+        t_sip / fit_s["qr"],
+        "x",
+        at_least=TARGET_SPEEDUP,
+    )
+    report.add(
+        "A", "speedup.fit_frols", "speed-up, fit: vrig FROLS vs SysIdentPy", t_sip / t_frols, "x"
+    )
+    report.add(
+        "A",
+        "sysidentpy_simulate_rate",
+        f"SysIdentPy free run, {A_N_VAL:,} samples",
+        A_N_VAL / t_sip_sim,
+        "samples/s",
+        note=SYSIDENTPY_SIM_BEFORE,
+    )
+    report.add(
+        "A", "speedup.simulate", "speed-up, free run (validation record)", t_sip_sim / t_val, "x"
+    )
+    report.add(
+        "A",
+        "sysidentpy_rrse",
+        "SysIdentPy free-run RRSE on validation",
+        float(metrics.rrse(y_val, y_sip)[0]),
+        "",
+        at_most=TARGET_RRSE,
+    )
+    report.add(
+        "A",
+        "max_abs_diff",
+        "max |y_vrig - y_SysIdentPy|, free run",
+        float(np.max(np.abs(y_vrig - y_sip))),
+        "",
+    )
 
 
 def problem_b(report: Report, repeats: int) -> None:
@@ -311,8 +363,13 @@ def problem_b(report: Report, repeats: int) -> None:
     progress("problem B: bare numpy QR")
     channel, start = inverse.channels_[0], inverse.max_lag_
     t_reg, X = best_of(lambda: regression_matrix(response, drive, channel, start), repeats)
-    report.add("B", "regression_matrix_s", f"  regression matrix {X.shape[0]:,} x {X.shape[1]:,}",
-               t_reg, "s")
+    report.add(
+        "B",
+        "regression_matrix_s",
+        f"  regression matrix {X.shape[0]:,} x {X.shape[1]:,}",
+        t_reg,
+        "s",
+    )
     t_qr, _ = best_of(lambda: np.linalg.qr(X, mode="r"), repeats)
     report.add("B", "numpy_qr_s", '  numpy.linalg.qr(X, mode="r"), reference', t_qr, "s")
     report.add("B", "fit_over_qr", "  fit time / bare QR time", t_fit / t_qr, "x")
@@ -351,8 +408,11 @@ def print_table(figures: list[Figure]) -> None:
 
 
 def environment(sip: SysIdentPy | None) -> dict[str, Any]:
-    threads = {k: os.environ[k] for k in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS",
-                                            "MKL_NUM_THREADS") if k in os.environ}
+    threads = {
+        k: os.environ[k]
+        for k in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS")
+        if k in os.environ
+    }
     try:
         blas = np.show_config(mode="dicts")["Build Dependencies"]["blas"]["name"]
     except Exception:  # pragma: no cover - depends on the numpy build

@@ -460,7 +460,7 @@ def _external() -> Path:
 
 def thesis_report(out_dir: Path | str, quick: bool = False, log=print) -> str:
     """Run every table, write ``thesis_reproduction.md`` into ``out_dir`` and return it."""
-    seconds, id_seconds = (20.0, 30.0) if quick else (30.0, 60.0)
+    seconds, id_seconds = (15.0, 20.0) if quick else (30.0, 60.0)
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     t0 = time.perf_counter()

@@ -7,6 +7,7 @@
     vrig reconstruct --rig shock-absorber --method arx
     vrig repeatability --rig shock-absorber
     vrig demo                                   # identify a generated non-linear MIMO system
+    vrig bench run --quick                      # the benchmark runner (= python -m benchmarks)
 
 ``vrig reconstruct`` without ``--desired`` reconstructs a pseudo-field response (reference text
 §6.5): the rig's response to a road-like random drive (triangular PSD over the simulation band,
@@ -131,6 +132,13 @@ def _parser() -> argparse.ArgumentParser:
     rec.add_argument(
         "--overwrite", action="store_true", help="replace the records of an existing results folder"
     )
+
+    bench = sub.add_parser(
+        "bench",
+        help="the reconstruction benchmark runner (= python -m benchmarks; source checkout)",
+        add_help=False,
+    )
+    bench.add_argument("args", nargs=argparse.REMAINDER, help="run|report|list and options")
 
     rep = sub.add_parser(
         "repeatability",
@@ -461,7 +469,28 @@ _COMMANDS = {
 }
 
 
+def _cmd_bench(argv: list[str]) -> int:
+    """Forward to the benchmark runner, which lives in the source checkout's ``benchmarks/``."""
+    if (Path.cwd() / "benchmarks" / "runner").is_dir() and str(Path.cwd()) not in sys.path:
+        sys.path.insert(0, str(Path.cwd()))  # the console script does not put cwd on sys.path
+    try:
+        from benchmarks.runner.cli import main as bench_main
+    except ImportError as exc:
+        print(
+            "vrig bench: the benchmark runner is not importable "
+            f"({exc}). It lives in benchmarks/ of the source checkout (not in the wheel): run "
+            "`vrig bench ...` or `python -m benchmarks ...` from the repository root of a "
+            "clone (git clone ...; pip install -e .).",
+            file=sys.stderr,
+        )
+        return 2
+    return bench_main(argv, prog="vrig bench")
+
+
 def main(argv: list[str] | None = None) -> int:
+    raw = list(sys.argv[1:] if argv is None else argv)
+    if raw[:1] == ["bench"]:
+        return _cmd_bench(raw[1:])
     args = _parser().parse_args(argv)
     args.argv = list(sys.argv[1:] if argv is None else argv)
     if args.command == "demo":

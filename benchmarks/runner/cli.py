@@ -1,0 +1,350 @@
+"""``python -m benchmarks`` (= ``vrig bench``): the reconstruction benchmark runner.
+
+::
+
+    python -m benchmarks run --quick                       # ~8 min on 2 shared cores
+    python -m benchmarks run [--rigs R ...] [--methods M ...] [--desired D ...] [--seeds S ...]
+                             [--out DIR] [--backend process|serial|ray] [--workers N]
+                             [--address RAY_ADDRESS] [--plugin MODULE_OR_FILE.py ...]
+    python -m benchmarks report --out DIR                  # rebuild leaderboard/plots
+    python -m benchmarks list                              # rigs and registered methods
+
+Exit status: 0 done (failed *records* are results, not errors), 1 the thesis report failed,
+2 bad arguments or a results folder made with other settings.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import signal
+import sys
+import threading
+import time
+from dataclasses import asdict, replace
+from pathlib import Path
+
+from .execute import BACKENDS, SettingsMismatchError, Store, execute
+from .record import RecordKey, Settings
+from .registry import default_plugin_specs, get_method, load_plugins, method_names, plugin_spec
+from .report import write_outputs
+
+__all__ = ["FULL", "QUICK", "main"]
+
+FULL = Settings(seconds=30.0, iterations=5, gain=0.8, fidelity="full", tolerance=5.0)
+"""The full run: every rig × every registered method × desired 0, 1, 2 × seed 0."""
+QUICK = Settings(seconds=12.0, iterations=3, gain=0.8, fidelity="fast", tolerance=5.0)
+"""``--quick``: every rig but fuel-tank-7ch × the quick methods × desired 0 × seed 0, short
+records, fast rigs."""
+FULL_DESIRED, QUICK_DESIRED = (0, 1, 2), (0,)
+QUICK_EXCLUDED_RIGS = ("fuel-tank-7ch",)
+"""Left out of ``--quick``: a 7 × 7 record takes minutes (delay estimation and inverse fits of
+every channel pair, three times per record); it is in the full run."""
+
+
+def _parser() -> argparse.ArgumentParser:
+    p = argparse.ArgumentParser(
+        prog="python -m benchmarks",
+        description="vrig reconstruction benchmark: rigs × methods × desired responses × seeds",
+    )
+    sub = p.add_subparsers(dest="command", required=True)
+    run = sub.add_parser(
+        "run",
+        help="run the benchmark (resumable) and write records, leaderboard, plots",
+        description="Run every rig × method × desired response × seed record that the results "
+        "folder does not hold yet, then write records.json/.csv, leaderboard.md, plots/ and the "
+        "thesis reproduction report. Re-running resumes an interrupted run.",
+    )
+    run.add_argument("--quick", action="store_true", help="short records, fast rigs, 1 desired")
+    run.add_argument("--rigs", nargs="+", help="rig names (default: all shipped rigs)")
+    run.add_argument("--methods", nargs="+", help="method names (default: all registered)")
+    run.add_argument("--desired", nargs="+", type=int, help="desired-response seeds")
+    run.add_argument("--seeds", nargs="+", type=int, help="rig/identification seeds (default 0)")
+    run.add_argument("--seconds", type=float, help="desired record length [s]")
+    run.add_argument("--iterations", type=int, help="iterations after IT00")
+    run.add_argument("--gain", type=float, help="iteration gain")
+    run.add_argument("--fidelity", choices=("full", "fast"), help="rig fidelity")
+    run.add_argument("--tolerance", type=float, help="mean η0 [%%] for 'iterations to tolerance'")
+    run.add_argument("--out", type=Path, help="results folder (default results/benchmarks[-quick])")
+    run.add_argument("--backend", choices=BACKENDS, default="process", help="default process")
+    run.add_argument("--workers", type=int, help="parallel records (default: CPU count)")
+    run.add_argument("--address", help="Ray cluster address (--backend ray; default: local Ray)")
+    run.add_argument(
+        "--plugin",
+        action="append",
+        default=[],
+        metavar="MODULE_OR_FILE",
+        help="load a method plugin (module name or .py file); repeatable",
+    )
+    run.add_argument(
+        "--overwrite", action="store_true", help="delete records made with other settings"
+    )
+    run.add_argument("--no-plots", action="store_true", help="skip the plots")
+    run.add_argument("--no-thesis", action="store_true", help="skip the thesis reproduction")
+    run.add_argument("--quiet", action="store_true", help="no per-record lines")
+
+    rep = sub.add_parser("report", help="rebuild records.json/.csv, leaderboard and plots")
+    rep.add_argument("--out", type=Path, default=Path("results/benchmarks"), help="results folder")
+    rep.add_argument("--no-plots", action="store_true")
+
+    lst = sub.add_parser("list", help="rigs and registered methods")
+    lst.add_argument("--plugin", action="append", default=[], metavar="MODULE_OR_FILE")
+    return p
+
+
+def _specs(extra: list[str]):
+    return default_plugin_specs() + [plugin_spec(t) for t in extra]
+
+
+def _settings(args) -> Settings:
+    base = QUICK if args.quick else FULL
+    changes = {
+        k: getattr(args, k)
+        for k in ("seconds", "iterations", "gain", "fidelity", "tolerance")
+        if getattr(args, k) is not None
+    }
+    return replace(base, **changes)
+
+
+def _code_version() -> dict:
+    """vrig version and git commit of the checkout (records assume unchanged code)."""
+    import subprocess
+
+    import vrig
+
+    info = {"vrig": getattr(vrig, "__version__", "?"), "commit": None, "dirty": None}
+    root = Path(__file__).resolve().parents[2]
+    try:
+        info["commit"] = subprocess.run(
+            ["git", "rev-parse", "HEAD"], cwd=root, capture_output=True, text=True, check=True
+        ).stdout.strip()
+        status = subprocess.run(
+            ["git", "status", "--porcelain", "--untracked-files=no"],
+            cwd=root,
+            capture_output=True,
+            text=True,
+            check=True,
+        ).stdout
+        info["dirty"] = bool(status.strip())
+    except (OSError, subprocess.CalledProcessError):
+        pass
+    return info
+
+
+def _thesis_available() -> str | None:
+    """None if benchmarks.thesis_tables.thesis_report can be called, else why not."""
+    try:
+        from benchmarks import thesis_tables
+    except ImportError as exc:
+        return f"benchmarks.thesis_tables not importable ({exc})"
+    if not callable(getattr(thesis_tables, "thesis_report", None)):
+        return "benchmarks.thesis_tables has no thesis_report"
+    return None
+
+
+def _thesis_child(out: str, quick: bool, conn) -> None:
+    """Run the thesis reproduction (in its own process; its log goes to a file)."""
+    import contextlib
+
+    out_dir = Path(out)
+    t = time.perf_counter()
+    with (
+        open(out_dir / "thesis_reproduction.log", "w", encoding="utf-8", buffering=1) as fh,
+        contextlib.redirect_stdout(fh),
+        contextlib.redirect_stderr(fh),
+    ):
+        try:
+            from benchmarks.thesis_tables import thesis_report
+
+            thesis_report(out_dir, quick)
+            result = (
+                f"thesis reproduction {out_dir / 'thesis_reproduction.md'} "
+                f"({time.perf_counter() - t:.0f} s; log thesis_reproduction.log)",
+                True,
+            )
+        except Exception as exc:
+            import traceback
+
+            traceback.print_exc()
+            result = (f"thesis reproduction FAILED: {type(exc).__name__}: {exc}", False)
+    conn.send(result)
+    conn.close()
+
+
+class _Thesis:
+    """The thesis reproduction, run in a separate (spawned) process alongside the records:
+    it is one serial job, so it overlaps the records' pool instead of following it."""
+
+    def __init__(self, out: Path, quick: bool):
+        import multiprocessing
+
+        ctx = multiprocessing.get_context("spawn")
+        self.recv, send = ctx.Pipe(duplex=False)
+        self.proc = ctx.Process(target=_thesis_child, args=(str(out), quick, send), daemon=False)
+        self.proc.start()
+        send.close()
+
+    def result(self) -> tuple[str, bool]:
+        try:
+            line, ok = self.recv.recv()
+        except EOFError:
+            line, ok = "thesis reproduction FAILED: its process died (see the log)", False
+        self.proc.join()
+        return line, ok
+
+    def stop(self) -> None:
+        if self.proc.is_alive():
+            self.proc.terminate()
+        self.proc.join()
+
+
+def _terminate(signum, frame):
+    raise KeyboardInterrupt(f"signal {signum}")
+
+
+def cmd_run(args) -> int:
+    import vrig
+
+    t0 = time.perf_counter()
+    try:
+        settings = _settings(args)
+        specs = _specs(args.plugin)
+    except (ValueError, FileNotFoundError) as exc:
+        print(f"benchmarks run: {exc}", file=sys.stderr)
+        return 2
+    load_plugins(specs)
+    rigs = args.rigs or [
+        r for r in vrig.list_rigs() if not (args.quick and r in QUICK_EXCLUDED_RIGS)
+    ]
+    unknown = [r for r in rigs if r not in vrig.list_rigs()]
+    methods = args.methods or method_names(quick=args.quick)
+    try:
+        for m in methods:
+            get_method(m)
+        if unknown:
+            raise KeyError(f"unknown rig(s) {unknown}; available: {', '.join(vrig.list_rigs())}")
+    except KeyError as exc:
+        print(f"benchmarks run: {exc.args[0]}", file=sys.stderr)
+        return 2
+    desired = args.desired or (QUICK_DESIRED if args.quick else FULL_DESIRED)
+    seeds = args.seeds or (0,)
+    out = args.out or Path("results") / ("benchmarks-quick" if args.quick else "benchmarks")
+    keys = [RecordKey(r, m, d, s) for r in rigs for m in methods for d in desired for s in seeds]
+    store = Store(out)
+    try:
+        store.prepare(settings, overwrite=args.overwrite)
+    except SettingsMismatchError as exc:
+        print(f"benchmarks run: {exc}", file=sys.stderr)
+        return 2
+    print(
+        f"benchmark: {len(rigs)} rigs × {len(methods)} methods ({', '.join(methods)}) × "
+        f"{len(desired)} desired × {len(seeds)} seeds -> {out}/"
+    )
+    if threading.current_thread() is threading.main_thread():  # SIGTERM -> clean stop
+        signal.signal(signal.SIGTERM, _terminate)
+    thesis = None
+    thesis_line, ok = "thesis reproduction skipped (--no-thesis)", True
+    if not args.no_thesis:
+        why_not = _thesis_available()
+        if why_not:
+            thesis_line = f"thesis reproduction skipped: {why_not}"
+        else:
+            print(f"thesis reproduction started alongside (log {out}/thesis_reproduction.log)")
+            thesis = _Thesis(out, args.quick)
+    try:
+        summary = execute(
+            keys,
+            settings,
+            store,
+            plugin_specs=specs,
+            backend=args.backend,
+            workers=args.workers,
+            address=args.address,
+            log=None if args.quiet else print,
+        )
+    except KeyboardInterrupt:
+        if thesis is not None:
+            thesis.stop()
+        done = sum(store.finished(k, settings) for k in keys)
+        print(
+            f"\ninterrupted: {done} of {len(keys)} records are in {out}/records; run the same "
+            "command again to finish the others",
+            file=sys.stderr,
+        )
+        return 130
+    wanted = {store.path(k).name for k in keys}
+    records = [r for r in store.all_records() if f"{r['id']}.json" in wanted]
+    written = write_outputs(out, records, asdict(settings), plots=not args.no_plots)
+    if thesis is not None:
+        if not args.quiet:
+            print("records done; waiting for the thesis reproduction ...", flush=True)
+        try:
+            thesis_line, ok = thesis.result()
+        except KeyboardInterrupt:
+            thesis.stop()
+            print("\ninterrupted during the thesis reproduction", file=sys.stderr)
+            return 130
+    wall = time.perf_counter() - t0
+    run_info = {
+        "settings": asdict(settings),
+        "rigs": rigs,
+        "methods": methods,
+        "desired": list(desired),
+        "seeds": list(seeds),
+        "backend": args.backend,
+        "workers": args.workers,
+        "computed": len(summary["computed"]),
+        "skipped": len(summary["skipped"]),
+        "failed_records": len(summary["failed"]),
+        "records_wall_s": summary["wall_s"],
+        "wall_s": wall,
+        "code": _code_version(),
+    }
+    (out / "run.json").write_text(json.dumps(run_info, indent=1) + "\n")
+    n_ok = sum(r["status"] == "ok" for r in records)
+    print(
+        f"\n{len(records)} records ({n_ok} ok, {len(records) - n_ok} failed; "
+        f"{len(summary['computed'])} computed now, {len(summary['skipped'])} resumed)"
+    )
+    print(f"leaderboard {out / 'leaderboard.md'}")
+    print(f"records     {out / 'records.json'}, {out / 'records.csv'}")
+    n_plots = sum(1 for p in written if p.suffix == ".png")
+    if n_plots:
+        print(f"plots       {out / 'plots'}/ ({n_plots} figures)")
+    print(thesis_line)
+    print(f"wall time   {wall:.0f} s")
+    return 0 if ok else 1
+
+
+def cmd_report(args) -> int:
+    store = Store(args.out)
+    records = store.all_records()
+    if not records:
+        print(f"benchmarks report: no records in {args.out}/records", file=sys.stderr)
+        return 2
+    settings_path = args.out / "settings.json"
+    settings = json.loads(settings_path.read_text()) if settings_path.exists() else None
+    write_outputs(args.out, records, settings, plots=not args.no_plots)
+    print(f"{len(records)} records -> {args.out / 'leaderboard.md'}")
+    return 0
+
+
+def cmd_list(args) -> int:
+    import vrig
+
+    load_plugins(_specs(args.plugin))
+    print("rigs:    " + ", ".join(vrig.list_rigs()))
+    print("methods:")
+    for name in method_names():
+        p = get_method(name)
+        quick = "" if p.quick else " (not in --quick)"
+        print(f"  {name:<10} {p.description}{quick}  [{p.origin}]")
+    return 0
+
+
+def main(argv: list[str] | None = None, *, prog: str | None = None) -> int:
+    parser = _parser()
+    if prog:
+        parser.prog = prog
+    args = parser.parse_args(argv)
+    return {"run": cmd_run, "report": cmd_report, "list": cmd_list}[args.command](args)

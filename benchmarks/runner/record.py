@@ -1,0 +1,329 @@
+"""One benchmark record: a reconstruction of one desired response on one rig by one method.
+
+A record is a pure function of its key (rig, method, desired, seed) and the run's settings:
+
+* the desired response is the pseudo-field response :func:`vrig.field.pseudo_field` of rig
+  ``rig`` (loaded with seed 0) over its default simulation band, with seed ``desired``;
+* the reconstruction runs on the rig loaded with seed ``seed``:
+  ``vrig.reconstruct(rig, desired, method=<plugin's object>, iterations, gain, bandwidth,
+  seed=seed)``.
+
+Scores (η0 is the DC-corrected QanTiM fit value, eq. 5-28, in %; "mean" is over the response
+channels):
+
+* ``eta0_it00``, ``eta0_final`` (the last iteration played, ITnn with nn = ``iterations_run``),
+  ``eta0_best`` (at ``best_iteration``) and ``eta0_per_iteration``;
+* ``iterations_to_tolerance``: the first iteration whose mean η0 is at most ``tolerance``
+  (None if none is);
+* ``rms_error`` [%] and ``damage_ratio`` (rainflow pseudo-damage, slope 5, achieved over
+  desired) at the best iteration, mean over channels (per channel in the ``*_channels`` fields);
+* modelling errors, from the processed identification records the method was fitted on (at the
+  model rate), split into the first 70 % (fit) and the last 30 % (held out; ``holdout``):
+
+  - ``inverse_model_error``: a fresh method object identified on the fit part predicts the
+    held-out drive from the held-out response in free run; mean η0 of that drive;
+  - ``normal_model_error``: the forward model — the method's factory (or the plugin's
+    ``forward`` factory) identified with the roles of drive and response swapped — predicts
+    the held-out response from the held-out drive in free run; mean η0 of that response;
+  - for vrig's time-domain methods (ARX, NARX, each band of split spectra) the fresh inverse
+    keeps the lead the reconstruction's model chose, and the forward model has lead 0 (causal,
+    the full-order structure of eq. 4-15): no lead search in these extra fits;
+
+* ``model_size`` (coefficients, see :func:`~.registry.model_size`) and the method's
+  ``describe()``.
+
+``timing`` holds the wall times (``fit_s``: the method's ``identify`` calls in the
+reconstruction; ``model_sim_s``: its ``drive`` calls, i.e. the inverse model's free runs;
+``reconstruction_s``; ``record_s``) plus host and process id: the only fields that differ
+between two runs of the same record, so they are left out when records are compared.
+
+A record whose rig, desired response or reconstruction raises is kept with ``status
+"failed"`` and ``error`` (stage, exception type, message): leaderboards show failures.
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+import os
+import platform
+import time
+from dataclasses import asdict, dataclass
+
+import numpy as np
+
+from .registry import get_method, load_plugins, model_size
+
+__all__ = ["RecordKey", "Settings", "compute_record", "record_id", "strip_timing"]
+
+SCHEMA = 1
+
+
+@dataclass(frozen=True)
+class Settings:
+    """Settings shared by every record of a run (part of every record)."""
+
+    seconds: float = 30.0
+    iterations: int = 5
+    gain: float = 0.8
+    fidelity: str = "full"
+    tolerance: float = 5.0
+    holdout: float = 0.3
+
+    def __post_init__(self):
+        if not (math.isfinite(self.seconds) and 4 <= self.seconds <= 3600):
+            raise ValueError(f"seconds must be 4..3600, got {self.seconds}")
+        if not 0 <= self.iterations <= 99:
+            raise ValueError(f"iterations must be 0..99, got {self.iterations}")
+        if not 0 < self.gain <= 2:
+            raise ValueError(f"gain must lie in (0, 2], got {self.gain}")
+        if self.fidelity not in ("full", "fast"):
+            raise ValueError(f"fidelity must be 'full' or 'fast', got {self.fidelity!r}")
+        if not 0.1 <= self.holdout <= 0.5:
+            raise ValueError(f"holdout must be 0.1..0.5, got {self.holdout}")
+
+
+@dataclass(frozen=True, order=True)
+class RecordKey:
+    rig: str
+    method: str
+    desired: int
+    seed: int
+
+
+def record_id(key: RecordKey) -> str:
+    """File-name-safe id: ``rig--method--dDESIRED--sSEED``."""
+    safe = "".join(c if c.isalnum() or c in "-_." else "_" for c in key.rig)
+    return f"{safe}--{key.method}--d{key.desired}--s{key.seed}"
+
+
+def strip_timing(record: dict) -> dict:
+    """The record without its ``timing`` (what two runs of the same record agree on)."""
+    return {k: v for k, v in record.items() if k != "timing"}
+
+
+def _clean(x):
+    """JSON-ready: floats (non-finite -> None), lists, ints."""
+    if isinstance(x, np.ndarray):
+        return [_clean(v) for v in x.tolist()]
+    if isinstance(x, (list, tuple)):
+        return [_clean(v) for v in x]
+    if isinstance(x, (bool, np.bool_)):
+        return bool(x)
+    if isinstance(x, (int, np.integer)):
+        return int(x)
+    if isinstance(x, (float, np.floating)):
+        return float(x) if math.isfinite(x) else None
+    return x
+
+
+class _Timed:
+    """Wraps a method object: times ``identify``/``drive`` and keeps the first identification
+    records it was given (the processed, decimated IDDRV/IDRES)."""
+
+    def __init__(self, method):
+        self.wrapped = method
+        self.fit_s = 0.0
+        self.sim_s = 0.0
+        self.id_records = None
+
+    def identify(self, iddrv, idres):
+        if self.id_records is None:
+            self.id_records = (iddrv, idres)
+        t = time.perf_counter()
+        try:
+            return self.wrapped.identify(iddrv, idres)
+        finally:
+            self.fit_s += time.perf_counter() - t
+
+    def drive(self, response):
+        t = time.perf_counter()
+        try:
+            return self.wrapped.drive(response)
+        finally:
+            self.sim_s += time.perf_counter() - t
+
+    def describe(self):
+        d = getattr(self.wrapped, "describe", None)
+        return d() if callable(d) else type(self.wrapped).__name__
+
+
+@functools.lru_cache(maxsize=8)
+def _desired(rig_name: str, fidelity: str, seconds: float, desired: int):
+    """The pseudo-field desired response (pure function of its arguments; cached per process)."""
+    import vrig
+    from vrig.field import default_band, pseudo_field
+
+    rig = vrig.load_rig(rig_name, seed=0, fidelity=fidelity)
+    band = default_band(rig)
+    _drive, response = pseudo_field(rig, band, seconds, seed=desired)
+    return band, response
+
+
+def _error(stage: str, exc: BaseException) -> dict:
+    return {"stage": stage, "type": type(exc).__name__, "message": str(exc)}
+
+
+def _split(th, holdout: float):
+    from vrig.timehistory import TimeHistory
+
+    k = round(th.n_samples * (1 - holdout))
+
+    def part(a, b):
+        return TimeHistory(th.data[a:b], th.fs, th.names, th.units)
+
+    return part(0, k), part(k, th.n_samples)
+
+
+def _set_leads(obj, fitted=None) -> None:
+    """Fix the lead of vrig's time-domain inverse methods (objects with ``lead`` and
+    ``max_lead``; split spectra: each band): to the lead ``fitted`` chose, or to 0 (a causal
+    forward model) when ``fitted`` is None. Skips the lead search of the extra fits."""
+    if hasattr(obj, "low") and hasattr(obj, "high"):
+        _set_leads(obj.low, getattr(fitted, "low", None) if fitted is not None else None)
+        _set_leads(obj.high, getattr(fitted, "high", None) if fitted is not None else None)
+    elif hasattr(obj, "lead") and hasattr(obj, "max_lead"):
+        if fitted is None:
+            obj.lead = 0
+        elif hasattr(getattr(fitted, "inverse", None), "lead_"):
+            obj.lead = int(fitted.inverse.lead_)
+
+
+def modelling_errors(plugin, rig, band, iddrv, idres, holdout: float, fitted=None) -> dict:
+    """Normal and inverse modelling errors (mean η0 %, held-out free runs; see module doc)."""
+    from identification import metrics
+    from vrig.timehistory import TimeHistory
+
+    out = {"normal_model_error": None, "inverse_model_error": None, "modelling_notes": []}
+    d_fit, d_val = _split(iddrv, holdout)
+    r_fit, r_val = _split(idres, holdout)
+    try:
+        inverse = plugin.make(rig, band)
+        if fitted is not None:
+            _set_leads(inverse, fitted)
+        inverse.identify(d_fit, r_fit)
+        pred = np.asarray(inverse.drive(r_val), dtype=float).reshape(d_val.data.shape)
+        out["inverse_model_error"] = float(np.mean(metrics.qantim_fit_dc(d_val.data, pred)))
+    except Exception as exc:
+        out["modelling_notes"].append(f"inverse: {type(exc).__name__}: {exc}")
+    try:
+        forward = plugin.make_forward(rig, band)
+        _set_leads(forward)
+        # roles swapped: the "drive" of the swapped problem is the response and vice versa
+        forward.identify(
+            TimeHistory(r_fit.data, r_fit.fs, r_fit.names, r_fit.units),
+            TimeHistory(d_fit.data, d_fit.fs, d_fit.names, d_fit.units),
+        )
+        pred = np.asarray(forward.drive(d_val), dtype=float).reshape(r_val.data.shape)
+        out["normal_model_error"] = float(np.mean(metrics.qantim_fit_dc(r_val.data, pred)))
+    except Exception as exc:
+        out["modelling_notes"].append(f"normal: {type(exc).__name__}: {exc}")
+    return out
+
+
+def compute_record(key: RecordKey, settings: Settings, plugin_specs=()) -> dict:
+    """Run one record (see the module docstring). Never raises for a failing reconstruction:
+    the failure is recorded. ``plugin_specs`` are loaded first (worker processes)."""
+    import vrig
+
+    t_record = time.perf_counter()
+    load_plugins(plugin_specs)
+    rec: dict = {
+        "schema": SCHEMA,
+        "id": record_id(key),
+        "key": asdict(key),
+        "settings": asdict(settings),
+        "status": "failed",
+        "error": None,
+    }
+    timing = {"fit_s": None, "model_sim_s": None, "reconstruction_s": None}
+    stage = "plugin"
+    try:
+        plugin = get_method(key.method)
+        rec["method_origin"] = plugin.origin
+        stage = "desired response"
+        band, desired = _desired(key.rig, settings.fidelity, float(settings.seconds), key.desired)
+        rec["band"] = list(band)
+        stage = "rig"
+        rig = vrig.load_rig(key.rig, seed=key.seed, fidelity=settings.fidelity)
+        rec["n_drives"], rec["n_responses"] = len(rig.inputs), len(rig.outputs)
+        stage = "method"
+        timed = _Timed(plugin.make(rig, band))
+        stage = "reconstruction"
+        t = time.perf_counter()
+        try:
+            result = vrig.reconstruct(
+                rig,
+                desired,
+                method=timed,
+                iterations=settings.iterations,
+                gain=settings.gain,
+                bandwidth=band,
+                seed=key.seed,
+            )
+        finally:
+            timing["reconstruction_s"] = time.perf_counter() - t
+            timing["fit_s"], timing["model_sim_s"] = timed.fit_s, timed.sim_s
+            rec["method_description"] = _describe(timed)
+            if timed.id_records is not None:
+                fitted = timed.wrapped if timed.fit_s > 0 else None
+                rec.update(
+                    modelling_errors(
+                        plugin, rig, band, *timed.id_records, settings.holdout, fitted=fitted
+                    )
+                )
+    except Exception as exc:
+        rec["error"] = _error(stage, exc)
+    else:
+        rec.update(_scores(result, timed.wrapped, settings))
+        rec["status"] = "ok"
+    timing["record_s"] = time.perf_counter() - t_record
+    timing["host"] = platform.node()
+    timing["pid"] = os.getpid()
+    rec["timing"] = timing
+    return _clean_record(rec)
+
+
+def _describe(timed) -> str:
+    try:
+        return str(timed.describe())
+    except Exception as exc:  # not fitted (identification failed)
+        return f"({type(exc).__name__} in describe)"
+
+
+def _scores(result, method, settings: Settings) -> dict:
+    errors = np.asarray(result.errors)
+    means = errors.mean(axis=1)
+    best = int(result.best_iteration)
+    reached = np.flatnonzero(means <= settings.tolerance)
+    return {
+        "iterations_run": len(means) - 1,
+        "stopped": result.stopped,
+        "decimation": result.decimation,
+        "eta0_it00": means[0],
+        "eta0_final": means[-1],
+        "eta0_best": means[best],
+        "best_iteration": best,
+        "iterations_to_tolerance": int(reached[0]) if reached.size else None,
+        "eta0_per_iteration": means,
+        "eta0_it00_channels": errors[0],
+        "eta0_best_channels": errors[best],
+        "rms_error": float(np.mean(result.rms_errors[best])),
+        "rms_error_channels": result.rms_errors[best],
+        "damage_ratio": float(np.mean(result.damage_ratio[best])),
+        "damage_ratio_channels": result.damage_ratio[best],
+        "model_size": model_size(method),
+    }
+
+
+def _clean_record(rec: dict) -> dict:
+    return {
+        k: (
+            _clean(v)
+            if k not in ("key", "settings", "error", "timing", "modelling_notes")
+            else {kk: _clean(vv) for kk, vv in v.items()}
+            if isinstance(v, dict)
+            else v
+        )
+        for k, v in rec.items()
+    }

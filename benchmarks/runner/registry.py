@@ -1,0 +1,292 @@
+"""Reconstruction methods of the benchmark runner: the built-ins and the plugins.
+
+A *method* is any object with the interface of :mod:`vrig.reconstruction.methods`:
+
+* ``identify(iddrv, idres)`` — fit from processed identification records (``TimeHistory``,
+  drive and response, at the model rate);
+* ``drive(response) -> ndarray (n_samples, n_drives)`` — the drive it predicts for a response;
+* ``describe() -> str`` — one line (optional);
+* ``model_size() -> int`` — number of model coefficients (optional; the runner knows the
+  built-ins).
+
+A *plugin* registers a name and a factory ``factory(rig, band) -> method`` (``band`` is the
+simulation bandwidth (low, high) in Hz; a factory without parameters is called without them)::
+
+    from benchmarks.runner import register_method
+    register_method("arx6", lambda rig, band: InverseArx(order=6), description="inverse ARX(6)")
+
+Plugins are Python modules: every module of ``benchmarks/plugins/`` is loaded, and
+``--plugin MODULE_OR_FILE.py`` adds more. Because records run in worker processes (or on a Ray
+cluster), a plugin is loaded again in each worker from its *spec* — a module name, or the source
+text of a file — never pickled as a live object.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import importlib
+import inspect
+import pkgutil
+import sys
+import types
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+__all__ = [
+    "MethodPlugin",
+    "PluginSpec",
+    "default_plugin_specs",
+    "get_method",
+    "load_plugins",
+    "method_names",
+    "model_size",
+    "plugin_spec",
+    "register_method",
+]
+
+
+@dataclass(frozen=True)
+class MethodPlugin:
+    """A registered method: ``factory(rig, band)`` builds a fresh, unfitted method object.
+
+    ``forward`` (optional) builds the object used for the *normal* (forward) modelling error
+    with the roles of drive and response swapped; by default the method's own factory is used.
+    ``quick`` says whether the method belongs to ``--quick`` runs; ``origin`` where it came from.
+    """
+
+    name: str
+    factory: Callable
+    description: str = ""
+    quick: bool = True
+    forward: Callable | None = None
+    origin: str = "builtin"
+
+    def make(self, rig, band):
+        return _call(self.factory, rig, band)
+
+    def make_forward(self, rig, band):
+        return _call(self.forward or self.factory, rig, band)
+
+
+def _call(factory, rig, band):
+    try:
+        n_params = len(inspect.signature(factory).parameters)
+    except (TypeError, ValueError):  # builtins without a signature
+        n_params = 2
+    return factory() if n_params == 0 else factory(rig, band)
+
+
+_REGISTRY: dict[str, MethodPlugin] = {}
+_LOADING: list[str] = ["builtin"]  # origin given to methods registered while a plugin loads
+
+
+def register_method(
+    name: str,
+    factory: Callable,
+    *,
+    description: str = "",
+    quick: bool = True,
+    forward: Callable | None = None,
+) -> MethodPlugin:
+    """Register a reconstruction method under ``name`` (re-registering replaces it).
+
+    Parameters
+    ----------
+    name : str
+        Method name used by ``--methods`` and in the leaderboard (letters, digits, ``-``, ``_``).
+    factory : callable
+        ``factory(rig, band) -> method object`` (or ``factory()``); called once per use, so it
+        must return a fresh, unfitted object. It must be a pure function of its arguments (no
+        global random state): records are pure functions of their key.
+    description : str
+        One line for the leaderboard.
+    quick : bool
+        Include the method in ``--quick`` runs (say False for slow methods).
+    forward : callable, optional
+        Factory of the object used for the normal modelling error (see ``record.py``).
+    """
+    if not name or not all(c.isalnum() or c in "-_" for c in name):
+        raise ValueError(f"method name {name!r}: use letters, digits, '-' and '_' only")
+    if not callable(factory):
+        raise TypeError(f"factory of method {name!r} must be callable")
+    plugin = MethodPlugin(name, factory, description, bool(quick), forward, _LOADING[-1])
+    _REGISTRY[name] = plugin
+    return plugin
+
+
+def get_method(name: str) -> MethodPlugin:
+    try:
+        return _REGISTRY[name]
+    except KeyError:
+        raise KeyError(
+            f"unknown method {name!r}; registered: {', '.join(method_names())} (a plugin module "
+            "registers more: --plugin MODULE_OR_FILE.py)"
+        ) from None
+
+
+def method_names(*, quick: bool = False) -> list[str]:
+    """Registered method names (built-ins first, then plugins in load order)."""
+    return [n for n, p in _REGISTRY.items() if p.quick or not quick]
+
+
+# ---------------------------------------------------------------------------------------------
+# built-in methods (the four of vrig.reconstruction, with the CLI's default settings)
+# ---------------------------------------------------------------------------------------------
+def _split(rig, band):
+    from vrig.reconstruction import InverseArx, SplitSpectra
+
+    lo, hi = band
+    split = float(np.sqrt(lo * hi)) if lo > 0 else hi / 4
+    return SplitSpectra(split, low=InverseArx(4), high=InverseArx(4))
+
+
+class ForwardFrf:
+    """The forward model of the FRF method for the normal modelling error: H1 from the
+    ``idres`` argument to the ``iddrv`` argument, applied directly (no inversion).
+
+    The runner identifies forward models with drive and response swapped, so here ``idres`` is
+    the rig's drive and ``drive(x)`` returns the predicted rig response to drive ``x``. (The
+    FRF method's own object would invert twice, H1 of the swapped records and its regularised
+    inverse, which is not the FRF forward model the method is built on.)"""
+
+    def __init__(self, *, nperseg: int = 512):
+        self.nperseg = nperseg
+
+    def identify(self, iddrv, idres) -> None:
+        from vrig.reconstruction.methods import _cross
+
+        x, y = idres.data, iddrv.data  # input: the rig's drive, output: its response
+        nper = min(self.nperseg, x.shape[0] // 4)
+        f, sxx = _cross(x, x, idres.fs, nper)
+        _, syx = _cross(y, x, idres.fs, nper)
+        self.f, self.fs = f, idres.fs
+        self.H = np.einsum("fij,fjk->fik", syx, np.linalg.pinv(sxx))  # (F, n_out, n_in)
+
+    def drive(self, response) -> np.ndarray:
+        x = response.data
+        n = x.shape[0]
+        X = np.fft.rfft(x, n=2 * n, axis=0)
+        fr = np.fft.rfftfreq(2 * n, 1.0 / self.fs)
+        H = np.empty((fr.size, *self.H.shape[1:]), dtype=complex)
+        for i in range(self.H.shape[1]):
+            for j in range(self.H.shape[2]):
+                H[:, i, j] = np.interp(fr, self.f, self.H[:, i, j].real) + 1j * np.interp(
+                    fr, self.f, self.H[:, i, j].imag
+                )
+        return np.fft.irfft(np.einsum("fij,fj->fi", H, X), n=2 * n, axis=0)[:n]
+
+
+def _register_builtins() -> None:
+    from vrig.reconstruction import InverseArx, InverseFrf, InverseNarx
+
+    register_method("arx", lambda: InverseArx(4), description="inverse ARX(4), QanTiM")
+    register_method(
+        "narx",
+        lambda: InverseNarx(4, 2, kind="full"),
+        description="inverse NARX(4), quadratic, every monomial (full)",
+        quick=False,  # its free run diverges on most rigs at --quick settings; narx-ip is quick
+    )
+    register_method(
+        "narx-ip",
+        lambda: InverseNarx(4, 2, kind="input-polynomial"),
+        description="inverse NARX(4), quadratic, input-polynomial terms (vrig's default)",
+    )
+    register_method(
+        "split",
+        _split,
+        description="split spectra at the band's geometric mean, inverse ARX(4) per band",
+    )
+    register_method(
+        "frf",
+        lambda: InverseFrf(),
+        description="H1 FRF, regularised inverse (RPC)",
+        forward=lambda: ForwardFrf(),
+    )
+
+
+_register_builtins()
+
+
+# ---------------------------------------------------------------------------------------------
+# plugin specs and loading
+# ---------------------------------------------------------------------------------------------
+PluginSpec = tuple[str, str, str]
+"""``("module", module_name, "")`` or ``("source", file_name, source_text)``: picklable."""
+
+_LOADED: set[PluginSpec] = set()
+
+
+def plugin_spec(text: str) -> PluginSpec:
+    """The spec of ``--plugin TEXT``: a ``.py`` file (its source is shipped) or a module name."""
+    if text.endswith(".py") or Path(text).is_file():
+        path = Path(text)
+        if not path.is_file():
+            raise FileNotFoundError(f"--plugin {text}: no such file")
+        return ("source", str(path.resolve()), path.read_text())
+    return ("module", text, "")
+
+
+def default_plugin_specs() -> list[PluginSpec]:
+    """Every module of the ``benchmarks.plugins`` package."""
+    from .. import plugins
+
+    return [
+        ("module", f"{plugins.__name__}.{m.name}", "")
+        for m in sorted(pkgutil.iter_modules(plugins.__path__), key=lambda m: m.name)
+        if not m.name.startswith("_")
+    ]
+
+
+def load_plugins(specs) -> list[str]:
+    """Load plugin specs (once per process); returns the names of the methods they registered."""
+    new = []
+    for spec in specs:
+        spec = tuple(spec)
+        if spec in _LOADED:
+            continue
+        kind, name, source = spec
+        before = dict(_REGISTRY)
+        _LOADING.append(name)
+        try:
+            if kind == "module":
+                importlib.import_module(name)
+            elif kind == "source":
+                mod_name = "_vrig_bench_plugin_" + hashlib.sha1(source.encode()).hexdigest()[:12]
+                module = types.ModuleType(mod_name)
+                module.__file__ = name
+                sys.modules[mod_name] = module
+                exec(compile(source, name, "exec"), module.__dict__)
+            else:
+                raise ValueError(f"unknown plugin spec kind {kind!r}")
+        finally:
+            _LOADING.pop()
+        _LOADED.add(spec)
+        new += [n for n, p in _REGISTRY.items() if before.get(n) is not p]
+    return new
+
+
+# ---------------------------------------------------------------------------------------------
+# model size
+# ---------------------------------------------------------------------------------------------
+def model_size(method) -> int | None:
+    """Number of coefficients of a fitted method object (None if unknown).
+
+    ``method.model_size()`` if the object has it; inverse ARX/NARX: terms over all channels;
+    split spectra: the sum of its bands; FRF: real numbers in the inverse FRF matrices."""
+    own = getattr(method, "model_size", None)
+    if own is not None:
+        value = own() if callable(own) else own
+        return None if value is None else int(value)
+    inverse = getattr(method, "inverse", None)
+    if inverse is not None and hasattr(inverse, "model"):
+        return int(np.sum(inverse.model.n_terms_))
+    if hasattr(method, "low") and hasattr(method, "high"):
+        lo, hi = model_size(method.low), model_size(method.high)
+        return None if lo is None or hi is None else lo + hi
+    hinv = getattr(method, "Hinv", None)
+    if hinv is not None:
+        return int(2 * np.asarray(hinv).size)
+    return None
