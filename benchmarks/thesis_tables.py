@@ -238,7 +238,7 @@ def _verdict(table: Table, values) -> str:
     if any(isinstance(v, str) for v in values[:n]):
         return "not comparable (a procedure failed)"
     ok = eval(table.verdict, {}, {"v": values})  # expressions are module constants above
-    return f"{'same ordering' if ok else 'different ordering'} as the text ({table.claim})"
+    return f"{'same ordering as' if ok else 'different ordering from'} the text ({table.claim})"
 
 
 def _markdown(table: Table, values) -> str:
@@ -460,7 +460,7 @@ def _external() -> Path:
 
 def thesis_report(out_dir: Path | str, quick: bool = False, log=print) -> str:
     """Run every table, write ``thesis_reproduction.md`` into ``out_dir`` and return it."""
-    seconds, id_seconds = (15.0, 20.0) if quick else (30.0, 60.0)
+    seconds, id_seconds = (20.0, 30.0) if quick else (30.0, 60.0)
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     t0 = time.perf_counter()
