@@ -130,6 +130,11 @@ TABLES = [
                 _narx(6, 2, kind="full"),
                 thesis=(14, 12),
             ),
+            Row(
+                "vrig: NARX 6th order quadratic, input-polynomial, top tank",
+                _narx(6, 2, kind="input-polynomial", responses=["toptank_acc"]),
+                thesis=(None, None),
+            ),
         ],
         "v[2][0] <= v[1][0] < v[0][0]",
         "non-square NARX <= NARX < QanTiM",
