@@ -80,10 +80,12 @@ class InverseModel:
     lead : int, "delay" or "auto"
         Time shift in samples: the drive at t is modelled from responses up to t + lead.
         ``"delay"`` uses the rig delay from :func:`estimate_delay`. ``"auto"`` (default) tries
-        leads 0 .. ``lead_search`` and the delay estimate plus each ``preview``, and keeps the one whose
-        inverse model reproduces the identification drive best in free run: a transducer or
+        leads 0 .. ``lead_search`` and the delay estimate plus each ``preview``, each fitted on
+        the first ``1 - holdout`` of the record, and keeps the shortest within 2 % of the best
+        free-run error on the held-out rest, then refits it on the whole record (a transducer or
         anti-alias lag makes the first response coefficient small, and an inverse built on it is
-        unstable, while one more sample of lead is not.
+        unstable, while one more sample of lead is not; an in-sample score would favour long
+        previews that fit noise).
     max_lead : int
         Largest delay considered by the delay estimate.
     lead_search : int
@@ -99,6 +101,8 @@ class InverseModel:
         high-passed response to a displacement drive puts poles at ``z ~ 1`` that estimation
         noise pushes outside the unit circle. ``None`` keeps the estimate as it is. The factor
         applied is ``contraction_`` (1: untouched).
+    holdout : float
+        Fraction of the record held out to choose the ``"auto"`` lead.
 
     Examples
     --------
@@ -115,6 +119,7 @@ class InverseModel:
         lead_search: int = 3,
         preview: tuple = (1, 2, 4, 8, 12, 16),
         max_radius: float | None = 0.995,
+        holdout: float = 0.25,
     ):
         if not isinstance(model, Narx):
             raise IdentificationError(
@@ -136,6 +141,9 @@ class InverseModel:
                 f"max_radius must lie in (0, 1] or be None, got {max_radius!r}"
             )
         self.max_radius = max_radius
+        if not 0 < holdout < 1:
+            raise IdentificationError(f"holdout must lie in (0, 1), got {holdout!r}")
+        self.holdout = float(holdout)
 
     def fit(self, drive, response, *, drive_names=None, response_names=None):
         """Fit the inverse from an identification drive (N, n_drives) and response (N, n_resp)."""
@@ -153,32 +161,47 @@ class InverseModel:
                 )
         else:
             candidates = [int(self.lead)]
-        best = None
-        for lead in candidates:
-            if lead >= N // 2:
-                if self.lead == "auto" and best is not None:
-                    continue  # a long preview candidate on a short record: skip it
-                raise IdentificationError(f"lead {lead} is too long for a record of {N} samples")
+
+        def fitted(lead, d, r):
             model = copy.deepcopy(self.model)
-            model.fit(
-                response[lead:],
-                drive[: N - lead],
-                input_names=response_names,
-                output_names=drive_names,
-            )
+            n = d.shape[0]
+            model.fit(r[lead:], d[: n - lead], input_names=response_names, output_names=drive_names)
             rho = 1.0
             if self.max_radius is not None and model.is_output_affine():
                 rho = model.stabilise(self.max_radius)
-            if len(candidates) == 1:
-                best = (0.0, lead, model, rho)
-                break
-            try:
-                sim = model.simulate(response[lead:])
-                score = float(np.mean(metrics.qantim_fit_dc(drive[: N - lead], sim)))
-            except SimulationDivergedError:
-                score = np.inf
-            if best is None or score < best[0]:
-                best = (score, lead, model, rho)
+            return model, rho
+
+        usable = [c for c in candidates if c < N // 2]
+        if not usable or (len(usable) < len(candidates) and self.lead != "auto"):
+            raise IdentificationError(
+                f"lead {max(candidates)} is too long for a record of {N} samples"
+            )
+        if len(usable) == 1:
+            model, rho = fitted(usable[0], drive, response)
+            best = (0.0, usable[0], model, rho)
+        else:
+            # each lead is fitted on the first part and judged by the free run of the held-out
+            # rest (started from its measured first drives): an in-sample score favours long
+            # previews that fit noise
+            n_fit = round((1.0 - self.holdout) * N)
+            d_val, r_val = drive[n_fit:], response[n_fit:]
+            scores = {}
+            for lead in usable:
+                if n_fit - lead < N // 4 or r_val.shape[0] - lead < N // 10:
+                    continue
+                model, _rho = fitted(lead, drive[:n_fit], response[:n_fit])
+                target = d_val[: d_val.shape[0] - lead]
+                try:
+                    sim = model.simulate(r_val[lead:], y0=target[: model.max_lag_])
+                    scores[lead] = float(np.mean(metrics.qantim_fit_dc(target, sim)))
+                except SimulationDivergedError:
+                    scores[lead] = np.inf
+            low = min(scores.values(), default=np.inf)
+            # the shortest lead within 2 % of the best score (ties: noise-free data fits any
+            # lead past the delay; a longer preview than needed only adds variance)
+            lead = min((k for k, v in scores.items() if v <= low * 1.02 + 1e-9), default=usable[0])
+            model, rho = fitted(lead, drive, response)
+            best = (scores.get(lead, np.inf), lead, model, rho)
         self.lead_ = best[1]
         self.model = best[2]
         self.contraction_ = best[3]
