@@ -301,7 +301,10 @@ def table_3_7(*, seconds: float, order: int = 4, log=print):
     specific = rig_specific_psd(
         TimeHistory(drv, fs, names), TimeHistory(res, fs, [c.name for c in rig.outputs])
     )
-    band_mask = lambda shape: lambda f: np.where((f >= band[0]) & (f <= band[1]), shape(f), 0.0)  # noqa: E731
+
+    def band_mask(shape):  # the rig-specific shape inside the 1-40 Hz band only
+        return lambda f: np.where((f >= band[0]) & (f <= band[1]), shape(f), 0.0)
+
     shapes = {
         "triangular": [triangular_psd(band)] * n_in,
         "rig-specific (Alg. 3.1)": [band_mask(s) for s in specific],
@@ -408,12 +411,13 @@ def belgian_road_example(
     from scipy import signal
 
     import vrig
+    from benchmarks.public_data import external_data_root
     from vrig.field import pseudo_field
     from vrig.processing import f2d, gprepro
     from vrig.rigs import OutputSubset
     from vrig.timehistory import TimeHistory
 
-    path = _external() / "rpc3-samples" / "acc_Belgium_road(half)_20Kph_Pass02_DATA7.rsp"
+    path = external_data_root() / "rpc3-samples" / "acc_Belgium_road(half)_20Kph_Pass02_DATA7.rsp"
     if not path.exists():
         return f"Belgian road example skipped: {path} not found\n"
     field_rec = vrig.io.read_rpc3(path)
@@ -449,17 +453,6 @@ def belgian_road_example(
         f"{seconds:g} s of the four outer wheel accelerations, resampled to 250 Hz, scaled to "
         f"{level:g} x the rig's pseudo-field level ({', '.join(f'{v:.1f}' for v in target_rms)} m/s² RMS)\n\n"
         "```\n" + res.table() + f"\n```\n{('stopped: ' + res.stopped) if res.stopped else ''}\n"
-    )
-
-
-def _external() -> Path:
-    import os
-
-    env = os.environ.get("VRIG_EXTERNAL_DATA")
-    return (
-        Path(env)
-        if env
-        else Path(__file__).resolve().parents[1].parent / "shared" / "external-data"
     )
 
 

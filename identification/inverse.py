@@ -176,10 +176,8 @@ class InverseModel:
             raise IdentificationError(
                 f"lead {max(candidates)} is too long for a record of {N} samples"
             )
-        if len(usable) == 1:
-            model, rho = fitted(usable[0], drive, response)
-            best = (0.0, usable[0], model, rho)
-        else:
+        lead = usable[0]
+        if len(usable) > 1:
             # each lead is fitted on the first part and judged by the free run of the held-out
             # rest (started from its measured first drives): an in-sample score favours long
             # previews that fit noise
@@ -199,12 +197,9 @@ class InverseModel:
             low = min(scores.values(), default=np.inf)
             # the shortest lead within 2 % of the best score (ties: noise-free data fits any
             # lead past the delay; a longer preview than needed only adds variance)
-            lead = min((k for k, v in scores.items() if v <= low * 1.02 + 1e-9), default=usable[0])
-            model, rho = fitted(lead, drive, response)
-            best = (scores.get(lead, np.inf), lead, model, rho)
-        self.lead_ = best[1]
-        self.model = best[2]
-        self.contraction_ = best[3]
+            lead = min((k for k, v in scores.items() if v <= low * 1.02 + 1e-9), default=lead)
+        self.model, self.contraction_ = fitted(lead, drive, response)
+        self.lead_ = lead
         return self
 
     def simulate(self, response, *, bound=None) -> np.ndarray:

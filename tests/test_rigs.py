@@ -160,3 +160,15 @@ def test_a_mujoco_instability_is_an_error_not_nan():
     r = vrig.load_rig(Path(__file__).parent / "data" / "unstable.xml")
     with pytest.raises(vrig.SimulationInstabilityError, match="mjWARN_BADQACC"):
         r.run(0.001 * np.sin(np.arange(200) / 5))
+
+
+def test_a_non_finite_drive_is_refused_before_it_is_sent():
+    from vrig.rigs import ChannelSpec
+    from vrig.rigs.spec import check_drive_limits
+
+    chans = [ChannelSpec("u", "m", 1.0, "hydraulic")]
+    drive = np.zeros((10, 1))
+    check_drive_limits(chans, drive)  # within limits: no error
+    drive[4, 0] = np.nan
+    with pytest.raises(vrig.RigLimitError, match="not finite"):
+        check_drive_limits(chans, drive, fs=100.0, what="IT00DRV")

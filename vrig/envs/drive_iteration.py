@@ -327,7 +327,7 @@ class DriveIterationEnv(gym.Env):
         self.iteration = 0
         drive = self.engine.first_drive()
         # IT00 cannot be refused quietly: there is no previous drive to fall back on
-        self.drive_th, self.raw, self.response, self.scores = ph.play(self.engine, drive, 0)
+        self.drive_th, self.raw, self.response, self.scores = self.engine.play(drive, 0)
         self.drive = drive
         self.log_band_error = self.task.measure(self.engine.desres.data, self.response.data, ph.fs)
         self.errors = [np.asarray(self.scores[0], dtype=float)]
@@ -349,7 +349,7 @@ class DriveIterationEnv(gym.Env):
                 self.engine.reidentify(self.drive_th, self.raw)
             edges = self.edges if gains.ndim == 2 else None
             drive = self.engine.next_drive(self.drive, self.response, gains, edges)
-            drv, raw, res, scores = ph.play(self.engine, drive, self.iteration)
+            drv, raw, res, scores = self.engine.play(drive, self.iteration)
         except FAILURES as exc:
             self._done = True
             obs = self._observe(previous)

@@ -161,28 +161,10 @@ class IterationPhysics:
                 _MODELS.popitem(last=False)
         else:
             _MODELS.move_to_end(self._key)
-            method, engine.id_drive, engine.id_response = cached
-            engine.method = copy.deepcopy(method)
-            engine.target = engine.method.drive(engine.down(engine.desres))
+            method, id_drive, id_response = cached
+            engine.use_identified(copy.deepcopy(method), id_drive, id_response)
         engine.seed = int(run_seed)  # from here on the engine's seed only seeds the rig runs
         return engine
-
-    @staticmethod
-    def play(engine: DriveIteration, drive: np.ndarray, iteration: int):
-        """Play ``drive``; returns ``(drive, raw, processed, scores)`` or raises
-        :class:`~vrig.RigLimitError` (a non-finite drive, a drive beyond the limits - never
-        sent - or a trip) or :class:`~vrig.SimulationInstabilityError`."""
-        if not np.all(np.isfinite(drive)):
-            raise RigLimitError(
-                "drive",
-                engine.names[0],
-                float("nan"),
-                float("nan"),
-                float(engine.rig.inputs[0].full_scale),
-                engine.units[0],
-                hint=f": IT{iteration:02d}DRV is not finite and was not sent.",
-            )
-        return engine.play(drive, iteration)
 
 
 FAILURES = (RigLimitError, SimulationInstabilityError, SimulationDivergedError)

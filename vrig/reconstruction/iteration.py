@@ -251,6 +251,13 @@ class DriveIteration:
         )
         self.target = self.method.drive(self.down(self.desres))
 
+    def use_identified(self, method, id_drive: TimeHistory, id_response: TimeHistory) -> None:
+        """Take an already identified method (e.g. a cached inverse model, identified by
+        :meth:`identify` on the same rig, band and settings) instead of identifying again."""
+        self.method = make_method(method)
+        self.id_drive, self.id_response = id_drive, id_response
+        self.target = self.method.drive(self.down(self.desres))
+
     def shape(self, x: np.ndarray) -> np.ndarray:
         """A drive (or drive correction) as it may be sent: band-limited to the identification
         band (zero-phase, as every other record: what the model does outside the band it was

@@ -215,14 +215,15 @@ def check_drive_limits(
 ) -> None:
     """Raise :class:`~vrig.errors.RigLimitError` if any drive channel exceeds its full scale.
 
-    A drive beyond a channel's ± full scale is never sent: the error names the channel, the
-    first offending sample (and its time when ``fs`` is given) and says the drive was not sent.
+    A drive beyond a channel's ± full scale (or not finite) is never sent: the error names the
+    channel, the first offending sample (and its time when ``fs`` is given) and says the drive was not sent.
     """
     for j, c in enumerate(channels):
-        over = np.abs(drive[:, j]) > c.full_scale
+        over = ~(np.abs(drive[:, j]) <= c.full_scale)  # NaN counts as over: never sent either
         if over.any():
             i = int(np.argmax(over))
             when = f"sample {i}" + (f", t = {i / fs:.4f} s" if fs else "")
+            fix = "scale it down" if np.isfinite(drive[i, j]) else "it is not finite"
             raise RigLimitError(
                 "drive",
                 c.name,
@@ -230,5 +231,5 @@ def check_drive_limits(
                 drive[i, j],
                 c.full_scale,
                 c.unit,
-                hint=f"({when}): {what} was not sent; scale it down.",
+                hint=f"({when}): {what} was not sent; {fix}.",
             )
