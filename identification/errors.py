@@ -8,6 +8,8 @@ __all__ = [
     "InsufficientDataError",
     "RankDeficiencyWarning",
     "SimulationDivergedError",
+    "StabilityWarning",
+    "UnstableModelError",
 ]
 
 
@@ -17,6 +19,24 @@ class IdentificationError(ValueError):
 
 class InsufficientDataError(IdentificationError):
     """Fewer usable samples than model terms."""
+
+
+class UnstableModelError(IdentificationError):
+    """``fit`` could not produce a model whose free run stays bounded on its identification input.
+
+    Attributes
+    ----------
+    cause : SimulationDivergedError or None
+        The divergence of the last model tried (channel, sample, value).
+    """
+
+    def __init__(self, message: str, cause=None):
+        super().__init__(message)
+        self.cause = cause
+
+
+class StabilityWarning(UserWarning):
+    """The fitted model's free run diverges at the stability margin (e.g. 1.5x the input)."""
 
 
 class RankDeficiencyWarning(UserWarning):

@@ -10,12 +10,18 @@ restores causality.
 from __future__ import annotations
 
 import copy
+import warnings
 
 import numpy as np
 
 from . import metrics
 from ._validation import as_signal, check_same_length
-from .errors import IdentificationError, SimulationDivergedError
+from .errors import (
+    IdentificationError,
+    SimulationDivergedError,
+    StabilityWarning,
+    UnstableModelError,
+)
 from .models import Narx
 
 __all__ = ["InverseModel", "estimate_delay"]
@@ -164,43 +170,64 @@ class InverseModel:
 
         def fitted(lead, d, r):
             model = copy.deepcopy(self.model)
+            if self.max_radius is not None:
+                model.max_radius = self.max_radius
             n = d.shape[0]
             model.fit(r[lead:], d[: n - lead], input_names=response_names, output_names=drive_names)
-            rho = 1.0
-            if self.max_radius is not None and model.is_output_affine():
-                rho = model.stabilise(self.max_radius)
-            return model, rho
+            return model
 
         usable = [c for c in candidates if c < N // 2]
         if not usable or (len(usable) < len(candidates) and self.lead != "auto"):
             raise IdentificationError(
                 f"lead {max(candidates)} is too long for a record of {N} samples"
             )
-        lead = usable[0]
+        ranked = usable
         if len(usable) > 1:
-            # each lead is fitted on the first part and judged by the free run of the held-out
-            # rest (started from its measured first drives): an in-sample score favours long
-            # previews that fit noise
-            n_fit = round((1.0 - self.holdout) * N)
-            d_val, r_val = drive[n_fit:], response[n_fit:]
-            scores = {}
-            for lead in usable:
-                if n_fit - lead < N // 4 or r_val.shape[0] - lead < N // 10:
-                    continue
-                model, _rho = fitted(lead, drive[:n_fit], response[:n_fit])
-                target = d_val[: d_val.shape[0] - lead]
-                try:
-                    sim = model.simulate(r_val[lead:], y0=target[: model.max_lag_])
-                    scores[lead] = float(np.mean(metrics.qantim_fit_dc(target, sim)))
-                except SimulationDivergedError:
-                    scores[lead] = np.inf
-            low = min(scores.values(), default=np.inf)
-            # the shortest lead within 2 % of the best score (ties: noise-free data fits any
-            # lead past the delay; a longer preview than needed only adds variance)
-            lead = min((k for k, v in scores.items() if v <= low * 1.02 + 1e-9), default=lead)
-        self.model, self.contraction_ = fitted(lead, drive, response)
-        self.lead_ = lead
-        return self
+            ranked = self._rank_leads(usable, drive, response, fitted)
+        last_error = None
+        for lead in ranked:  # the best lead whose refit on the whole record is bounded
+            try:
+                self.model = fitted(lead, drive, response)
+            except UnstableModelError as exc:
+                last_error = exc
+                continue
+            self.contraction_ = self.model.contraction_
+            self.lead_ = lead
+            return self
+        raise UnstableModelError(
+            f"no lead among {ranked} gives an inverse model whose free run stays bounded: "
+            f"{last_error}",
+            getattr(last_error, "cause", None),
+        )
+
+    def _rank_leads(self, usable, drive, response, fitted) -> list[int]:
+        """Leads ordered by held-out free-run error: the shortest within 2 % of the best first.
+
+        Each lead is fitted on the first part and judged by the free run of the held-out rest
+        (started from its measured first drives): an in-sample score favours long previews that
+        fit noise. Ties: noise-free data fits any lead past the delay, and a longer preview than
+        needed only adds variance.
+        """
+        N = drive.shape[0]
+        n_fit = round((1.0 - self.holdout) * N)
+        d_val, r_val = drive[n_fit:], response[n_fit:]
+        scores = {}
+        for lead in usable:
+            if n_fit - lead < N // 4 or r_val.shape[0] - lead < N // 10:
+                continue
+            target = d_val[: d_val.shape[0] - lead]
+            try:
+                with warnings.catch_warnings():
+                    warnings.simplefilter("ignore", StabilityWarning)
+                    model = fitted(lead, drive[:n_fit], response[:n_fit])
+                sim = model.simulate(r_val[lead:], y0=target[: model.max_lag_])
+                scores[lead] = float(np.mean(metrics.qantim_fit_dc(target, sim)))
+            except (SimulationDivergedError, UnstableModelError):
+                scores[lead] = np.inf
+        low = min(scores.values(), default=np.inf)
+        best = min((k for k, v in scores.items() if v <= low * 1.02 + 1e-9), default=usable[0])
+        rest = sorted((k for k in scores if k != best and np.isfinite(scores[k])), key=scores.get)
+        return [best, *rest] if np.isfinite(low) else usable
 
     def simulate(self, response, *, bound=None) -> np.ndarray:
         """Drive (N, n_drives) that the inverse model predicts for ``response`` (N, n_resp).

@@ -9,12 +9,20 @@ from __future__ import annotations
 
 import json
 import time
+import warnings
 from pathlib import Path
 
 import numpy as np
 
 from ._validation import as_signal, check_same_length, per_channel_int
-from .errors import IdentificationError, InsufficientDataError
+from .errors import (
+    IdentificationError,
+    InsufficientDataError,
+    SimulationDivergedError,
+    StabilityWarning,
+    UnstableModelError,
+)
+from .output_error import FlatModel, refine
 from .regression import regression_matrix
 from .selection import forward_regression
 from .simulation import compile_plan, simulate_plan
@@ -64,6 +72,39 @@ def _lag_table(value, ny: int, n_src: int, name: str, minimum: int) -> np.ndarra
     return a.astype(np.int64)
 
 
+def _check_focus_options(focus, horizon, max_iter, stability_margin) -> None:
+    if focus not in ("prediction", "simulation"):
+        raise IdentificationError(
+            f"focus must be 'prediction' (one-step least squares) or 'simulation' (free-run "
+            f"error), got {focus!r}"
+        )
+    if horizon is not None and (
+        not isinstance(horizon, (int, np.integer)) or isinstance(horizon, bool) or horizon < 1
+    ):
+        raise IdentificationError(
+            f"horizon must be a positive number of samples or None (the whole record), "
+            f"got {horizon!r}"
+        )
+    if not isinstance(max_iter, (int, np.integer)) or isinstance(max_iter, bool) or max_iter < 1:
+        raise IdentificationError(f"max_iter must be a positive integer, got {max_iter!r}")
+    if not (isinstance(stability_margin, (int, float)) and 1.0 <= stability_margin < np.inf):
+        raise IdentificationError(
+            f"stability_margin must be a finite factor >= 1 (1 checks the identification "
+            f"input only), got {stability_margin!r}"
+        )
+
+
+def _is_output_affine_term(ch: ChannelStructure, row, ny: int) -> bool:
+    """True unless the term multiplies a past output by another factor (or transforms it)."""
+    factors = [int(i) for i in row if i > 0]
+    outs = [i for i in factors if ch.regressors[i - 1, 0] < ny]
+    if not outs:
+        return True
+    fn = getattr(ch, "functions", None)
+    transformed = fn is not None and any(fn[i - 1] != 0 for i in outs)
+    return len(factors) == 1 and not transformed
+
+
 class Narx:
     """Polynomial NARX model, full-order MIMO structure (eq. 5-3 / 5-4, any degree).
 
@@ -97,6 +138,33 @@ class Narx:
     bound_factor : float
         Free-run divergence bound: ``bound_factor * max|y|`` of the identification output per
         channel (see :meth:`simulate`).
+    focus : {"prediction", "simulation"}
+        What the coefficients minimise. ``"prediction"`` (default): the one-step-ahead error,
+        by linear least squares (fast; biased when the noise is on the measured output).
+        ``"simulation"``: the free-run (output-error) error over the record, by
+        Levenberg-Marquardt started from the least-squares estimate with the exact sensitivity
+        Jacobian (:mod:`identification.output_error`); MIMO outputs weighted by 1/std.
+    horizon : int, optional
+        With ``focus="simulation"``: a truncated horizon in samples (the record cut into
+        segments restarted from the measured outputs). Default: the whole record, reached by a
+        horizon continuation when the least-squares free run diverges.
+    max_iter : int
+        With ``focus="simulation"``: Levenberg-Marquardt iterations per horizon stage.
+    stability_margin : float
+        The stability contract: after fitting, the free run is checked on the identification
+        input and on ``stability_margin`` times it (from the record's first measured outputs,
+        within ``bound_``). ``fit`` never returns a model that diverges on its identification
+        input: with ``focus="prediction"`` it raises :class:`UnstableModelError` (suggesting the
+        simulation focus); with ``focus="simulation"`` it drops the terms that feed past outputs
+        back non-linearly, refits and refines, contracts the poles of a remaining linear
+        autoregression, and raises only if that still diverges. A divergence at the margin only
+        warns (:class:`StabilityWarning`). Results in ``stability_``.
+    max_radius : float, optional
+        For a model linear in its past outputs (:meth:`is_output_affine`): after fitting,
+        contract its poles inside this radius (:meth:`stabilise`; the factor applied is
+        ``contraction_``) before the stability check. Inverting an acceleration or a
+        high-passed response to a displacement drive puts poles at ``z ~ 1`` that estimation
+        noise pushes outside the unit circle; 0.995 turns them into leaky integrators.
 
     Attributes (after fit)
     ----------------------
@@ -108,6 +176,10 @@ class Narx:
     input_names_, output_names_ : tuple of str
     bound_ : ndarray, free-run bound per output channel
     fit_time_ : float, seconds spent in fit
+    refinement_ : RefinementResult or None, what the simulation focus did
+    coef_std_ : tuple of ndarray or None, standard errors of ``coef_`` (simulation focus)
+    stability_ : dict, the stability contract's checks (``"input"``, ``"margin"``: bounded or
+        not; ``"remedy"``: what was done to make the free run bounded, or None)
     """
 
     _linear_only = False
@@ -127,6 +199,11 @@ class Narx:
         n_terms: int | None = None,
         err_tol: float | None = None,
         bound_factor: float = 1e3,
+        focus: str = "prediction",
+        horizon: int | None = None,
+        max_iter: int = 50,
+        stability_margin: float = 1.5,
+        max_radius: float | None = None,
     ):
         explicit = na is not None or nb is not None or nk is not None
         if order is None and not explicit:
@@ -149,6 +226,11 @@ class Narx:
             raise IdentificationError(f"err_tol must be in [0, 1), got {err_tol!r}")
         if not bound_factor > 0:
             raise IdentificationError(f"bound_factor must be > 0, got {bound_factor!r}")
+        _check_focus_options(focus, horizon, max_iter, stability_margin)
+        if max_radius is not None and not 0 < max_radius <= 1:
+            raise IdentificationError(
+                f"max_radius must lie in (0, 1] or be None, got {max_radius!r}"
+            )
         self.order = order
         self.degree = degree
         self.na, self.nb, self.nk = na, nb, nk
@@ -159,6 +241,11 @@ class Narx:
         self.n_terms = n_terms
         self.err_tol = err_tol
         self.bound_factor = float(bound_factor)
+        self.focus = focus
+        self.horizon = None if horizon is None else int(horizon)
+        self.max_iter = int(max_iter)
+        self.stability_margin = float(stability_margin)
+        self.max_radius = max_radius
 
     # ------------------------------------------------------------------ structure
     def _structure(self, ny: int, nu: int) -> tuple[ChannelStructure, ...]:
@@ -190,7 +277,9 @@ class Narx:
 
         Channels that share a structure share one regression matrix, factorised once for all
         of them. With ``n_terms``/``err_tol`` each channel's terms are chosen by forward
-        regression and then re-estimated with ``solver``.
+        regression and then re-estimated with ``solver``. With ``focus="simulation"`` the
+        coefficients are then refined on the free-run error. Either way the stability contract
+        (see ``stability_margin``) is enforced before the model is returned.
         """
         t0 = time.perf_counter()
         u = as_signal(u, "u")
@@ -209,6 +298,26 @@ class Narx:
                     f"({N} samples minus the largest lag {start}). Provide at least "
                     f"{ch.n_terms + start} samples, or lower the order/degree."
                 )
+        self.n_inputs_, self.n_outputs_ = nu, ny
+        self.input_names_ = _names(input_names, nu, "u", "input_names")
+        self.output_names_ = _names(output_names, ny, "y", "output_names")
+        scale = np.max(np.abs(y), axis=0)
+        self.bound_ = self.bound_factor * np.where(scale > 0, scale, 1.0)
+        self.max_lag_ = start
+        self._install(*self._least_squares(u, y, channels, start))
+        self.refinement_, self.coef_std_ = None, None
+        if self.focus == "simulation":
+            self._refine(u, y)
+        self.contraction_ = 1.0
+        if self.max_radius is not None and self.is_output_affine():
+            self.contraction_ = self.stabilise(self.max_radius)
+        self._enforce_stability(u, y)
+        self.fit_time_ = time.perf_counter() - t0
+        return self
+
+    def _least_squares(self, u, y, channels, start):
+        """One-step least squares (with forward selection when asked): channels, coefs, errs."""
+        ny = y.shape[1]
         solve = get_solver(self.solver)
         coefs: list[np.ndarray | None] = [None] * ny
         errs: list[np.ndarray | None] = [None] * ny
@@ -239,20 +348,112 @@ class Narx:
                 final_channels[k] = ChannelStructure(
                     channels[k].regressors, channels[k].terms[idx], channels[k].order
                 )
-        self.channels_ = tuple(final_channels)
-        self.coef_ = tuple(coefs)
-        self.err_ = tuple(errs) if select else None
+        return tuple(final_channels), tuple(coefs), (tuple(errs) if select else None)
+
+    def _install(self, channels, coefs, errs="keep"):
+        """Set the fitted structure and coefficients; the free-run plan is compiled now."""
+        self.channels_ = tuple(channels)
+        self.coef_ = tuple(np.ascontiguousarray(c, dtype=np.float64) for c in coefs)
+        if errs != "keep":
+            self.err_ = errs
         self.n_terms_ = np.array([ch.n_terms for ch in self.channels_])
-        self.max_lag_ = start
-        self.n_inputs_, self.n_outputs_ = nu, ny
-        self.input_names_ = _names(input_names, nu, "u", "input_names")
-        self.output_names_ = _names(output_names, ny, "y", "output_names")
-        scale = np.max(np.abs(y), axis=0)
-        self.bound_ = self.bound_factor * np.where(scale > 0, scale, 1.0)
-        # compile the free-run plan now: simulate() then pays only for the recursion
-        self._plan = compile_plan(self.channels_, self.coef_, ny, nu)
-        self.fit_time_ = time.perf_counter() - t0
-        return self
+        self._plan = compile_plan(self.channels_, self.coef_, self.n_outputs_, self.n_inputs_)
+
+    # ------------------------------------------------------------------ simulation focus
+    def _refine(self, u, y) -> None:
+        """Levenberg-Marquardt on the free-run error from the current (least-squares) coef_."""
+        flat = FlatModel.from_channels(self.channels_, self.n_outputs_)
+        res = refine(
+            flat,
+            np.concatenate(self.coef_),
+            u,
+            y,
+            horizon=self.horizon,
+            max_iter=self.max_iter,
+            bound=self.bound_,
+        )
+        self.refinement_ = res
+        if not np.isfinite(res.cost):
+            return
+        self._install(self.channels_, flat.split(res.theta))
+        if res.covariance is not None:
+            std = np.sqrt(np.clip(np.diag(res.covariance), 0.0, None))
+            self.coef_std_ = flat.split(std)
+
+    def _free_run_divergence(self, u, y, scale: float):
+        """None when the free run on ``scale * u`` (from y's first outputs) stays bounded."""
+        try:
+            simulate_plan(self._plan, scale * u, y[: self.max_lag_], self.bound_,
+                          self.output_names_)
+        except SimulationDivergedError as exc:
+            return exc
+        return None
+
+    def _enforce_stability(self, u, y) -> None:
+        """The stability contract (see the class docstring, ``stability_margin``)."""
+        remedy = None
+        div = self._free_run_divergence(u, y, 1.0)
+        if div is not None and self.focus == "prediction":
+            raise UnstableModelError(
+                f"the least-squares model's free run diverges on its own identification input "
+                f"({div.channel_name!r} at sample {div.sample}). Fit with focus='simulation' "
+                "(output-error refinement), lower the degree, or use kind='input-polynomial' "
+                "(past outputs enter linearly).",
+                div,
+            )
+        if div is not None:
+            remedy, div = self._remedy(u, y)
+        if div is not None:
+            raise UnstableModelError(
+                "no bounded model found: the free run diverges on the identification input "
+                f"({div.channel_name!r} at sample {div.sample}) even after simulation-error "
+                "refinement, dropping the non-linear output feedback and contracting the poles. "
+                "Lower the order or degree, or check the record for drift and outliers.",
+                div,
+            )
+        margin = self.stability_margin
+        at_margin = self._free_run_divergence(u, y, margin) if margin != 1.0 else None
+        self.stability_ = {"input": True, "margin": at_margin is None, "remedy": remedy}
+        if at_margin is not None:
+            warnings.warn(
+                f"the fitted model's free run diverges at {margin:g}x the identification input "
+                f"({at_margin.channel_name!r} at sample {at_margin.sample}): keep the model's "
+                "use within the identification amplitude, or lower the degree",
+                StabilityWarning,
+                stacklevel=3,
+            )
+
+    def _remedy(self, u, y):
+        """Drop non-linear output feedback, refit, refine; then contract the poles."""
+        ny = self.n_outputs_
+        kept = []
+        for ch, c in zip(self.channels_, self.coef_, strict=True):
+            keep = np.array([_is_output_affine_term(ch, row, ny) for row in ch.terms])
+            kept.append((ChannelStructure(ch.regressors, ch.terms[keep], ch.order), c[keep]))
+        if any(k[0].n_terms < ch.n_terms for k, ch in zip(kept, self.channels_, strict=True)):
+            channels = tuple(k[0] for k in kept)
+            chans, coefs, _ = self._least_squares_fixed(u, y, channels)
+            self._install(chans, coefs)
+            self._refine(u, y)
+            div = self._free_run_divergence(u, y, 1.0)
+            if div is None:
+                return "dropped the non-linear output-feedback terms", None
+        if self.is_output_affine():
+            self.contraction_ = self.stabilise(min(self.max_radius or 0.995, 0.995))
+            div = self._free_run_divergence(u, y, 1.0)
+            if div is None:
+                return "dropped non-linear output feedback; poles contracted to 0.995", None
+            return None, div
+        return None, self._free_run_divergence(u, y, 1.0)
+
+    def _least_squares_fixed(self, u, y, channels):
+        """Least squares on a given structure (no selection)."""
+        solve = get_solver(self.solver)
+        coefs = []
+        for k, ch in enumerate(channels):
+            X = regression_matrix(u, y, ch, self.max_lag_)
+            coefs.append(np.ascontiguousarray(solve(X, y[self.max_lag_ :, k], rcond=self.rcond)))
+        return channels, coefs, None
 
     def is_output_affine(self) -> bool:
         """True when past outputs enter only linearly (ARX, ``kind="input-polynomial"``, or a
@@ -315,8 +516,7 @@ class Narx:
         coef = [np.array(c, dtype=float) for c in self.coef_]
         for k, t, _src, lag in self._output_lag_terms():
             coef[k][t] *= rho**lag
-        self.coef_ = tuple(coef)
-        self._plan = None
+        self._install(self.channels_, coef)
         return rho
 
     # ------------------------------------------------------------------ use
@@ -444,6 +644,11 @@ class Narx:
             "n_terms": plain(self.n_terms),
             "err_tol": self.err_tol,
             "bound_factor": self.bound_factor,
+            "focus": self.focus,
+            "horizon": self.horizon,
+            "max_iter": self.max_iter,
+            "stability_margin": self.stability_margin,
+            "max_radius": self.max_radius,
         }
 
     def save(self, path) -> Path:
@@ -473,6 +678,8 @@ class Narx:
             arrays[f"coef_{k}"] = self.coef_[k]
             if self.err_ is not None:
                 arrays[f"err_{k}"] = self.err_[k]
+            if getattr(self, "coef_std_", None) is not None:
+                arrays[f"coef_std_{k}"] = self.coef_std_[k]
         np.savez(path, **arrays)
         return path
 
@@ -506,12 +713,17 @@ class Narx:
             has_err = "err_0" in f.files
             model.err_ = tuple(np.array(f[f"err_{k}"]) for k in range(ny)) if has_err else None
             model.bound_ = np.array(f["bound"])
+            has_std = "coef_std_0" in f.files
+            model.coef_std_ = (
+                tuple(np.array(f[f"coef_std_{k}"]) for k in range(ny)) if has_std else None
+            )
         model.n_terms_ = np.array([ch.n_terms for ch in model.channels_])
         model.max_lag_ = meta["max_lag"]
         model.n_inputs_, model.n_outputs_ = meta["nu"], ny
         model.input_names_ = tuple(meta["input_names"])
         model.output_names_ = tuple(meta["output_names"])
         model._plan = None
+        model.refinement_ = None
         model.fit_time_ = float("nan")
         return model
 
@@ -540,6 +752,11 @@ class Arx(Narx):
         n_terms=None,
         err_tol=None,
         bound_factor: float = 1e3,
+        focus: str = "prediction",
+        horizon: int | None = None,
+        max_iter: int = 50,
+        stability_margin: float = 1.5,
+        max_radius: float | None = None,
     ):
         super().__init__(
             order,
@@ -554,6 +771,11 @@ class Arx(Narx):
             n_terms=n_terms,
             err_tol=err_tol,
             bound_factor=bound_factor,
+            focus=focus,
+            horizon=horizon,
+            max_iter=max_iter,
+            stability_margin=stability_margin,
+            max_radius=max_radius,
         )
 
     def to_statespace(self, dt: float = 1.0):
