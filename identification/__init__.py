@@ -8,7 +8,7 @@ This package never imports ``vrig`` or MuJoCo: it works on any (N, channels) rec
 >>> metrics.qantim_fit_dc(y_new, y_sim)                 # doctest: +SKIP
 """
 
-from . import metrics, solvers
+from . import metrics, solvers, validation
 from .error_model import ErrorSignalModel
 from .errors import (
     IdentificationError,
@@ -16,6 +16,8 @@ from .errors import (
     InsufficientDataError,
     RankDeficiencyWarning,
     SimulationDivergedError,
+    StabilityWarning,
+    UnstableModelError,
 )
 from .inverse import InverseModel, estimate_delay
 from .models import Arx, Narx
@@ -24,28 +26,47 @@ from .regression import regression_matrix
 from .selection import ForwardSelection, forward_regression
 from .structure import ChannelStructure, term_count, term_count_combinatorial
 from .synthetic import band_limited_noise, random_narx
+from .validation import (
+    CorrelationTests,
+    InformationCriteria,
+    PressResult,
+    correlation_tests,
+    criterion_value,
+    information_criteria,
+    press,
+)
 
 __all__ = [
     "Arx",
     "ChannelStructure",
+    "CorrelationTests",
     "ErrorSignalModel",
     "ForwardSelection",
     "IdentificationError",
     "IllConditionedWarning",
+    "InformationCriteria",
     "InsufficientDataError",
     "InverseModel",
     "Narx",
     "OrderScan",
+    "PressResult",
     "RankDeficiencyWarning",
     "SimulationDivergedError",
+    "StabilityWarning",
+    "UnstableModelError",
     "band_limited_noise",
+    "correlation_tests",
+    "criterion_value",
     "estimate_delay",
     "forward_regression",
+    "information_criteria",
     "metrics",
     "order_scan",
+    "press",
     "random_narx",
     "regression_matrix",
     "solvers",
     "term_count",
     "term_count_combinatorial",
+    "validation",
 ]

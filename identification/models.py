@@ -150,6 +150,11 @@ class Narx:
         horizon continuation when the least-squares free run diverges.
     max_iter : int
         With ``focus="simulation"``: Levenberg-Marquardt iterations per horizon stage.
+    holdout : float
+        With ``focus="simulation"``: the fraction of the record (its end) held out for early
+        stopping; the refinement keeps the iterate with the best held-out free-run error (an
+        over-parameterised model otherwise fits the noise into dynamics that diverge on other
+        inputs). 0 fits the whole record to convergence.
     stability_margin : float
         The stability contract: after fitting, the free run is checked on the identification
         input and on ``stability_margin`` times it (from the record's first measured outputs,
@@ -202,6 +207,7 @@ class Narx:
         focus: str = "prediction",
         horizon: int | None = None,
         max_iter: int = 50,
+        holdout: float = 0.2,
         stability_margin: float = 1.5,
         max_radius: float | None = None,
     ):
@@ -227,6 +233,10 @@ class Narx:
         if not bound_factor > 0:
             raise IdentificationError(f"bound_factor must be > 0, got {bound_factor!r}")
         _check_focus_options(focus, horizon, max_iter, stability_margin)
+        if not (isinstance(holdout, (int, float)) and 0.0 <= holdout < 0.5):
+            raise IdentificationError(
+                f"holdout must be a fraction in [0, 0.5) of the record, got {holdout!r}"
+            )
         if max_radius is not None and not 0 < max_radius <= 1:
             raise IdentificationError(
                 f"max_radius must lie in (0, 1] or be None, got {max_radius!r}"
@@ -244,6 +254,7 @@ class Narx:
         self.focus = focus
         self.horizon = None if horizon is None else int(horizon)
         self.max_iter = int(max_iter)
+        self.holdout = float(holdout)
         self.stability_margin = float(stability_margin)
         self.max_radius = max_radius
 
@@ -362,7 +373,7 @@ class Narx:
     # ------------------------------------------------------------------ simulation focus
     def _refine(self, u, y) -> None:
         """Levenberg-Marquardt on the free-run error from the current (least-squares) coef_."""
-        flat = FlatModel.from_channels(self.channels_, self.n_outputs_)
+        flat = FlatModel.from_channels(self.channels_, self.n_outputs_, self.n_inputs_)
         res = refine(
             flat,
             np.concatenate(self.coef_),
@@ -371,6 +382,7 @@ class Narx:
             horizon=self.horizon,
             max_iter=self.max_iter,
             bound=self.bound_,
+            holdout=self.holdout,
         )
         self.refinement_ = res
         if not np.isfinite(res.cost):
@@ -647,6 +659,7 @@ class Narx:
             "focus": self.focus,
             "horizon": self.horizon,
             "max_iter": self.max_iter,
+            "holdout": self.holdout,
             "stability_margin": self.stability_margin,
             "max_radius": self.max_radius,
         }
@@ -755,6 +768,7 @@ class Arx(Narx):
         focus: str = "prediction",
         horizon: int | None = None,
         max_iter: int = 50,
+        holdout: float = 0.2,
         stability_margin: float = 1.5,
         max_radius: float | None = None,
     ):
@@ -774,6 +788,7 @@ class Arx(Narx):
             focus=focus,
             horizon=horizon,
             max_iter=max_iter,
+            holdout=holdout,
             stability_margin=stability_margin,
             max_radius=max_radius,
         )

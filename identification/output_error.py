@@ -33,7 +33,8 @@ import numpy as np
 from scipy import linalg
 
 from ._sensitivity import simulate_with_sensitivity
-from .errors import IdentificationError
+from .errors import IdentificationError, SimulationDivergedError
+from .simulation import compile_plan, simulate_plan
 
 __all__ = ["FlatModel", "RefinementResult", "refine", "simulation_error"]
 
@@ -53,9 +54,11 @@ class FlatModel:
     reg_ptr: np.ndarray
     terms: np.ndarray  # (P, L_max), padded with 0 (the constant factor)
     term_ptr: np.ndarray
+    channels: tuple  # the ChannelStructure of each output (for the fast plan-based free run)
+    nu: int
 
     @classmethod
-    def from_channels(cls, channels, ny: int) -> FlatModel:
+    def from_channels(cls, channels, ny: int, nu: int) -> FlatModel:
         L = max(ch.degree for ch in channels)
         src, lag, fn, bp, rptr = [], [], [], [], [0]
         rows, tptr = [], [0]
@@ -63,8 +66,10 @@ class FlatModel:
             R = ch.n_regressors
             src.append(ch.regressors[:, 0])
             lag.append(ch.regressors[:, 1])
-            fn.append(getattr(ch, "functions", None) if getattr(ch, "functions", None) is not None else np.zeros(R, np.int64))
-            bp.append(getattr(ch, "breakpoints", None) if getattr(ch, "breakpoints", None) is not None else np.zeros(R))
+            functions = getattr(ch, "functions", None)  # non-polynomial regressor functions
+            breakpoints = getattr(ch, "breakpoints", None)
+            fn.append(np.zeros(R, np.int64) if functions is None else functions)
+            bp.append(np.zeros(R) if breakpoints is None else breakpoints)
             rptr.append(rptr[-1] + R)
             t = np.zeros((ch.n_terms, L), dtype=np.int64)
             t[:, L - ch.degree :] = ch.terms
@@ -81,6 +86,8 @@ class FlatModel:
             reg_ptr=np.array(rptr, dtype=i64),
             terms=np.ascontiguousarray(np.concatenate(rows), dtype=i64),
             term_ptr=np.array(tptr, dtype=i64),
+            channels=tuple(channels),
+            nu=int(nu),
         )
 
     @property
@@ -118,6 +125,8 @@ def simulation_error(
     w = np.ones(ny) if weight is None else np.asarray(weight, dtype=np.float64)
     b = np.full(ny, np.inf) if bound is None else np.asarray(bound, dtype=np.float64)
     rows = (N - p) * ny
+    if not jacobian and h >= N:  # one segment: the compiled plan-based free run is faster
+        return _plan_error(flat, theta, u, y, w, b)
     E = np.empty(rows)
     J = np.empty((rows, flat.n_params) if jacobian else (1, 1))
     Yhat = np.array(y, dtype=np.float64, order="C")
@@ -144,6 +153,16 @@ def simulation_error(
     if k >= 0:
         return None, None, Yhat
     return E, (J if jacobian else None), Yhat
+
+
+def _plan_error(flat: FlatModel, theta, u, y, w, b):
+    p = flat.max_lag
+    plan = compile_plan(flat.channels, flat.split(theta), flat.ny, flat.nu)
+    try:
+        yhat = simulate_plan(plan, u, y[:p], b, [str(k) for k in range(flat.ny)])
+    except SimulationDivergedError:
+        return None, None, None
+    return ((y[p:] - yhat[p:]) * w).ravel(), None, yhat
 
 
 @dataclass
@@ -191,64 +210,99 @@ def _check_budget(rows: int, n_params: int) -> None:
         )
 
 
-def _lm_stage(flat, theta, u, y, horizon, w, bound, max_iter, tol):
+class _Monitor:
+    """Early stopping on a held-out record: keeps the iterate with the best free-run error."""
+
+    def __init__(self, flat, u, y, w, bound, patience: int = 5):
+        self.flat, self.u, self.y, self.w, self.bound = flat, u, y, w, bound
+        self.patience = patience
+        self.best_theta, self.best, self.since = None, np.inf, 0
+
+    def score(self, theta) -> float:
+        e, _, _ = simulation_error(
+            self.flat, theta, self.u, self.y, weight=self.w, bound=self.bound
+        )
+        return float(e @ e) if e is not None else np.inf
+
+    def update(self, theta) -> bool:
+        """Record ``theta``; True when the held-out error has not improved for ``patience``."""
+        v = self.score(theta)
+        if v < self.best * (1 - 1e-9):
+            self.best_theta, self.best, self.since = theta.copy(), v, 0
+        else:
+            self.since += 1
+        return self.since >= self.patience
+
+
+def _lm_step(A, grad, mu):
+    """Solve ``(A + mu diag(A)) delta = grad`` with Marquardt's scaling; None if singular."""
+    d = np.diag(A).copy()
+    d = np.maximum(d, 1e-14 * max(float(d.max()), 1e-300))
+    s = 1.0 / np.sqrt(d)
+    As = A * s[:, None] * s[None, :]
+    As[np.diag_indices_from(As)] += mu
+    try:
+        x = linalg.cho_solve(
+            linalg.cho_factor(As, check_finite=False), grad * s, check_finite=False
+        )
+    except linalg.LinAlgError:
+        return None, d
+    return s * x, d
+
+
+def _lm_stage(flat, theta, data, horizon, max_iter, tol, monitor=None):
     """Levenberg-Marquardt at one horizon (Marquardt scaling, Nielsen's damping update).
 
-    Solves ``(J^T J + mu diag(J^T J)) delta = J^T e`` in the scaled variables
-    ``x = sqrt(diag(J^T J)) * delta``; a trial whose free run leaves ``bound`` is rejected.
-    Returns ``(theta, cost, iterations, converged, history)``.
+    Solves ``(J^T J + mu diag(J^T J)) delta = J^T e``; a trial whose free run leaves the bound
+    is rejected. With a ``monitor`` the stage also stops when the held-out error has not
+    improved for its patience (early stopping). Returns ``(theta, cost, its, converged, hist)``.
     """
-    e, J, _ = simulation_error(
-        flat, theta, u, y, horizon=horizon, weight=w, bound=bound, jacobian=True
-    )
+    u, y, w, bound = data
+
+    def evaluate(th, jac):
+        return simulation_error(
+            flat, th, u, y, horizon=horizon, weight=w, bound=bound, jacobian=jac
+        )
+
+    e, J, _ = evaluate(theta, True)
     if e is None:
         return theta, np.inf, 0, False, []
-    cost = float(e @ e)
-    A, grad = J.T @ J, J.T @ e
-    mu, nu = 1e-3, 2.0
-    history: list[float] = []
-    its = 0
+    if monitor is not None:
+        monitor.update(theta)
+    cost, A, grad = float(e @ e), J.T @ J, J.T @ e
+    mu, nu, its, history = 1e-3, 2.0, 0, []
     while its < max_iter:
         its += 1
-        d = np.diag(A).copy()
-        d = np.maximum(d, 1e-14 * max(float(d.max()), 1e-300))
-        s = 1.0 / np.sqrt(d)
-        As = A * s[:, None] * s[None, :]
-        As[np.diag_indices_from(As)] += mu
-        try:
-            delta = s * linalg.cho_solve(
-                linalg.cho_factor(As, check_finite=False), grad * s, check_finite=False
-            )
-        except linalg.LinAlgError:
+        delta, d = _lm_step(A, grad, mu)
+        if delta is None:
             mu, nu = mu * nu, nu * 2.0
             continue
         if np.linalg.norm(delta) <= tol * (np.linalg.norm(theta) + tol):
             return theta, cost, its, True, history
-        trial = theta + delta
-        e_t, _, _ = simulation_error(flat, trial, u, y, horizon=horizon, weight=w, bound=bound)
+        e_t, _, _ = evaluate(theta + delta, False)
         cost_t = float(e_t @ e_t) if e_t is not None else np.inf
         predicted = float(delta @ (mu * d * delta + grad))
         rho = (cost - cost_t) / predicted if predicted > 0 else -1.0
-        if rho > 0 and np.isfinite(cost_t):
-            rel = (cost - cost_t) / max(cost, 1e-300)
-            theta, cost = trial, cost_t
-            e, J, _ = simulation_error(
-                flat, theta, u, y, horizon=horizon, weight=w, bound=bound, jacobian=True
-            )
-            A, grad = J.T @ J, J.T @ e
-            mu *= max(1.0 / 3.0, 1.0 - (2.0 * rho - 1.0) ** 3)
-            nu = 2.0
-            history.append(cost)
-            if rel < tol:
-                return theta, cost, its, True, history
-        else:
+        if not (rho > 0 and np.isfinite(cost_t)):
             mu, nu = mu * nu, nu * 2.0
             if mu > 1e12:  # no descent direction left at working precision
                 return theta, cost, its, True, history
+            continue
+        rel = (cost - cost_t) / max(cost, 1e-300)
+        theta, cost = theta + delta, cost_t
+        e, J, _ = evaluate(theta, True)
+        A, grad = J.T @ J, J.T @ e
+        mu *= max(1.0 / 3.0, 1.0 - (2.0 * rho - 1.0) ** 3)
+        nu = 2.0
+        history.append(cost)
+        if monitor is not None and monitor.update(theta):
+            return theta, cost, its, True, history
+        if rel < tol:
+            return theta, cost, its, True, history
     return theta, cost, its, False, history
 
 
-def _horizon_schedule(start: int, n: int, max_lag: int) -> list[int]:
+def _horizon_schedule(start: int, n: int) -> list[int]:
     h, out = start, []
     while h < n:
         out.append(h)
@@ -264,8 +318,9 @@ def refine(
     *,
     horizon: int | None = None,
     max_iter: int = 50,
-    tol: float = 1e-6,
+    tol: float = 1e-5,
     bound: np.ndarray | None = None,
+    holdout: float = 0.0,
 ) -> RefinementResult:
     """Minimise the free-run error of ``flat`` over the record ``u, y`` from ``theta0``.
 
@@ -287,12 +342,27 @@ def refine(
         step is below this fraction of ``|theta|``.
     bound : ndarray (ny,), optional
         Free-run bound per channel; a trial leaving it is rejected (default: finite only).
+    holdout : float
+        Fraction of the record (its end) held out for early stopping: the last stage keeps the
+        iterate whose free run on the held-out part is best and stops when that has not
+        improved for 5 accepted steps. 0: no early stopping, the whole record is fitted.
     """
     N, ny = y.shape
     p = flat.max_lag
     _check_budget((N - p) * ny, flat.n_params)
     std = y[p:].std(axis=0)
     w = 1.0 / np.where(std > 0, std, 1.0)
+    monitor = None
+    if holdout > 0:
+        cut = round(N * (1.0 - holdout))
+        if cut - p < 2 * flat.n_params or N - cut < 4 * p + 10:
+            raise IdentificationError(
+                f"holdout={holdout} leaves too few samples to fit {flat.n_params} parameters "
+                f"({cut - p}) or to validate ({N - cut}); lower it or use a longer record"
+            )
+        monitor = _Monitor(flat, u[cut - p :], y[cut - p :], w, bound)
+        u, y, N = u[:cut], y[:cut], cut
+    data = (u, y, w, bound)
     theta = np.array(theta0, dtype=np.float64)
     full = N if horizon is None else min(int(horizon), N)
     e0, _, _ = simulation_error(flat, theta, u, y, horizon=full, weight=w, bound=bound)
@@ -300,24 +370,29 @@ def refine(
     if horizon is not None or e0 is not None:
         stages = [full]
     else:
-        stages = _horizon_schedule(max(10, 2 * p), N, p)
+        stages = _horizon_schedule(max(10, 2 * p), N)
     total, history, converged, cost = 0, [], False, np.inf
-    for h in stages:
+    for i, h in enumerate(stages):
+        last = i == len(stages) - 1
         theta, cost, its, converged, hist = _lm_stage(
-            flat, theta, u, y, h, w, bound, max_iter, tol
+            flat, theta, data, h, max_iter, tol, monitor if last else None
         )
         total += its
         history += hist
+    if monitor is not None and monitor.best_theta is not None:
+        theta = monitor.best_theta
+        e, _, _ = simulation_error(flat, theta, u, y, horizon=stages[-1], weight=w, bound=bound)
+        cost = float(e @ e) if e is not None else np.inf
     cov = None
     if np.isfinite(cost):
         e, J, _ = simulation_error(
             flat, theta, u, y, horizon=stages[-1], weight=w, bound=bound, jacobian=True
         )
-        cov = _covariance(e, J, flat, w, N - p)
+        cov = _covariance(e, J, flat)
     return RefinementResult(theta, cost, initial, total, stages, cov, converged, history)
 
 
-def _covariance(e, J, flat: FlatModel, w, n_rows):
+def _covariance(e, J, flat: FlatModel):
     """``sigma^2 (J^T J)^-1`` per channel's noise level, back in the original output units.
 
     With weights ``w_k`` the weighted residual variance is the same for every channel when the

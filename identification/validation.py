@@ -558,7 +558,7 @@ def correlation_tests(u, e, max_lag: int = 20, confidence: float = 0.95) -> Corr
     lags = np.arange(-max_lag, max_lag + 1)
     pos = np.arange(1, max_lag + 1)
     phis = _all_correlations(u, e, lags, pos)
-    band = float(2 * stats.norm.ppf((1.0 + confidence) / 2.0) / math.sqrt(n))
+    band = float(stats.norm.ppf((1.0 + confidence) / 2.0) / math.sqrt(n))
     verdicts = {k: _verdict(v, band, confidence) for k, v in phis.items()}
     return CorrelationTests(
         max_lag=max_lag,
