@@ -22,6 +22,7 @@ from .errors import (
     StabilityWarning,
     UnstableModelError,
 )
+from .free_run_selection import check_criterion, criterion_path, simulation_selection
 from .output_error import FlatModel, refine
 from .regression import regression_matrix
 from .selection import forward_regression
@@ -132,9 +133,18 @@ class Narx:
     rcond : float, optional
         Relative singular-value threshold for rank decisions (default ``max(N, M) * eps``).
     n_terms : int, optional
-        Select at most this many terms per channel by orthogonal forward regression (FROLS).
+        Select at most this many terms per channel (by ``selection``).
     err_tol : float, optional
-        With forward regression, stop when the unexplained output fraction drops below this.
+        With FROLS, stop when the unexplained output fraction drops below this.
+    selection : {"frols", "simulation"}
+        How terms are chosen when ``n_terms``, ``err_tol`` or ``criterion`` is given (or always,
+        for ``"simulation"``). ``"frols"``: orthogonal forward regression by one-step error
+        reduction ratio. ``"simulation"``: forward selection with pruning by *free-run* error
+        (SEMP, :mod:`identification.free_run_selection`; at most ``n_terms``, default 40).
+    criterion : {"aic", "aicc", "bic", "fpe", "press"}, optional
+        Choose the number of terms along the selection path by this criterion (on the one-step
+        residuals for FROLS, the free-run residuals for ``"simulation"``, whose default is
+        ``"bic"``); PRESS is the leave-one-out one-step error.
     bound_factor : float
         Free-run divergence bound: ``bound_factor * max|y|`` of the identification output per
         channel (see :meth:`simulate`).
@@ -210,6 +220,8 @@ class Narx:
         holdout: float = 0.2,
         stability_margin: float = 1.5,
         max_radius: float | None = None,
+        selection: str = "frols",
+        criterion: str | None = None,
     ):
         explicit = na is not None or nb is not None or nk is not None
         if order is None and not explicit:
@@ -233,6 +245,12 @@ class Narx:
         if not bound_factor > 0:
             raise IdentificationError(f"bound_factor must be > 0, got {bound_factor!r}")
         _check_focus_options(focus, horizon, max_iter, stability_margin)
+        if selection not in ("frols", "simulation"):
+            raise IdentificationError(
+                f"selection must be 'frols' (one-step error reduction ratio) or 'simulation' "
+                f"(free-run error, SEMP), got {selection!r}"
+            )
+        check_criterion(criterion)
         if not (isinstance(holdout, (int, float)) and 0.0 <= holdout < 0.5):
             raise IdentificationError(
                 f"holdout must be a fraction in [0, 0.5) of the record, got {holdout!r}"
@@ -257,6 +275,8 @@ class Narx:
         self.holdout = float(holdout)
         self.stability_margin = float(stability_margin)
         self.max_radius = max_radius
+        self.selection = selection
+        self.criterion = criterion
 
     # ------------------------------------------------------------------ structure
     def _structure(self, ny: int, nu: int) -> tuple[ChannelStructure, ...]:
@@ -341,7 +361,14 @@ class Narx:
                     break
             else:
                 groups.append([k])
-        select = self.n_terms is not None or self.err_tol is not None
+        select = (
+            self.n_terms is not None
+            or self.err_tol is not None
+            or self.criterion is not None
+            or self.selection == "simulation"
+        )
+        self.selection_paths_ = None
+        paths: list = [None] * ny
         for g in groups:
             X = regression_matrix(u, y, channels[g[0]], start)
             if not select:
@@ -350,16 +377,38 @@ class Narx:
                     coefs[k] = np.ascontiguousarray(coef[:, j])
                 continue
             for k in g:
-                sel = forward_regression(
-                    X, y[start:, k], n_terms=self.n_terms, err_tol=self.err_tol
-                )
-                idx = sel.selected
+                idx, errs[k], paths[k] = self._select_terms(X, channels[k], k, u, y, start)
                 coefs[k] = np.ascontiguousarray(solve(X[:, idx], y[start:, k], rcond=self.rcond))
-                errs[k] = sel.err
                 final_channels[k] = ChannelStructure(
                     channels[k].regressors, channels[k].terms[idx], channels[k].order
                 )
+        if self.selection == "simulation":
+            self.selection_paths_ = tuple(paths) if select else None
+            return tuple(final_channels), tuple(coefs), None
         return tuple(final_channels), tuple(coefs), (tuple(errs) if select else None)
+
+    def _select_terms(self, X, ch, k, u, y, start):
+        """Selected column indices of channel k, their ERR (FROLS) and the path (SEMP)."""
+        if self.selection == "simulation":
+            path = simulation_selection(
+                X,
+                ch,
+                k,
+                u,
+                y,
+                start,
+                n_terms=self.n_terms,
+                criterion=self.criterion or "bic",
+                bound=float(self.bound_[k]),
+            )
+            return path.selected, None, path
+        target = y[start:, k]
+        sel = forward_regression(X, target, n_terms=self.n_terms, err_tol=self.err_tol)
+        idx, err = sel.selected, sel.err
+        if self.criterion is not None:
+            n = criterion_path(X, target, idx, err, self.criterion)
+            idx, err = idx[:n], err[:n]
+        return idx, err, None
 
     def _install(self, channels, coefs, errs="keep"):
         """Set the fitted structure and coefficients; the free-run plan is compiled now."""
@@ -662,6 +711,8 @@ class Narx:
             "holdout": self.holdout,
             "stability_margin": self.stability_margin,
             "max_radius": self.max_radius,
+            "selection": self.selection,
+            "criterion": self.criterion,
         }
 
     def save(self, path) -> Path:
@@ -771,6 +822,8 @@ class Arx(Narx):
         holdout: float = 0.2,
         stability_margin: float = 1.5,
         max_radius: float | None = None,
+        selection: str = "frols",
+        criterion: str | None = None,
     ):
         super().__init__(
             order,
@@ -791,6 +844,8 @@ class Arx(Narx):
             holdout=holdout,
             stability_margin=stability_margin,
             max_radius=max_radius,
+            selection=selection,
+            criterion=criterion,
         )
 
     def to_statespace(self, dt: float = 1.0):
