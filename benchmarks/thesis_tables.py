@@ -81,7 +81,16 @@ TABLES = [
         ["damper_load"],
         [
             Row("QanTiM 6th order (inverse)", _arx(6), thesis=(57,)),
-            Row("NARX 4th order quadratic (inverse)", _narx(4, 2, kind="full"), thesis=(24,)),
+            Row(
+                "NARX 4th order quadratic (inverse), simulation focus",
+                _narx(4, 2, kind="full", focus="simulation"),
+                thesis=(24,),
+            ),
+            Row(
+                "vrig: NARX 4th order quadratic, least squares (prediction focus)",
+                _narx(4, 2, kind="full"),
+                thesis=(None,),
+            ),
             Row(
                 "vrig: NARX 4th order quadratic, input-polynomial",
                 _narx(4, 2, kind="input-polynomial"),
@@ -99,7 +108,16 @@ TABLES = [
         [
             Row("QanTiM 4th order (inverse) IT00", _arx(4), thesis=(27,), key="arx"),
             Row("QanTiM 4th order (inverse) IT05", _arx(4), iteration=5, thesis=(17,), key="arx"),
-            Row("NARX 4th order cubic (inverse) IT00", _narx(4, 3, kind="full"), thesis=(18,)),
+            Row(
+                "NARX 4th order cubic (inverse) IT00, simulation focus",
+                _narx(4, 3, kind="full", focus="simulation"),
+                thesis=(18,),
+            ),
+            Row(
+                "vrig: NARX 4th order cubic, least squares (prediction focus), IT00",
+                _narx(4, 3, kind="full"),
+                thesis=(None,),
+            ),
             Row(
                 "vrig: NARX 4th order cubic, input-polynomial, IT00",
                 _narx(4, 3, kind="input-polynomial"),
@@ -121,14 +139,19 @@ TABLES = [
                 thesis=(35, None),
             ),
             Row(
-                "NARX 6th order quadratic (inverse), top tank",
-                _narx(6, 2, kind="full", responses=["toptank_acc"]),
+                "NARX 6th order quadratic (inverse), top tank, simulation focus",
+                _narx(6, 2, kind="full", focus="simulation", responses=["toptank_acc"]),
                 thesis=(16, None),
             ),
             Row(
-                "Non-square NARX 6th order quadratic, top tank + base",
-                _narx(6, 2, kind="full"),
+                "Non-square NARX 6th order quadratic, top tank + base, simulation focus",
+                _narx(6, 2, kind="full", focus="simulation"),
                 thesis=(14, 12),
+            ),
+            Row(
+                "vrig: NARX 6th order quadratic, top tank, least squares (prediction focus)",
+                _narx(6, 2, kind="full", responses=["toptank_acc"]),
+                thesis=(None, None),
             ),
             Row(
                 "vrig: NARX 6th order quadratic, input-polynomial, top tank",

@@ -167,13 +167,16 @@ class Narx:
         inputs). 0 fits the whole record to convergence.
     stability_margin : float
         The stability contract: after fitting, the free run is checked on the identification
-        input and on ``stability_margin`` times it (from the record's first measured outputs,
-        within ``bound_``). ``fit`` never returns a model that diverges on its identification
-        input: with ``focus="prediction"`` it raises :class:`UnstableModelError` (suggesting the
-        simulation focus); with ``focus="simulation"`` it drops the terms that feed past outputs
-        back non-linearly, refits and refines, contracts the poles of a remaining linear
-        autoregression, and raises only if that still diverges. A divergence at the margin only
-        warns (:class:`StabilityWarning`). Results in ``stability_``.
+        input and on ``stability_margin`` times it (from the record's first measured outputs and
+        from a zero past, within ``bound_``). ``fit`` never returns a model that diverges on its
+        identification input. With ``focus="prediction"`` it raises :class:`UnstableModelError`
+        (suggesting the simulation focus) and only warns (:class:`StabilityWarning`) at the
+        margin. With ``focus="simulation"`` a model must also be bounded at the margin (it is
+        meant for simulation, on inputs other than the record): otherwise the terms that feed
+        past outputs back non-linearly are dropped and the rest refitted and refined, then the
+        poles of a remaining linear autoregression are contracted; it raises only if the free
+        run on the identification input still diverges, and warns if only the margin does.
+        What was done is in ``stability_["remedy"]`` and :meth:`describe`.
     max_radius : float, optional
         For a model linear in its past outputs (:meth:`is_output_affine`): after fitting,
         contract its poles inside this radius (:meth:`stabilise`; the factor applied is
@@ -442,12 +445,13 @@ class Narx:
             self.coef_std_ = flat.split(std)
 
     def _free_run_divergence(self, u, y, scale: float):
-        """None when the free run on ``scale * u`` (from y's first outputs) stays bounded."""
-        try:
-            simulate_plan(self._plan, scale * u, y[: self.max_lag_], self.bound_,
-                          self.output_names_)
-        except SimulationDivergedError as exc:
-            return exc
+        """None when the free run on ``scale * u`` stays bounded, started both from the record's
+        first measured outputs and from a zero past (what ``simulate(u)`` does)."""
+        for y0 in (y[: self.max_lag_], None):
+            try:
+                simulate_plan(self._plan, scale * u, y0, self.bound_, self.output_names_)
+            except SimulationDivergedError as exc:
+                return exc
         return None
 
     def _enforce_stability(self, u, y) -> None:
@@ -462,8 +466,9 @@ class Narx:
                 "(past outputs enter linearly).",
                 div,
             )
-        if div is not None:
-            remedy, div = self._remedy(u, y)
+        if self.focus == "simulation" and not self._bounded(u, y):
+            remedy = self._remedy(u, y)
+            div = self._free_run_divergence(u, y, 1.0)
         if div is not None:
             raise UnstableModelError(
                 "no bounded model found: the free run diverges on the identification input "
@@ -484,28 +489,36 @@ class Narx:
                 stacklevel=3,
             )
 
-    def _remedy(self, u, y):
-        """Drop non-linear output feedback, refit, refine; then contract the poles."""
+    def _bounded(self, u, y) -> bool:
+        """Bounded free run on the identification input and at the stability margin."""
+        return all(
+            self._free_run_divergence(u, y, s) is None for s in {1.0, self.stability_margin}
+        )
+
+    def _remedy(self, u, y) -> str | None:
+        """Simulation focus, free run not bounded at 1x or at the margin: drop the terms that
+        feed past outputs back non-linearly, refit and refine; then contract the poles of the
+        remaining linear autoregression. Returns what was done (None: nothing helped)."""
         ny = self.n_outputs_
-        kept = []
-        for ch, c in zip(self.channels_, self.coef_, strict=True):
-            keep = np.array([_is_output_affine_term(ch, row, ny) for row in ch.terms])
-            kept.append((ChannelStructure(ch.regressors, ch.terms[keep], ch.order), c[keep]))
-        if any(k[0].n_terms < ch.n_terms for k, ch in zip(kept, self.channels_, strict=True)):
-            channels = tuple(k[0] for k in kept)
-            chans, coefs, _ = self._least_squares_fixed(u, y, channels)
-            self._install(chans, coefs)
+        done = []
+        channels = tuple(
+            ChannelStructure(
+                ch.regressors,
+                ch.terms[np.array([_is_output_affine_term(ch, row, ny) for row in ch.terms])],
+                ch.order,
+            )
+            for ch in self.channels_
+        )
+        if any(a.n_terms < b.n_terms for a, b in zip(channels, self.channels_, strict=True)):
+            self._install(*self._least_squares_fixed(u, y, channels)[:2])
             self._refine(u, y)
-            div = self._free_run_divergence(u, y, 1.0)
-            if div is None:
-                return "dropped the non-linear output-feedback terms", None
-        if self.is_output_affine():
+            done.append("dropped the non-linear output-feedback terms")
+            if self._bounded(u, y):
+                return "; ".join(done)
+        if self.is_output_affine() and self.pole_radius() > 0.995:
             self.contraction_ = self.stabilise(min(self.max_radius or 0.995, 0.995))
-            div = self._free_run_divergence(u, y, 1.0)
-            if div is None:
-                return "dropped non-linear output feedback; poles contracted to 0.995", None
-            return None, div
-        return None, self._free_run_divergence(u, y, 1.0)
+            done.append(f"poles contracted by {self.contraction_:.4f}")
+        return "; ".join(done) or None
 
     def _least_squares_fixed(self, u, y, channels):
         """Least squares on a given structure (no selection)."""
@@ -675,6 +688,9 @@ class Narx:
                 f"  {self.output_names_[k]}: order {ch.order}, degree {ch.degree}, "
                 f"{ch.n_regressors} regressors, {ch.n_terms} terms, max lag {ch.max_lag}"
             )
+        remedy = getattr(self, "stability_", {}).get("remedy")
+        if remedy:
+            lines.append(f"  stability contract: {remedy}")
         return "\n".join(lines)
 
     # ------------------------------------------------------------------ persistence

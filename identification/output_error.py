@@ -277,8 +277,6 @@ def _lm_stage(flat, theta, data, horizon, max_iter, tol, monitor=None):
         if delta is None:
             mu, nu = mu * nu, nu * 2.0
             continue
-        if np.linalg.norm(delta) <= tol * (np.linalg.norm(theta) + tol):
-            return theta, cost, its, True, history
         e_t, _, _ = evaluate(theta + delta, False)
         cost_t = float(e_t @ e_t) if e_t is not None else np.inf
         predicted = float(delta @ (mu * d * delta + grad))
@@ -338,8 +336,9 @@ def refine(
     max_iter : int
         Levenberg-Marquardt iterations per stage.
     tol : float
-        Stop a stage when an accepted step lowers the cost by less than this fraction, or the
-        step is below this fraction of ``|theta|``.
+        Stop a stage when an accepted step lowers the cost by less than this fraction (a step
+        criterion relative to ``|theta|`` is meaningless for ill-conditioned polynomial models,
+        whose large coefficients cancel).
     bound : ndarray (ny,), optional
         Free-run bound per channel; a trial leaving it is rejected (default: finite only).
     holdout : float
@@ -369,13 +368,20 @@ def refine(
     initial = float(e0 @ e0) if e0 is not None else np.inf
     if horizon is not None or e0 is not None:
         stages = [full]
-    else:
-        stages = _horizon_schedule(max(10, 2 * p), N)
+    else:  # continuation from the longest short horizon (<= 10, >= 2) with a finite cost
+        h0 = max(10, 2 * p)
+        while (
+            h0 > 2
+            and simulation_error(flat, theta, u, y, horizon=h0, weight=w, bound=bound)[0] is None
+        ):
+            h0 //= 2
+        stages = _horizon_schedule(max(h0, 2), N)
     total, history, converged, cost = 0, [], False, np.inf
     for i, h in enumerate(stages):
         last = i == len(stages) - 1
+        its_h = max_iter if last else max(5, max_iter // 5)  # continuation stages: a few
         theta, cost, its, converged, hist = _lm_stage(
-            flat, theta, data, h, max_iter, tol, monitor if last else None
+            flat, theta, data, h, its_h, tol, monitor if last else None
         )
         total += its
         history += hist

@@ -59,9 +59,10 @@ class _InverseTimeDomain:
     def describe(self) -> str:
         m = self.inverse.model
         src = "" if self.responses is None else f" from {self.responses}"
+        remedy = getattr(m, "stability_", {}).get("remedy")
         return (
             f"{self.name}: {type(m).__name__} {m.n_terms_.tolist()} terms, "
-            f"lead {self.inverse.lead_}{src}"
+            f"lead {self.inverse.lead_}{src}" + (f" ({remedy})" if remedy else "")
         )
 
 
@@ -91,16 +92,29 @@ class InverseNarx(_InverseTimeDomain):
     past drives linear, the recursion is a linear filter of a polynomial of the responses: its
     poles are known and kept inside the unit circle (``max_radius``), so a bounded response
     always gives a bounded drive.
+
+    ``focus="simulation"`` refines the least-squares inverse on its free-run (output-error)
+    error (:class:`identification.Narx`): what makes the text's full condensed NARX inverse
+    (``kind="full"``) usable at all, since its least-squares fit diverges in free run.
     """
 
     name = "narx"
 
-    def __init__(self, order: int = 4, degree: int = 2, *, kind: str = "input-polynomial", **kw):
+    def __init__(
+        self,
+        order: int = 4,
+        degree: int = 2,
+        *,
+        kind: str = "input-polynomial",
+        focus: str = "prediction",
+        **kw,
+    ):
         super().__init__(**kw)
-        self.order, self.degree, self.kind = order, degree, kind
+        self.order, self.degree, self.kind, self.focus = order, degree, kind, focus
+        self._model()  # validate the options now, not at identification
 
     def _model(self):
-        return Narx(order=self.order, degree=self.degree, kind=self.kind)
+        return Narx(order=self.order, degree=self.degree, kind=self.kind, focus=self.focus)
 
 
 class SplitSpectra:

@@ -1,0 +1,277 @@
+"""Simulation-accurate NARX: output-error refinement, its Jacobian, the stability contract and
+free-run term selection, against known generating systems."""
+
+from __future__ import annotations
+
+import warnings
+
+import numpy as np
+import pytest
+from scipy import signal
+
+from identification import (
+    IdentificationError,
+    InverseModel,
+    Narx,
+    StabilityWarning,
+    UnstableModelError,
+    band_limited_noise,
+    information_criteria,
+    metrics,
+    random_narx,
+    regression_matrix,
+)
+from identification.free_run_selection import criterion_path
+from identification.output_error import FlatModel, refine, simulation_error
+from identification.selection import forward_regression
+
+# y(t) = 1.5 y(t-1) - 0.7 y(t-2) + 0.5 u(t-1) + 0.3 u(t-2) + 0.1 u(t-1)^2 - 0.05 y(t-1) u(t-1)
+TRUE_TERMS = {
+    "y1(t-1)": 1.5,
+    "y1(t-2)": -0.7,
+    "u1(t-1)": 0.5,
+    "u1(t-2)": 0.3,
+    "u1(t-1)*u1(t-1)": 0.1,
+    "y1(t-1)*u1(t-1)": -0.05,
+}
+
+
+def _true_system(u: np.ndarray) -> np.ndarray:
+    """The generating NARX, written out sample by sample (independent of the package)."""
+    y = np.zeros(u.size)
+    for t in range(2, u.size):
+        y[t] = (
+            1.5 * y[t - 1]
+            - 0.7 * y[t - 2]
+            + 0.5 * u[t - 1]
+            + 0.3 * u[t - 2]
+            + 0.1 * u[t - 1] ** 2
+            - 0.05 * y[t - 1] * u[t - 1]
+        )
+    return y
+
+
+@pytest.fixture(scope="module")
+def output_noise_data():
+    """4,000 samples of the true system with 5 % (of the output RMS) noise added after the
+    recursion: output error, not equation error."""
+    u = band_limited_noise(4000, 1, cutoff=0.5, seed=1)[:, 0]
+    clean = _true_system(u)
+    rng = np.random.default_rng(0)
+    y = clean + 0.05 * np.sqrt(np.mean(clean**2)) * rng.standard_normal(u.size)
+    return u, y
+
+
+def _coef(model, name):
+    return dict(zip(model.term_names()[0], model.coef_[0], strict=True))[name]
+
+
+def test_least_squares_is_biased_and_simulation_focus_recovers_the_generating_model(
+    output_noise_data,
+):
+    u, y = output_noise_data
+    structure = dict(na=2, nb=2, nk=1, degree=2)
+    ls = Narx(**structure).fit(u, y)
+    oe = Narx(**structure, focus="simulation").fit(u, y)
+    # least squares: its own standard errors sigma^2 (X^T X)^-1 from the regression matrix
+    X = regression_matrix(u[:, None], y[:, None], ls.channels_[0], ls.max_lag_)
+    resid = y[ls.max_lag_ :] - X @ ls.coef_[0]
+    cov = resid.var() * np.linalg.inv(X.T @ X)
+    ls_std = dict(zip(ls.term_names()[0], np.sqrt(np.diag(cov)), strict=True))
+    ls_dev = {n: abs(_coef(ls, n) - v) / ls_std[n] for n, v in TRUE_TERMS.items()}
+    assert max(ls_dev.values()) > 10, ls_dev  # visibly biased: many standard errors off
+    # simulation focus: every coefficient (true ones and the spurious ones, truth 0) within
+    # three of its own standard errors of the generating value
+    std = dict(zip(oe.term_names()[0], oe.coef_std_[0], strict=True))
+    for name, value in zip(oe.term_names()[0], oe.coef_[0], strict=True):
+        truth = TRUE_TERMS.get(name, 0.0)
+        assert abs(value - truth) <= 3 * std[name], (name, value, truth, std[name])
+    # free run on fresh data against the noise-free truth: at least 2x lower NRMSE
+    u_new = band_limited_noise(4000, 1, cutoff=0.5, seed=7)[:, 0]
+    truth = _true_system(u_new)
+    e_ls = metrics.nrmse(truth, ls.simulate(u_new)[:, 0])
+    e_oe = metrics.nrmse(truth, oe.simulate(u_new)[:, 0])
+    assert e_oe * 2 <= e_ls, (e_oe, e_ls)
+    assert oe.refinement_.cost < oe.refinement_.initial_cost
+
+
+@pytest.mark.parametrize("horizon", [None, 37])
+def test_sensitivity_jacobian_equals_finite_differences_on_a_mimo_cubic_model(horizon):
+    truth = random_narx(2, 2, 2, 3, seed=11)  # cross-coupled 2x2 cubic, 285 terms per channel
+    u = band_limited_noise(300, 2, cutoff=0.3, seed=12)
+    y = truth.simulate(u) + 0.01 * np.random.default_rng(3).standard_normal((300, 2))
+    flat = FlatModel.from_channels(truth.channels_, 2, 2)
+    rng = np.random.default_rng(5)
+    theta = np.concatenate(truth.coef_) * (1 + 1e-5 * rng.standard_normal(flat.n_params))
+    assert simulation_error(flat, theta, u, y)[0] is not None
+    w = np.array([1.0, 2.0])
+    e, J, _ = simulation_error(flat, theta, u, y, horizon=horizon, weight=w, jacobian=True)
+    cols = rng.choice(flat.n_params, 40, replace=False)
+
+    def central(j, h):
+        tp, tm = theta.copy(), theta.copy()
+        tp[j] += h
+        tm[j] -= h
+        ep = simulation_error(flat, tp, u, y, horizon=horizon, weight=w)[0]
+        em = simulation_error(flat, tm, u, y, horizon=horizon, weight=w)[0]
+        return -(ep - em) / (2 * h)  # e = w (y - yhat): d yhat / d theta = -d e / d theta
+
+    for j in cols:
+        h = 1e-5 * max(abs(theta[j]), 1.0)
+        fd = (4 * central(j, h / 2) - central(j, h)) / 3  # Richardson: O(h^4)
+        rel = np.linalg.norm(fd - J[:, j]) / np.linalg.norm(J[:, j])
+        assert rel < 1e-6, (j, rel)
+
+
+def _saturating_wiener(seed=4):
+    """A Wiener system (linear filter, then tanh plus a linear part) with 5 % output noise:
+    its least-squares cubic NARX diverges in free run on its own input (seed 4)."""
+    u = band_limited_noise(3000, 1, cutoff=0.2, seed=seed)[:, 0]
+    b, a = signal.butter(2, 0.1)
+    x = 2 * signal.lfilter(b, a, u)
+    y = np.tanh(x) + 0.3 * x
+    y += 0.05 * y.std() * np.random.default_rng(seed).standard_normal(y.size)
+    return u, y
+
+
+def test_a_model_that_diverges_on_its_identification_input_is_never_returned():
+    u, y = _saturating_wiener()
+    with pytest.raises(UnstableModelError, match="focus='simulation'") as info:
+        Narx(order=3, degree=3).fit(u, y)
+    assert info.value.cause.sample < u.size  # the divergence it found on the record itself
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", StabilityWarning)
+        model = Narx(order=3, degree=3, focus="simulation").fit(u, y)
+    for y0 in (y[: model.max_lag_], None):  # bounded on its identification input
+        sim = model.simulate(u, y0=y0)
+        assert metrics.nrmse(y, sim[:, 0]) < 0.2
+    assert model.stability_["input"] is True
+
+
+def test_horizon_continuation_refines_a_diverging_least_squares_start():
+    u, y = _saturating_wiener()
+    ls = Narx(order=3, degree=3)
+    ls.n_inputs_, ls.n_outputs_ = 1, 1
+    ch = ls._structure(1, 1)
+    ls.max_lag_ = ch[0].max_lag
+    channels, coefs, _ = ls._least_squares_fixed(u[:, None], y[:, None], ch)
+    flat = FlatModel.from_channels(channels, 1, 1)
+    theta0 = np.concatenate(coefs)
+    assert simulation_error(flat, theta0, u[:, None], y[:, None])[0] is None  # LS diverges
+    res = refine(flat, theta0, u[:, None], y[:, None])
+    assert res.initial_cost == np.inf and len(res.horizons) > 2
+    assert res.horizons[-1] == u.size and np.isfinite(res.cost)
+    e = simulation_error(flat, res.theta, u[:, None], y[:, None])[0]  # whole record, bounded
+    assert e is not None and np.sqrt(np.mean(e**2)) < 0.2  # weighted: a fraction of std(y)
+
+
+def test_the_remedy_drops_output_feedback_when_refinement_cannot_save_it():
+    # white-noise 'output' unrelated to the input: a cubic NARX of it with products of past
+    # outputs is wildly unstable and carries no information; the contract must still hold
+    rng = np.random.default_rng(2)
+    u = rng.standard_normal(1500)
+    y = np.cumsum(rng.standard_normal(1500)) * 0.01 + rng.standard_normal(1500)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", StabilityWarning)
+        try:
+            model = Narx(order=2, degree=3, focus="simulation").fit(u, y)
+        except UnstableModelError as exc:  # an honest refusal is allowed by the contract
+            assert "Lower the order" in str(exc)
+            return
+    model.simulate(u, y0=y[: model.max_lag_])  # whatever it returned runs bounded
+
+
+def test_stability_margin_warns_when_the_free_run_diverges_at_1_5x_the_input():
+    # y(t) = 0.5 y(t-1) + 0.25 y(t-1)^2 + u(t-1): the fixed point y* = 2 - 2 sqrt(1 - u/...)
+    # escapes once 0.5 y + 0.25 y^2 + u > y has no stable solution (u > 0.25 for constant u)
+    u = 0.09 + 0.04 * band_limited_noise(2000, 1, cutoff=0.1, seed=3)[:, 0]
+    y = np.zeros(u.size)
+    for t in range(1, u.size):
+        y[t] = 0.5 * y[t - 1] + 0.25 * y[t - 1] ** 2 + u[t - 1]
+    big = 1.5 * u
+    yb = np.zeros(u.size)
+    with np.errstate(over="ignore", invalid="ignore"):
+        for t in range(1, u.size):
+            yb[t] = 0.5 * yb[t - 1] + 0.25 * yb[t - 1] ** 2 + big[t - 1]
+    assert not np.all(np.isfinite(yb)) or np.abs(yb).max() > 1e3  # the truth escapes at 1.5x
+    with pytest.warns(StabilityWarning, match="1.5x"):
+        model = Narx(na=1, nb=1, nk=1, degree=2).fit(u, y)
+    assert model.stability_ == {"input": True, "margin": False, "remedy": None}
+
+
+def test_simulation_focus_inverse_model_fits_and_runs():
+    u, y = _saturating_wiener(seed=9)
+    inv = InverseModel(Narx(order=3, degree=2, focus="simulation"), lead="auto").fit(u, y)
+    drive = inv.simulate(y, bound=np.inf)
+    assert metrics.nrmse(u[: u.size - inv.lead_], drive[: u.size - inv.lead_, 0]) < 0.5
+
+
+def test_simulation_selection_finds_the_generating_terms_where_frols_adds_a_spurious_one(
+    output_noise_data,
+):
+    u, y = output_noise_data
+    candidates = dict(na=2, nb=2, nk=1, degree=3)  # 34 candidate terms
+    semp = Narx(**candidates, selection="simulation").fit(u, y)
+    assert set(semp.term_names()[0]) == set(TRUE_TERMS)
+    assert semp.selection_paths_[0].criterion.size >= len(TRUE_TERMS)
+    frols = Narx(**candidates, n_terms=14, criterion="bic").fit(u, y)
+    assert set(frols.term_names()[0]) != set(TRUE_TERMS)  # one-step ERR is misled by the noise
+
+
+def test_criterion_path_matches_refitting_every_frols_prefix(output_noise_data):
+    u, y = output_noise_data
+    model = Narx(na=2, nb=2, nk=1, degree=2)
+    model.n_inputs_, model.n_outputs_ = 1, 1
+    ch = model._structure(1, 1)[0]
+    X = regression_matrix(u[:, None], y[:, None], ch, ch.max_lag)
+    target = y[ch.max_lag :]
+    sel = forward_regression(X, target)
+    for name in ("aic", "bic", "fpe"):
+        brute = []
+        for n in range(1, sel.selected.size + 1):
+            cols = sel.selected[:n]
+            coef, *_ = np.linalg.lstsq(X[:, cols], target, rcond=None)
+            ic = information_criteria(target - X[:, cols] @ coef, n)
+            brute.append(getattr(ic, name))
+        assert criterion_path(X, target, sel.selected, sel.err, name) == int(np.argmin(brute)) + 1
+
+
+def test_save_and_load_keep_the_new_options_and_standard_errors(tmp_path, output_noise_data):
+    u, y = output_noise_data
+    model = Narx(na=2, nb=2, nk=1, degree=2, focus="simulation", holdout=0.1, max_iter=20)
+    model.fit(u, y)
+    back = Narx.load(model.save(tmp_path / "oe"))
+    assert (back.focus, back.holdout, back.max_iter) == ("simulation", 0.1, 20)
+    for a, b in zip(model.coef_std_, back.coef_std_, strict=True):
+        np.testing.assert_array_equal(a, b)
+    np.testing.assert_array_equal(model.simulate(u), back.simulate(u))
+
+
+@pytest.mark.parametrize(
+    ("options", "message"),
+    [
+        ({"focus": "free-run"}, "focus must be 'prediction'"),
+        ({"horizon": 0}, "horizon must be a positive number of samples"),
+        ({"horizon": 2.5}, "horizon must be a positive number of samples"),
+        ({"horizon": True}, "horizon must be a positive number of samples"),
+        ({"max_iter": 0}, "max_iter must be a positive integer"),
+        ({"stability_margin": 0.5}, "stability_margin must be a finite factor >= 1"),
+        ({"stability_margin": float("nan")}, "stability_margin must be a finite factor >= 1"),
+        ({"stability_margin": float("inf")}, "stability_margin must be a finite factor >= 1"),
+        ({"holdout": 0.6}, "holdout must be a fraction in"),
+        ({"holdout": -0.1}, "holdout must be a fraction in"),
+        ({"selection": "ofr"}, "selection must be 'frols'"),
+        ({"criterion": "mdl"}, "criterion must be one of"),
+        ({"max_radius": 1.5}, "max_radius must lie in"),
+    ],
+)
+def test_every_new_option_rejects_bad_input_clearly(options, message):
+    with pytest.raises(IdentificationError, match=message):
+        Narx(order=2, degree=2, **options)
+
+
+def test_holdout_too_short_for_the_model_is_refused():
+    u = band_limited_noise(300, 1, seed=1)[:, 0]
+    y = _true_system(u)
+    with pytest.raises(IdentificationError, match="holdout"):
+        Narx(order=3, degree=3, focus="simulation", holdout=0.45).fit(u, y)
