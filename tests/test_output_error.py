@@ -282,3 +282,17 @@ def test_holdout_too_short_for_the_model_is_refused():
     y = _true_system(u)
     with pytest.raises(IdentificationError, match="holdout"):
         Narx(order=3, degree=3, focus="simulation", holdout=0.45).fit(u, y)
+
+
+@pytest.mark.parametrize("kind", ["full", "pure", "quasi-static", "input-polynomial"])
+def test_simulation_focus_lowers_the_free_run_error_for_every_term_kind(kind, output_noise_data):
+    u, y = output_noise_data
+    model = Narx(order=2, degree=2, kind=kind, focus="simulation", holdout=0.0, max_iter=20)
+    model.fit(u, y)
+    ref = model.refinement_
+    assert ref.cost <= ref.initial_cost  # never worse than the least-squares start
+    assert ref.history and ref.history[0] < ref.initial_cost  # and it did move
+    ls = Narx(order=2, degree=2, kind=kind).fit(u, y)
+    p = model.max_lag_
+    err = [metrics.rmse(y[p:], m.simulate(u, y0=y[:p])[p:, 0]) for m in (ls, model)]
+    assert err[1] < err[0]
