@@ -431,6 +431,9 @@ def problem_c(report: Report, repeats: int, sip: SysIdentPy | None) -> None:
         )
         progress("problem C: free-run (SEMP) selection over 220 candidates")
         t_sel, semp = best_of(lambda: vrig_model(selection="simulation").fit(u_id, y_id), 1)
+        t_both, both = best_of(
+            lambda: vrig_model(selection="simulation", focus="simulation").fit(u_id, y_id), 1
+        )
     label = f"vrig refinement, {A_N_TERMS} terms, {A_N_ID:,} samples (fit incl. LS)"
     report.add(
         "C",
@@ -447,7 +450,8 @@ def problem_c(report: Report, repeats: int, sip: SysIdentPy | None) -> None:
         "  the same to convergence (holdout=0)",
         t_conv,
         "s",
-        note=f"{conv.refinement_.iterations} LM iterations",
+        note=f"{conv.refinement_.iterations} LM iterations"
+        + (f"; {conv.stability_['remedy']}" if conv.stability_["remedy"] else ""),
     )
     report.add(
         "C",
@@ -463,6 +467,7 @@ def problem_c(report: Report, repeats: int, sip: SysIdentPy | None) -> None:
         ("oe", "simulation focus", oe),
         ("oe_conv", "simulation focus, converged", conv),
         ("semp", "SEMP selection", semp),
+        ("semp_oe", f"SEMP + simulation focus ({t_both:.2f} s)", both),
     ):
         report.add(
             "C",
