@@ -324,3 +324,18 @@ def test_the_shock_absorber_full_narx_inverse_is_bounded_only_with_simulation_fo
     model.simulate(response[lead:])  # from a zero past: raises if it diverges
     sim = model.simulate(response[lead:], y0=drive[: model.max_lag_])
     assert metrics.qantim_fit_dc(drive[: n - lead], sim)[0] < 20  # ARX(4) inverse: 15 %
+
+
+def test_free_run_residuals_of_the_simulation_fit_are_the_white_output_noise(output_noise_data):
+    """The noise was added white to the output: a correct output-error model leaves exactly it,
+    so every Billings-Voon test passes; the biased least-squares model fails them."""
+    from identification import correlation_tests
+
+    u, y = output_noise_data
+    candidates = dict(na=2, nb=2, nk=1, degree=3)
+    oe = Narx(**candidates, selection="simulation", focus="simulation").fit(u, y)
+    ls = Narx(**candidates, n_terms=14, criterion="bic").fit(u, y)
+    ok = correlation_tests(u, y - oe.simulate(u, y0=y[:2])[:, 0])
+    bad = correlation_tests(u, y - ls.simulate(u, y0=y[:2])[:, 0])
+    assert ok.all_passed, ok.table()
+    assert not np.any([np.any(v) for v in bad.passed.values()]), bad.table()  # fails all five
