@@ -316,6 +316,20 @@ class Narx:
         (see ``stability_margin``) is enforced before the model is returned.
         """
         t0 = time.perf_counter()
+        u, y = self._fit_least_squares(u, y, input_names, output_names)
+        if self.focus == "simulation":
+            self._refine(u, y)
+        self.contraction_ = 1.0
+        if self.max_radius is not None and self.is_output_affine():
+            self.contraction_ = self.stabilise(self.max_radius)
+        self._enforce_stability(u, y)
+        self.fit_time_ = time.perf_counter() - t0
+        return self
+
+    def _fit_least_squares(self, u, y, input_names=None, output_names=None):
+        """Validate, build the structure and fit by least squares (no refinement, no stability
+        contract: for generators such as :func:`~identification.random_narx` that check their
+        own). Returns the validated ``u, y``."""
         u = as_signal(u, "u")
         y = as_signal(y, "y")
         check_same_length(u, y, "u", "y")
@@ -340,14 +354,10 @@ class Narx:
         self.max_lag_ = start
         self._install(*self._least_squares(u, y, channels, start))
         self.refinement_, self.coef_std_ = None, None
-        if self.focus == "simulation":
-            self._refine(u, y)
         self.contraction_ = 1.0
-        if self.max_radius is not None and self.is_output_affine():
-            self.contraction_ = self.stabilise(self.max_radius)
-        self._enforce_stability(u, y)
-        self.fit_time_ = time.perf_counter() - t0
-        return self
+        self.stability_ = {"input": None, "margin": None, "remedy": None}
+        self.fit_time_ = float("nan")
+        return u, y
 
     def _least_squares(self, u, y, channels, start):
         """One-step least squares (with forward selection when asked): channels, coefs, errs."""

@@ -246,3 +246,11 @@ def test_repeatability_rejects_bad_arguments(capsys):
     assert "--runs must be 2..50" in capsys.readouterr().err
     assert main(["repeatability", "--rig", "nope"]) == 2
     assert "unknown rig" in capsys.readouterr().err
+
+
+def test_demo_says_when_the_stability_contract_refuses_the_fit(capsys):
+    # seed 5 with 4,000 samples: the least-squares cubic model (454 terms per output, 3,000
+    # identification samples) diverges on its own input from a zero past
+    assert main(["demo", "--samples", "4000", "--seed", "5"]) == 1
+    err = capsys.readouterr().err
+    assert "diverges on its own identification input" in err and "--samples" in err

@@ -105,7 +105,7 @@ def test_sensitivity_jacobian_equals_finite_differences_on_a_mimo_cubic_model(ho
     theta = np.concatenate(truth.coef_) * (1 + 1e-5 * rng.standard_normal(flat.n_params))
     assert simulation_error(flat, theta, u, y)[0] is not None
     w = np.array([1.0, 2.0])
-    e, J, _ = simulation_error(flat, theta, u, y, horizon=horizon, weight=w, jacobian=True)
+    _e, J, _ = simulation_error(flat, theta, u, y, horizon=horizon, weight=w, jacobian=True)
     cols = rng.choice(flat.n_params, 16, replace=False)
 
     def central(j, h):

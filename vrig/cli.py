@@ -502,7 +502,17 @@ def main(argv: list[str] | None = None) -> int:
         if not 0 <= args.noise < 1:
             print("vrig demo: --noise must be in [0, 1)", file=sys.stderr)
             return 2
-        run_demo(seed=args.seed, n_samples=args.samples, noise=args.noise)
+        from identification.errors import UnstableModelError
+
+        try:
+            run_demo(seed=args.seed, n_samples=args.samples, noise=args.noise)
+        except UnstableModelError as exc:  # the stability contract refused the fit
+            print(
+                f"vrig demo: {exc} ({args.samples} samples are few for the 454 terms per output: "
+                "try more --samples)",
+                file=sys.stderr,
+            )
+            return 1
         return 0
     from identification.errors import IdentificationError, SimulationDivergedError
 
