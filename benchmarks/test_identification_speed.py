@@ -142,3 +142,19 @@ def test_predict(benchmark, request, name: str) -> None:
     p: Problem = request.getfixturevalue(name)
     y = benchmark(p.model.predict, p.u, p.y)
     assert y.shape == p.y.shape
+
+
+@pytest.mark.benchmark(group="simulation-focus")
+@pytest.mark.parametrize("name", ["siso", "mimo"])
+def test_fit_simulation_focus(benchmark, request, name: str) -> None:
+    """Output-error refinement (least squares, then Levenberg-Marquardt on the free run)."""
+    p: Problem = request.getfixturevalue(name)
+    model = benchmark(lambda: p.fresh(focus="simulation", max_iter=10).fit(p.u, p.y))
+    assert model.refinement_ is not None and model.stability_["input"]
+
+
+@pytest.mark.benchmark(group="simulation-focus")
+def test_fit_simulation_selection(benchmark, siso: Problem) -> None:
+    """SEMP term selection by free-run error over the 84 SISO candidates."""
+    model = benchmark(lambda: siso.fresh(selection="simulation", n_terms=10).fit(siso.u, siso.y))
+    assert 1 <= model.n_terms_[0] <= 10
