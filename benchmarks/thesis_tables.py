@@ -96,6 +96,11 @@ TABLES = [
                 _narx(4, 2, kind="input-polynomial"),
                 thesis=(None,),
             ),
+            Row(
+                "vrig: NARX 4th order quadratic, terms by free run (SEMP), simulation focus",
+                _narx(4, 2, kind="full", focus="simulation", selection="simulation"),
+                thesis=(None,),
+            ),
         ],
         "v[1][0] < v[0][0]",
         "NARX below QanTiM",
@@ -121,6 +126,11 @@ TABLES = [
             Row(
                 "vrig: NARX 4th order cubic, input-polynomial, IT00",
                 _narx(4, 3, kind="input-polynomial"),
+                thesis=(None,),
+            ),
+            Row(
+                "vrig: NARX 4th order cubic, terms by free run (SEMP), simulation focus, IT00",
+                _narx(4, 3, kind="full", focus="simulation", selection="simulation"),
                 thesis=(None,),
             ),
         ],

@@ -96,6 +96,8 @@ class InverseNarx(_InverseTimeDomain):
     ``focus="simulation"`` refines the least-squares inverse on its free-run (output-error)
     error (:class:`identification.Narx`): what makes the text's full condensed NARX inverse
     (``kind="full"``) usable at all, since its least-squares fit diverges in free run.
+    ``selection="simulation"`` chooses the terms by free-run error (SEMP; ``n_terms`` caps,
+    ``criterion`` sizes), which keeps only the output-feedback terms that simulate well.
     """
 
     name = "narx"
@@ -107,14 +109,26 @@ class InverseNarx(_InverseTimeDomain):
         *,
         kind: str = "input-polynomial",
         focus: str = "prediction",
+        selection: str = "frols",
+        n_terms: int | None = None,
+        criterion: str | None = None,
         **kw,
     ):
         super().__init__(**kw)
         self.order, self.degree, self.kind, self.focus = order, degree, kind, focus
+        self.selection, self.n_terms, self.criterion = selection, n_terms, criterion
         self._model()  # validate the options now, not at identification
 
     def _model(self):
-        return Narx(order=self.order, degree=self.degree, kind=self.kind, focus=self.focus)
+        return Narx(
+            order=self.order,
+            degree=self.degree,
+            kind=self.kind,
+            focus=self.focus,
+            selection=self.selection,
+            n_terms=self.n_terms,
+            criterion=self.criterion,
+        )
 
 
 class SplitSpectra:
