@@ -121,10 +121,12 @@ class Narx:
         nk .. nk + nb - 1 of each input (MATLAB ``arx`` convention); an int applies to every
         channel, a sequence gives one value per source channel, a 2-D table one per
         (output channel, source channel). ``nk`` defaults to 0.
-    kind : {"full", "pure", "quasi-static"}
+    kind : {"full", "pure", "quasi-static", "input-polynomial"}
         Term set: all monomials (eq. 5-8), pure powers without cross products (purely
-        quadratic NARX, eq. 5-24), or linear plus pure powers of the lag-0 inputs
-        (quasi-static NARX, eq. 5-25).
+        quadratic NARX, eq. 5-24), linear plus pure powers of the lag-0 inputs
+        (quasi-static NARX, eq. 5-25), or linear plus every monomial of the input regressors
+        (past outputs enter linearly: the free run is stable exactly when its linear
+        autoregression is).
     constant : bool
         Include a constant term (the full-order NARX of the reference text has none).
     solver : str or callable
@@ -456,8 +458,16 @@ class Narx:
 
     def _free_run_divergence(self, u, y, scale: float):
         """None when the free run on ``scale * u`` stays bounded, started both from the record's
-        first measured outputs and from a zero past (what ``simulate(u)`` does)."""
-        for y0 in (y[: self.max_lag_], None):
+        first measured outputs and from a zero past (what ``simulate(u)`` does).
+
+        A model linear in its past outputs with every pole inside the unit circle is stable:
+        bounded inputs give bounded outputs whatever the start, so only the record's own start
+        is checked (a zero past can give a large but decaying start-up transient when the
+        coefficients are large and cancel, which is not a divergence)."""
+        starts = [y[: self.max_lag_]]
+        if not (self.is_output_affine() and self.pole_radius() < 1.0):
+            starts.append(None)
+        for y0 in starts:
             try:
                 simulate_plan(self._plan, scale * u, y0, self.bound_, self.output_names_)
             except SimulationDivergedError as exc:

@@ -188,6 +188,11 @@ class RefinementResult:
     converged : bool
     history : list of float
         Cost after each accepted step.
+    kept_step : int or None
+        With early stopping: the accepted step of the last stage whose held-out free run was
+        best (0: the stage's starting coefficients, i.e. no refinement helped on held-out
+        data; a short or unrepresentative held-out part can cause that: try ``holdout=0``).
+        None without a holdout.
     """
 
     theta: np.ndarray
@@ -198,6 +203,7 @@ class RefinementResult:
     covariance: np.ndarray | None
     converged: bool
     history: list[float] = field(default_factory=list)
+    kept_step: int | None = None
 
 
 def _check_budget(rows: int, n_params: int) -> None:
@@ -217,6 +223,7 @@ class _Monitor:
         self.flat, self.u, self.y, self.w, self.bound = flat, u, y, w, bound
         self.patience = patience
         self.best_theta, self.best, self.since = None, np.inf, 0
+        self.seen, self.best_step = 0, None
 
     def score(self, theta) -> float:
         e, _, _ = simulation_error(
@@ -227,8 +234,10 @@ class _Monitor:
     def update(self, theta) -> bool:
         """Record ``theta``; True when the held-out error has not improved for ``patience``."""
         v = self.score(theta)
+        self.seen += 1
         if v < self.best * (1 - 1e-9):
             self.best_theta, self.best, self.since = theta.copy(), v, 0
+            self.best_step = self.seen - 1
         else:
             self.since += 1
         return self.since >= self.patience
@@ -395,7 +404,8 @@ def refine(
             flat, theta, u, y, horizon=stages[-1], weight=w, bound=bound, jacobian=True
         )
         cov = _covariance(e, J, flat)
-    return RefinementResult(theta, cost, initial, total, stages, cov, converged, history)
+    kept = None if monitor is None else monitor.best_step
+    return RefinementResult(theta, cost, initial, total, stages, cov, converged, history, kept)
 
 
 def _covariance(e, J, flat: FlatModel):

@@ -339,3 +339,32 @@ def test_free_run_residuals_of_the_simulation_fit_are_the_white_output_noise(out
     bad = correlation_tests(u, y - ls.simulate(u, y0=y[:2])[:, 0])
     assert ok.all_passed, ok.table()
     assert not np.any([np.any(v) for v in bad.passed.values()]), bad.table()  # fails all five
+
+
+def test_early_stopping_reports_which_step_it_kept(output_noise_data):
+    u, y = output_noise_data
+    model = Narx(na=2, nb=2, nk=1, degree=2, focus="simulation").fit(u, y)
+    kept = model.refinement_.kept_step
+    assert kept is not None and 1 <= kept <= len(model.refinement_.history)  # it did refine
+    full = Narx(na=2, nb=2, nk=1, degree=2, focus="simulation", holdout=0.0).fit(u, y)
+    assert full.refinement_.kept_step is None
+
+
+def test_a_stable_linear_autoregression_is_not_refused_for_a_zero_past_transient():
+    # y(t) = 1.6 y(t-1) - 0.8 y(t-2) + u(t-1): stable (|poles| = 0.89), underdamped; the record
+    # sits at its level 250 (u = 50), a zero past starts at 0 and overshoots past the bound
+    # (1.2 x max|y|) before it decays: a start-up transient, not a divergence
+    from identification import SimulationDivergedError
+
+    rng = np.random.default_rng(4)
+    u = 50.0 + 0.1 * rng.standard_normal(3000)
+    y = np.full(3000, 250.0)
+    for t in range(2, 3000):
+        y[t] = 1.6 * y[t - 1] - 0.8 * y[t - 2] + u[t - 1]
+    y += 0.01 * rng.standard_normal(3000)
+    model = Narx(na=2, nb=1, nk=1, degree=1, bound_factor=1.2).fit(u, y)
+    assert model.pole_radius() < 0.95  # stable (true 0.894; a weakly excited estimate)
+    assert model.stability_["input"] is True
+    with pytest.raises(SimulationDivergedError):
+        model.simulate(u)  # the transient does exceed the bound from a zero past
+    model.simulate(u, y0=y[:2])  # and the record's own start runs bounded
