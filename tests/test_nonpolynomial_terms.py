@@ -218,6 +218,17 @@ def test_auto_deadzone_forward_selection_picks_the_true_breakpoint():
     assert m.pole_radius() == pytest.approx(0.5, abs=1e-8)
 
 
+def test_auto_breakpoints_skip_a_constant_source():
+    rng = np.random.default_rng(12)
+    u = np.column_stack([rng.standard_normal(500), np.ones(500)])  # u2 has zero deviation
+    y = rng.standard_normal(500)
+    m = Narx(na=1, nb=1, degree=1, functions=[("saturation", "auto")]).fit(u, y)
+    ch = m.channels_[0]
+    s = np.std(u[:, 0])
+    assert m.term_names()[0][3:] == [f"saturation(u1(t), {f * s:.6g})" for f in (0.25, 0.5, 1.0)]
+    assert ch.regressors[ch.functions != 0].tolist() == [[1, 0]] * 3
+
+
 @pytest.mark.parametrize("kind", ["full", "pure", "quasi-static", "input-polynomial"])
 @pytest.mark.parametrize("explicit", [False, True])
 def test_every_term_kind_with_constant_and_either_order_form(kind, explicit):
