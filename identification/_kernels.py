@@ -1,12 +1,16 @@
 """Compiled kernels (numba): term expansion and the free-run recursion.
 
 Internal module: callers validate inputs. Arrays are contiguous; integer tables are int64.
+Regressors may pass through static functions (codes and breakpoints of
+:mod:`identification._transforms`); models without them take the plain paths.
 """
 
 from __future__ import annotations
 
 import numba as nb
 import numpy as np
+
+from ._transforms import apply
 
 __all__ = ["expand_terms", "free_run", "input_coefficients"]
 
@@ -43,11 +47,12 @@ def expand_terms(Z, terms, out):  # pragma: no cover - compiled
 
 @nb.njit(cache=True, nogil=True)
 def input_coefficients(
-    U, t0, t1, reg_src, reg_lag, parent, factor, e_mono, e_col, e_coef, columns, A
+    U, t0, t1, reg_src, reg_lag, reg_fun, reg_bp, parent, factor, e_mono, e_col, e_coef, columns, A
 ):  # pragma: no cover
     """Input-dependent coefficients ``A[t - t0, col]`` of the output monomials, t in [t0, t1).
 
-    Input regressor r is ``U[t - reg_lag[r], reg_src[r]]``; input monomial i is
+    Input regressor r is ``g(U[t - reg_lag[r], reg_src[r]])`` with ``g`` the function
+    ``reg_fun[r]`` (breakpoint ``reg_bp[r]``; 0 = identity, a plain copy); input monomial i is
     ``P[:, parent[i]] * Z[:, factor[i]]`` (monomial 0 = 1, ``Z[:, 0] = 1``); entry e adds
     ``e_coef[e] * P[:, e_mono[e]]`` to column ``e_col[e]`` of ``A``. ``A`` is Fortran-ordered;
     the listed ``columns`` are zeroed first. Every loop runs along time, so it vectorises.
@@ -60,8 +65,14 @@ def input_coefficients(
     for r in range(R):
         s = reg_src[r]
         base = t0 - reg_lag[r]
-        for i in range(n):
-            Z[r + 1, i] = U[base + i, s]
+        code = reg_fun[r]
+        if code == 0:
+            for i in range(n):
+                Z[r + 1, i] = U[base + i, s]
+        else:
+            b = reg_bp[r]
+            for i in range(n):
+                Z[r + 1, i] = apply(code, b, U[base + i, s])
     P = np.empty((parent.shape[0], n))
     for i in range(n):
         P[0, i] = 1.0
@@ -83,7 +94,7 @@ def input_coefficients(
 
 @nb.njit(cache=True, nogil=True)
 def free_run(
-    Y, start, stop, A, reg_src, reg_lag, reg_ptr, parent, factor, mono_ptr, bound
+    Y, start, stop, A, reg_src, reg_lag, reg_fun, reg_bp, reg_ptr, parent, factor, mono_ptr, bound
 ):  # pragma: no cover
     """Free-run recursion of a MIMO polynomial NARX model written as a polynomial in past outputs.
 
@@ -91,7 +102,8 @@ def free_run(
     computed. Channel ``k`` has output regressors ``reg_ptr[k]:reg_ptr[k+1]`` (output index, lag
     >= 1) and output monomials ``mono_ptr[k]:mono_ptr[k+1]``; monomial 0 of each channel is the
     constant and monomial ``m`` is ``mono[parent[m]] * z[factor[m]]`` with ``z[0] = 1``,
-    ``z[r + 1]`` = output regressor r. ``A[t - start, m]`` is the coefficient of monomial m at
+    ``z[r + 1]`` = output regressor r passed through its function ``reg_fun[r]`` (breakpoint
+    ``reg_bp[r]``; when every code is 0 the plain copy loop runs). ``A[t - start, m]`` is the coefficient of monomial m at
     time t: everything that depends only on the inputs, precomputed outside the recursion, so
     the loop costs one multiplication and one multiply-add per distinct output monomial.
     Returns ``(-1, -1)`` or the (channel, sample) where ``|y|`` exceeded ``bound[channel]`` or
@@ -103,6 +115,10 @@ def free_run(
     for k in range(ny):
         max_r = max(max_r, reg_ptr[k + 1] - reg_ptr[k])
         max_m = max(max_m, mono_ptr[k + 1] - mono_ptr[k])
+    plain = True
+    for r in range(reg_fun.shape[0]):
+        if reg_fun[r] != 0:
+            plain = False
     z = np.empty(max_r + 1)
     mono = np.empty(max_m)
     z[0] = 1.0
@@ -111,8 +127,13 @@ def free_run(
         row = t - start
         for k in range(ny):
             r0 = reg_ptr[k]
-            for r in range(reg_ptr[k + 1] - r0):
-                z[r + 1] = Y[t - reg_lag[r0 + r], reg_src[r0 + r]]
+            if plain:
+                for r in range(reg_ptr[k + 1] - r0):
+                    z[r + 1] = Y[t - reg_lag[r0 + r], reg_src[r0 + r]]
+            else:
+                for r in range(reg_ptr[k + 1] - r0):
+                    x = Y[t - reg_lag[r0 + r], reg_src[r0 + r]]
+                    z[r + 1] = apply(reg_fun[r0 + r], reg_bp[r0 + r], x)
             m0 = mono_ptr[k]
             nm = mono_ptr[k + 1] - m0
             par = parent[m0 : m0 + nm]

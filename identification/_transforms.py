@@ -23,7 +23,7 @@ from __future__ import annotations
 import numba as nb
 import numpy as np
 
-__all__ = ["FUNCTIONS", "apply", "derivative", "function_code"]
+__all__ = ["FUNCTIONS", "apply", "apply_array", "derivative", "function_code"]
 
 FUNCTIONS = ("identity", "abs", "deadzone", "saturation", "sign_square")
 NEEDS_BREAKPOINT = ("deadzone", "saturation")

@@ -7,6 +7,7 @@ thesis's ``Mpar_k`` generalised to any degree) and one coefficient vector per ch
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import time
 import warnings
@@ -14,6 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ._transforms import FUNCTIONS
 from ._validation import as_signal, check_same_length, per_channel_int
 from .errors import (
     IdentificationError,
@@ -29,16 +31,20 @@ from .selection import forward_regression
 from .simulation import compile_plan, simulate_plan
 from .solvers import get_solver
 from .structure import (
+    AUTO_BREAKPOINTS,
+    FUNCTION_SOURCES,
     TERM_KINDS,
     ChannelStructure,
     explicit_regressors,
     full_order_regressors,
+    function_regressors,
+    function_specs,
     polynomial_terms,
 )
 
 __all__ = ["Arx", "Narx"]
 
-_FORMAT_VERSION = 1
+_FORMAT_VERSION = 2  # 2: per-channel regressor functions and breakpoints (1 had none)
 
 
 def _names(given, n: int, prefix: str, what: str) -> tuple[str, ...]:
@@ -129,6 +135,21 @@ class Narx:
         autoregression is).
     constant : bool
         Include a constant term (the full-order NARX of the reference text has none).
+    functions : sequence, optional
+        Non-polynomial terms (§7.4.1: dead band, saturation/backlash-like limits). Each item is
+        ``"abs"`` (``|x|``), ``"sign_square"`` (``x |x|``), ``("deadzone", b)``
+        (``sign(x) max(|x| - b, 0)``) or ``("saturation", b)`` (``clip(x, -b, b)``), with the
+        breakpoint ``b`` a positive number in the source signal's units, or ``"auto"``: one
+        candidate at each of 0.25, 0.5 and 1.0 times the source channel's standard deviation on
+        the identification data (a constant source gets none). Every function version of each
+        selected regressor (see ``function_sources``) is added as a linear term after the
+        polynomial terms: ``#functions x #breakpoints x #regressors`` more terms, no products
+        with them. With ``n_terms``/``err_tol`` forward regression chooses among them (e.g. the
+        best "auto" breakpoint); otherwise least squares weighs them all.
+    function_sources : {"inputs", "outputs", "all"}
+        Which regressors get the function versions: the channel's input regressors (default),
+        its past-output regressors, or both. A function of a past output makes the model
+        non-affine in its outputs (no poles, no state-space form).
     solver : str or callable
         ``"qr"`` (default), ``"householder"``, ``"mgs"``, ``"cgs"``, ``"svd"``, ``"normal"`` or a
         function ``solver(X, Y, *, rcond=None)``.
@@ -227,6 +248,8 @@ class Narx:
         max_radius: float | None = None,
         selection: str = "frols",
         criterion: str | None = None,
+        functions=None,
+        function_sources: str = "inputs",
     ):
         explicit = na is not None or nb is not None or nk is not None
         if order is None and not explicit:
@@ -264,6 +287,11 @@ class Narx:
             raise IdentificationError(
                 f"max_radius must lie in (0, 1] or be None, got {max_radius!r}"
             )
+        specs = function_specs(functions)
+        if function_sources not in FUNCTION_SOURCES:
+            raise IdentificationError(
+                f"function_sources must be one of {FUNCTION_SOURCES}, got {function_sources!r}"
+            )
         self.order = order
         self.degree = degree
         self.na, self.nb, self.nk = na, nb, nk
@@ -282,9 +310,13 @@ class Narx:
         self.max_radius = max_radius
         self.selection = selection
         self.criterion = criterion
+        self.functions = specs or None
+        self.function_sources = function_sources
 
     # ------------------------------------------------------------------ structure
-    def _structure(self, ny: int, nu: int) -> tuple[ChannelStructure, ...]:
+    def _structure(self, ny: int, nu: int, scale: np.ndarray) -> tuple[ChannelStructure, ...]:
+        """Channel structures; ``scale`` (ny + nu,): the sources' standard deviations on the
+        identification data (for "auto" breakpoints)."""
         degrees = per_channel_int(self.degree, ny, "degree", minimum=1)
         if self.order is not None:
             orders = per_channel_int(self.order, ny, "order", minimum=0)
@@ -304,8 +336,26 @@ class Narx:
             terms = polynomial_terms(
                 regs[k], degrees[k], kind=self.kind, constant=self.constant, ny=ny
             )
-            channels.append(ChannelStructure(regs[k], terms, orders[k]))
+            channels.append(self._with_functions(regs[k], terms, orders[k], ny, scale))
         return tuple(channels)
+
+    def _with_functions(self, regs, terms, order, ny: int, scale) -> ChannelStructure:
+        """The channel with its function regressors appended, one linear term each."""
+        if not self.functions:
+            return ChannelStructure(regs, terms, order)
+        fregs, funs, bps = function_regressors(
+            regs, self.functions, sources=self.function_sources, ny=ny, scale=scale
+        )
+        R, L = regs.shape[0], terms.shape[1]
+        extra = np.zeros((fregs.shape[0], L), dtype=np.int64)
+        extra[:, -1] = np.arange(R + 1, R + 1 + fregs.shape[0])
+        return ChannelStructure(
+            np.concatenate([regs, fregs]),
+            np.concatenate([terms, extra]),
+            order,
+            np.concatenate([np.zeros(R, dtype=np.int64), funs]),
+            np.concatenate([np.zeros(R), bps]),
+        )
 
     # ------------------------------------------------------------------ fitting
     def fit(self, u, y, *, input_names=None, output_names=None):
@@ -337,7 +387,7 @@ class Narx:
         check_same_length(u, y, "u", "y")
         N, nu = u.shape
         ny = y.shape[1]
-        channels = self._structure(ny, nu)
+        channels = self._structure(ny, nu, np.concatenate([y.std(axis=0), u.std(axis=0)]))
         start = max(ch.max_lag for ch in channels)
         rows = N - start
         for k, ch in enumerate(channels):
@@ -394,9 +444,7 @@ class Narx:
             for k in g:
                 idx, errs[k], paths[k] = self._select_terms(X, channels[k], k, u, y, start)
                 coefs[k] = np.ascontiguousarray(solve(X[:, idx], y[start:, k], rcond=self.rcond))
-                final_channels[k] = ChannelStructure(
-                    channels[k].regressors, channels[k].terms[idx], channels[k].order
-                )
+                final_channels[k] = dataclasses.replace(channels[k], terms=channels[k].terms[idx])
         if self.selection == "simulation":
             self.selection_paths_ = tuple(paths) if select else None
             return tuple(final_channels), tuple(coefs), None
@@ -522,10 +570,8 @@ class Narx:
         ny = self.n_outputs_
         done = []
         channels = tuple(
-            ChannelStructure(
-                ch.regressors,
-                ch.terms[np.array([_is_output_affine_term(ch, row, ny) for row in ch.terms])],
-                ch.order,
+            dataclasses.replace(
+                ch, terms=ch.terms[[_is_output_affine_term(ch, row, ny) for row in ch.terms]]
             )
             for ch in self.channels_
         )
@@ -551,8 +597,9 @@ class Narx:
 
     def is_output_affine(self) -> bool:
         """True when past outputs enter only linearly (ARX, ``kind="input-polynomial"``, or a
-        selected model without output products): then the free run is a linear recursion
-        driven by a polynomial of the inputs, with poles :meth:`pole_radius` can bound."""
+        selected model without output products, and no function of a past output): then the
+        free run is a linear recursion driven by the inputs, with poles :meth:`pole_radius`
+        can bound."""
         try:
             self._output_lag_terms()
         except IdentificationError:
@@ -566,8 +613,8 @@ class Narx:
         out = []
         for k, ch in enumerate(self.channels_):
             for t, row in enumerate(ch.terms):
-                factors = [ch.regressors[i - 1] for i in row if i > 0]
-                outs = [(src, lag) for src, lag in factors if src < ny]
+                factors = [i - 1 for i in row if i > 0]
+                outs = [i for i in factors if ch.regressors[i, 0] < ny]
                 if not outs:
                     continue
                 if len(factors) > 1:
@@ -575,7 +622,13 @@ class Narx:
                         "the model has products with past outputs: its poles are not defined "
                         "(only models linear in the outputs, e.g. ARX or kind='input-polynomial')"
                     )
-                out.append((k, t, *outs[0]))
+                if ch.functions[outs[0]] != 0:
+                    raise IdentificationError(
+                        "the model has non-polynomial functions of past outputs "
+                        f"(function_sources={self.function_sources!r}): its poles are not "
+                        "defined (only models linear in the outputs)"
+                    )
+                out.append((k, t, *ch.regressors[outs[0]]))
         return out
 
     def pole_radius(self) -> float:
@@ -697,17 +750,29 @@ class Narx:
         return [ch.term_names(self.output_names_, self.input_names_) for ch in self.channels_]
 
     def describe(self) -> str:
-        """Multi-line summary: per channel order, degree, number of terms."""
+        """Multi-line summary: per channel order, degree, number of terms (and of the
+        non-polynomial function terms)."""
         self._check_fitted()
         lines = [
             f"{type(self).__name__}: {self.n_inputs_} input(s) {self.input_names_}, "
             f"{self.n_outputs_} output(s) {self.output_names_}, kind={self.kind!r}"
         ]
-        for k, ch in enumerate(self.channels_):
+        if self.functions:
             lines.append(
+                f"  regressor functions {list(self.functions)} on {self.function_sources} "
+                f"('auto' breakpoints: {list(AUTO_BREAKPOINTS)} x the source's std)"
+            )
+        for k, ch in enumerate(self.channels_):
+            line = (
                 f"  {self.output_names_[k]}: order {ch.order}, degree {ch.degree}, "
                 f"{ch.n_regressors} regressors, {ch.n_terms} terms, max lag {ch.max_lag}"
             )
+            if ch.transformed.any():
+                fterms = np.concatenate([[False], ch.transformed])[ch.terms].any(axis=1)
+                codes = ch.functions[np.unique(ch.terms[fterms]).clip(1) - 1]
+                used = sorted({FUNCTIONS[c] for c in codes if c})
+                line += f"; {int(fterms.sum())} function terms ({', '.join(used) or 'none'})"
+            lines.append(line)
         remedy = getattr(self, "stability_", {}).get("remedy")
         if remedy:
             lines.append(f"  stability contract: {remedy}")
@@ -749,6 +814,8 @@ class Narx:
             "max_radius": self.max_radius,
             "selection": self.selection,
             "criterion": self.criterion,
+            "functions": plain(self.functions),
+            "function_sources": self.function_sources,
         }
 
     def save(self, path) -> Path:
@@ -775,6 +842,8 @@ class Narx:
         for k, ch in enumerate(self.channels_):
             arrays[f"regressors_{k}"] = ch.regressors
             arrays[f"terms_{k}"] = ch.terms
+            arrays[f"functions_{k}"] = ch.functions
+            arrays[f"breakpoints_{k}"] = ch.breakpoints
             arrays[f"coef_{k}"] = self.coef_[k]
             if self.err_ is not None:
                 arrays[f"err_{k}"] = self.err_[k]
@@ -796,6 +865,11 @@ class Narx:
                 raise IdentificationError(f"{path} is not a vrig identification model") from None
             if meta.get("format") != "vrig-identification-model":
                 raise IdentificationError(f"{path} is not a vrig identification model")
+            if meta.get("version", 1) > _FORMAT_VERSION:
+                raise IdentificationError(
+                    f"{path} has model format version {meta['version']}, newer than this "
+                    f"package reads ({_FORMAT_VERSION}); update the identification package"
+                )
             target = {"Narx": Narx, "Arx": Arx}.get(meta["class"])
             if target is None:
                 raise IdentificationError(f"unknown model class {meta['class']!r} in {path}")
@@ -805,10 +879,7 @@ class Narx:
                 params.pop("kind", None)
             model = target(**params)
             ny = meta["ny"]
-            model.channels_ = tuple(
-                ChannelStructure(f[f"regressors_{k}"], f[f"terms_{k}"], meta["orders"][k])
-                for k in range(ny)
-            )
+            model.channels_ = tuple(_load_channel(f, k, meta["orders"][k]) for k in range(ny))
             model.coef_ = tuple(np.array(f[f"coef_{k}"]) for k in range(ny))
             has_err = "err_0" in f.files
             model.err_ = tuple(np.array(f[f"err_{k}"]) for k in range(ny)) if has_err else None
@@ -831,6 +902,18 @@ class Narx:
         p = self._params()
         shown = {k: v for k, v in p.items() if v is not None and k != "bound_factor"}
         return f"{type(self).__name__}({', '.join(f'{k}={v!r}' for k, v in shown.items())})"
+
+
+def _load_channel(f, k: int, order) -> ChannelStructure:
+    """Channel k of an open model file; files of format 1 have no functions (identity)."""
+    has_functions = f"functions_{k}" in f.files
+    return ChannelStructure(
+        f[f"regressors_{k}"],
+        f[f"terms_{k}"],
+        order,
+        f[f"functions_{k}"] if has_functions else None,
+        f[f"breakpoints_{k}"] if has_functions else None,
+    )
 
 
 class Arx(Narx):
@@ -860,7 +943,14 @@ class Arx(Narx):
         max_radius: float | None = None,
         selection: str = "frols",
         criterion: str | None = None,
+        functions=None,
+        function_sources: str = "inputs",
     ):
+        if functions:
+            raise IdentificationError(
+                "Arx is linear and takes no regressor functions; for non-polynomial terms use "
+                f"Narx(..., degree=1, functions={functions!r})"
+            )
         super().__init__(
             order,
             1,
@@ -896,6 +986,10 @@ class Arx(Narx):
         self._check_fitted()
         if self.constant:
             raise IdentificationError("a model with a constant term has no linear state-space form")
+        if any(ch.transformed.any() for ch in self.channels_):
+            raise IdentificationError(
+                "a model with non-polynomial regressor functions has no linear state-space form"
+            )
         if not dt > 0:
             raise IdentificationError(f"dt must be > 0, got {dt!r}")
         ny, nu, p = self.n_outputs_, self.n_inputs_, self.max_lag_

@@ -2,7 +2,8 @@
 
 The linear regressors are lagged copies of the data columns (Algorithm B.2, no loop over samples);
 the polynomial terms are products of those columns chosen by the term index table (Algorithm B.5,
-generalised to any degree) and computed by a compiled kernel.
+generalised to any degree) and computed by a compiled kernel. A regressor with a static function
+(:mod:`identification._transforms`) holds ``g(x)`` instead of ``x``.
 """
 
 from __future__ import annotations
@@ -10,18 +11,25 @@ from __future__ import annotations
 import numpy as np
 
 from ._kernels import expand_terms
+from ._transforms import apply_array
 from .structure import ChannelStructure
 
 __all__ = ["lagged_regressors", "regression_matrix"]
 
 
 def lagged_regressors(
-    u: np.ndarray, y: np.ndarray, regressors: np.ndarray, start: int
+    u: np.ndarray,
+    y: np.ndarray,
+    regressors: np.ndarray,
+    start: int,
+    functions: np.ndarray | None = None,
+    breakpoints: np.ndarray | None = None,
 ) -> np.ndarray:
     """Return ``Z`` (N - start, R + 1), Fortran-ordered: a column of ones, then each regressor.
 
     Row ``i`` corresponds to time ``t = start + i``; regressor (source, lag) is
-    ``y[t - lag, source]`` for outputs and ``u[t - lag, source - ny]`` for inputs.
+    ``y[t - lag, source]`` for outputs and ``u[t - lag, source - ny]`` for inputs, passed through
+    ``g = functions[r]`` with breakpoint ``breakpoints[r]`` when given (code 0: identity).
     """
     N = u.shape[0]
     ny = y.shape[1]
@@ -30,7 +38,10 @@ def lagged_regressors(
     Z[:, 0] = 1.0
     for r, (src, lag) in enumerate(regressors):
         data = y[:, src] if src < ny else u[:, src - ny]
-        Z[:, r + 1] = data[start - lag : N - lag]
+        x = data[start - lag : N - lag]
+        if functions is not None and functions[r] != 0:
+            x = apply_array(int(functions[r]), float(breakpoints[r]), x)
+        Z[:, r + 1] = x
     return Z
 
 
@@ -55,7 +66,7 @@ def regression_matrix(
     -------
     ndarray (N - start, n_terms + extra_columns), Fortran-ordered.
     """
-    Z = lagged_regressors(u, y, channel.regressors, start)
+    Z = lagged_regressors(u, y, channel.regressors, start, channel.functions, channel.breakpoints)
     out = np.empty((Z.shape[0], channel.n_terms + extra_columns), order="F")
     expand_terms(Z, channel.terms, out)
     return out

@@ -13,6 +13,11 @@ by a kernel whose loops run along time (vectorised), and the compiled recursion
 (:func:`~identification._kernels.free_run`) costs
 one multiplication and one multiply-add per distinct output monomial and sample. For the SISO
 cubic model with 4 output and 5 input lags, 220 terms collapse to 35 output monomials.
+
+Regressors with a static function (``abs``, dead zone, ...) keep their code and breakpoint in
+the plan: the input kernel applies it to whole blocks, the recursion to each fed-back output
+regressor (a model without output functions runs the plain recursion). Regressors that no term
+uses (e.g. after forward selection) are left out of the plan.
 """
 
 from __future__ import annotations
@@ -36,6 +41,8 @@ class InputPart:
 
     reg_src: np.ndarray  # (Ru,) input index of each input regressor
     reg_lag: np.ndarray  # (Ru,) its lag
+    reg_fun: np.ndarray  # (Ru,) its function code
+    reg_bp: np.ndarray  # (Ru,) and breakpoint
     parent: np.ndarray  # input-monomial program (monomial 0 = 1)
     factor: np.ndarray
     e_mono: np.ndarray  # entries: input monomial, column of A, coefficient
@@ -53,6 +60,8 @@ class SimulationPlan:
     max_lag: int
     reg_src: np.ndarray
     reg_lag: np.ndarray
+    reg_fun: np.ndarray
+    reg_bp: np.ndarray
     reg_ptr: np.ndarray
     parent: np.ndarray
     factor: np.ndarray
@@ -82,12 +91,17 @@ class _Program:
 
 
 def _split_channel(ch: ChannelStructure, coef: np.ndarray, ny: int):
-    """Output program, input program and (input monomial, output monomial, coef) entries."""
-    regs = ch.regressors
-    is_out = regs[:, 0] < ny
-    local = np.zeros(regs.shape[0] + 1, dtype=np.int64)  # z index -> index within its group
-    local[1:][is_out] = np.arange(1, is_out.sum() + 1)
-    local[1:][~is_out] = np.arange(1, (~is_out).sum() + 1)
+    """Output and input regressor tables (source, lag, function, breakpoint) of the regressors
+    the terms use, their monomial programs and the (input monomial, output monomial, coef)
+    entries."""
+    table = np.column_stack([ch.regressors, ch.functions, ch.breakpoints])  # float: exact ints
+    used = np.zeros(ch.n_regressors + 1, dtype=bool)
+    used[ch.terms.ravel()] = True
+    used = used[1:]
+    is_out = ch.regressors[:, 0] < ny
+    local = np.zeros(ch.n_regressors + 1, dtype=np.int64)  # z index -> index within its group
+    local[1:][is_out & used] = np.arange(1, (is_out & used).sum() + 1)
+    local[1:][~is_out & used] = np.arange(1, (~is_out & used).sum() + 1)
     out_of = np.concatenate([[False], is_out])
     yprog, uprog = _Program(), _Program()
     entries = []
@@ -96,22 +110,38 @@ def _split_channel(ch: ChannelStructure, coef: np.ndarray, ny: int):
         yi = yprog.add(tuple(sorted(int(local[i]) for i in nz if out_of[i])))
         ui = uprog.add(tuple(sorted(int(local[i]) for i in nz if not out_of[i])))
         entries.append((ui, yi, float(c)))
-    uregs = regs[~is_out].copy()
-    uregs[:, 0] -= ny
-    return regs[is_out], yprog, uregs, uprog, entries
+    utable = table[~is_out & used]
+    utable[:, 0] -= ny
+    return table[is_out & used], yprog, utable, uprog, entries
+
+
+def _input_part(group: dict) -> InputPart:
+    i64 = np.int64
+    e = np.array(group["entries"], dtype=np.float64).reshape(-1, 3)
+    regs = group["uregs"]
+    return InputPart(
+        reg_src=np.ascontiguousarray(regs[:, 0], dtype=i64),
+        reg_lag=np.ascontiguousarray(regs[:, 1], dtype=i64),
+        reg_fun=np.ascontiguousarray(regs[:, 2], dtype=i64),
+        reg_bp=np.ascontiguousarray(regs[:, 3]),
+        parent=np.array(group["prog"].parent, dtype=i64),
+        factor=np.array(group["prog"].factor, dtype=i64),
+        e_mono=e[:, 0].astype(i64),
+        e_col=e[:, 1].astype(i64),
+        e_coef=np.ascontiguousarray(e[:, 2]),
+        columns=np.array(group["columns"], dtype=i64),
+    )
 
 
 def compile_plan(channels: tuple[ChannelStructure, ...], coefs, ny: int, nu: int) -> SimulationPlan:
     """Rewrite all output channels for :func:`simulate_plan` (see the module docstring)."""
-    reg_src, reg_lag, reg_ptr = [], [], [0]
+    yregs_all, reg_ptr = [], [0]
     par, fac, mono_ptr = [], [], [0]
     groups: list[dict] = []
-    i64 = np.int64
     for ch, coef in zip(channels, coefs, strict=True):
         yregs, yprog, uregs, uprog, entries = _split_channel(ch, coef, ny)
-        reg_src.extend(yregs[:, 0].tolist())
-        reg_lag.extend(yregs[:, 1].tolist())
-        reg_ptr.append(len(reg_src))
+        yregs_all.append(yregs)
+        reg_ptr.append(reg_ptr[-1] + yregs.shape[0])
         offset = len(par)
         par.extend(yprog.parent)
         fac.extend(yprog.factor)
@@ -123,32 +153,21 @@ def compile_plan(channels: tuple[ChannelStructure, ...], coefs, ny: int, nu: int
             groups.append(group)
         group["entries"] += [(ui, offset + yi, c) for ui, yi, c in entries]
         group["columns"] += list(range(offset, offset + len(yprog.parent)))
-    parts = []
-    for g in groups:
-        e = np.array(g["entries"], dtype=np.float64).reshape(-1, 3)
-        parts.append(
-            InputPart(
-                reg_src=np.ascontiguousarray(g["uregs"][:, 0], dtype=i64),
-                reg_lag=np.ascontiguousarray(g["uregs"][:, 1], dtype=i64),
-                parent=np.array(g["prog"].parent, dtype=i64),
-                factor=np.array(g["prog"].factor, dtype=i64),
-                e_mono=e[:, 0].astype(i64),
-                e_col=e[:, 1].astype(i64),
-                e_coef=np.ascontiguousarray(e[:, 2]),
-                columns=np.array(g["columns"], dtype=i64),
-            )
-        )
+    yt = np.concatenate(yregs_all) if yregs_all else np.zeros((0, 4))
+    i64 = np.int64
     return SimulationPlan(
         ny=ny,
         nu=nu,
         max_lag=max((ch.max_lag for ch in channels), default=0),
-        reg_src=np.array(reg_src, dtype=i64),
-        reg_lag=np.array(reg_lag, dtype=i64),
+        reg_src=np.ascontiguousarray(yt[:, 0], dtype=i64),
+        reg_lag=np.ascontiguousarray(yt[:, 1], dtype=i64),
+        reg_fun=np.ascontiguousarray(yt[:, 2], dtype=i64),
+        reg_bp=np.ascontiguousarray(yt[:, 3]),
         reg_ptr=np.array(reg_ptr, dtype=i64),
         parent=np.array(par, dtype=i64),
         factor=np.array(fac, dtype=i64),
         mono_ptr=np.array(mono_ptr, dtype=i64),
-        input_parts=tuple(parts),
+        input_parts=tuple(_input_part(g) for g in groups),
     )
 
 
@@ -194,6 +213,8 @@ def simulate_plan(
                 t1,
                 part.reg_src,
                 part.reg_lag,
+                part.reg_fun,
+                part.reg_bp,
                 part.parent,
                 part.factor,
                 part.e_mono,
@@ -209,6 +230,8 @@ def simulate_plan(
             A,
             plan.reg_src,
             plan.reg_lag,
+            plan.reg_fun,
+            plan.reg_bp,
             plan.reg_ptr,
             plan.parent,
             plan.factor,

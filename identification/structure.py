@@ -13,6 +13,11 @@ Here the same idea is generalised to any degree:
 With full-order regressors (eq. 4-15 / 5-3) and all combinations, the term order is the thesis's:
 linear terms first, then quadratic, cubic, ... each in lexicographic order of their factors
 (Appendix E; Algorithm B.5's P1/P2 index vectors).
+
+Non-polynomial terms (§7.4.1: dead band, backlash-like saturation): each regressor may enter
+through a static function ``x -> g(x)`` (``functions``/``breakpoints``, codes of
+:data:`identification._transforms.FUNCTIONS`); ``z`` then holds ``g(x)``. A transformed
+regressor is a row of its own, with the same (source, lag) as a plain one.
 """
 
 from __future__ import annotations
@@ -24,38 +29,63 @@ from functools import cache
 
 import numpy as np
 
+from ._transforms import FUNCTIONS, NEEDS_BREAKPOINT
 from .errors import IdentificationError
 
 __all__ = [
+    "AUTO_BREAKPOINTS",
+    "FUNCTION_SOURCES",
     "TERM_KINDS",
     "ChannelStructure",
     "explicit_regressors",
     "full_order_regressors",
+    "function_regressors",
+    "function_specs",
     "polynomial_terms",
     "term_count",
     "term_count_combinatorial",
 ]
 
 TERM_KINDS = ("full", "pure", "quasi-static", "input-polynomial")
+FUNCTION_SOURCES = ("inputs", "outputs", "all")
+#: ``("deadzone", "auto")`` / ``("saturation", "auto")``: breakpoints at these multiples of the
+#: source channel's standard deviation on the identification data
+AUTO_BREAKPOINTS = (0.25, 0.5, 1.0)
+_PLAIN_FUNCTIONS = tuple(n for n in FUNCTIONS[1:] if n not in NEEDS_BREAKPOINT)
+_ALLOWED = (
+    f"{', '.join(repr(n) for n in _PLAIN_FUNCTIONS)}, "
+    f"{', '.join(f'({n!r}, b)' for n in NEEDS_BREAKPOINT)} with b > 0 or 'auto'"
+)
+
+
+_BREAKPOINT_CODES = tuple(FUNCTIONS.index(name) for name in NEEDS_BREAKPOINT)
 
 
 @dataclass(frozen=True, eq=False)
 class ChannelStructure:
-    """Structure of one output channel: linear regressors and the polynomial term table.
+    """Structure of one output channel: regressors, their functions and the term table.
 
     Parameters
     ----------
     regressors : ndarray of int, shape (R, 2)
-        (source, lag) of each linear regressor; sources < ny are outputs, the rest inputs.
+        (source, lag) of each regressor; sources < ny are outputs, the rest inputs.
     terms : ndarray of int, shape (M, L)
         Factor indices of each term into ``[1, x_1 .. x_R]`` (0 = constant factor).
     order : int or None
         The full-order model order n_k when the regressors were built by eq. 5-3, else None.
+    functions : ndarray of int, shape (R,), optional
+        Static function of each regressor, a code of
+        :data:`identification._transforms.FUNCTIONS` (default 0: identity, ``x_r`` itself).
+    breakpoints : ndarray of float, shape (R,), optional
+        Breakpoint ``b`` of each regressor's function: finite and > 0 for ``deadzone`` and
+        ``saturation``, 0 for the others (default all 0).
     """
 
     regressors: np.ndarray
     terms: np.ndarray
     order: int | None = None
+    functions: np.ndarray | None = None
+    breakpoints: np.ndarray | None = None
 
     def __post_init__(self):
         regs = np.ascontiguousarray(self.regressors, dtype=np.int64).reshape(-1, 2)
@@ -66,10 +96,12 @@ class ChannelStructure:
             raise IdentificationError("term factor index out of range of the regressors")
         if terms.shape[1] > 1 and np.any(np.diff(terms, axis=1) < 0):
             raise IdentificationError("term factor indices must be non-decreasing along each row")
-        regs.setflags(write=False)
-        terms.setflags(write=False)
-        object.__setattr__(self, "regressors", regs)
-        object.__setattr__(self, "terms", terms)
+        funs, bps = _checked_functions(self.functions, self.breakpoints, regs.shape[0])
+        for name, a in (("regressors", regs), ("terms", terms), ("functions", funs)):
+            a.setflags(write=False)
+            object.__setattr__(self, name, a)
+        bps.setflags(write=False)
+        object.__setattr__(self, "breakpoints", bps)
 
     @property
     def degree(self) -> int:
@@ -88,18 +120,35 @@ class ChannelStructure:
     def max_lag(self) -> int:
         return int(self.regressors[:, 1].max()) if self.regressors.size else 0
 
+    @property
+    def transformed(self) -> np.ndarray:
+        """Boolean mask (R,) of the regressors that enter through a non-identity function."""
+        return self.functions != 0
+
     def same_as(self, other: ChannelStructure) -> bool:
-        """True when both channels have identical regressors and terms (one shared matrix)."""
-        return np.array_equal(self.regressors, other.regressors) and np.array_equal(
-            self.terms, other.terms
+        """True when both channels have identical regressors, functions and terms (one shared
+        regression matrix)."""
+        return (
+            np.array_equal(self.regressors, other.regressors)
+            and np.array_equal(self.functions, other.functions)
+            and np.array_equal(self.breakpoints, other.breakpoints)
+            and np.array_equal(self.terms, other.terms)
         )
 
     def regressor_names(self, output_names, input_names) -> list[str]:
+        """Regressor names, e.g. ``y1(t-1)``, ``abs(u1(t))``, ``deadzone(u1(t-1), 0.1)``."""
         ny = len(output_names)
         names = []
-        for src, lag in self.regressors:
+        for (src, lag), code, b in zip(
+            self.regressors, self.functions, self.breakpoints, strict=True
+        ):
             base = output_names[src] if src < ny else input_names[src - ny]
-            names.append(f"{base}(t)" if lag == 0 else f"{base}(t-{lag})")
+            name = f"{base}(t)" if lag == 0 else f"{base}(t-{lag})"
+            if code in _BREAKPOINT_CODES:
+                name = f"{FUNCTIONS[code]}({name}, {b:.6g})"
+            elif code != 0:
+                name = f"{FUNCTIONS[code]}({name})"
+            names.append(name)
         return names
 
     def term_names(self, output_names, input_names) -> list[str]:
@@ -110,6 +159,48 @@ class ChannelStructure:
             factors = [regs[i - 1] for i in row if i > 0]
             out.append("*".join(factors) if factors else "1")
         return out
+
+
+def _checked_functions(functions, breakpoints, R: int) -> tuple[np.ndarray, np.ndarray]:
+    """Validated (R,) int64 function codes and (R,) float64 breakpoints (defaults: zeros)."""
+    if functions is None:
+        funs = np.zeros(R, dtype=np.int64)
+    else:
+        raw = np.asarray(functions)
+        if raw.shape != (R,) or (raw.size and raw.dtype.kind not in "iu"):
+            raise IdentificationError(
+                f"functions must hold one integer code per regressor ({R}), got shape {raw.shape} "
+                f"and dtype {raw.dtype}"
+            )
+        funs = np.ascontiguousarray(raw, dtype=np.int64)
+        if funs.size and (funs.min() < 0 or funs.max() >= len(FUNCTIONS)):
+            raise IdentificationError(
+                f"function codes must lie in 0..{len(FUNCTIONS) - 1} "
+                f"({', '.join(f'{i} {n}' for i, n in enumerate(FUNCTIONS))}), got {raw.tolist()}"
+            )
+    if breakpoints is None:
+        bps = np.zeros(R)
+    else:
+        raw = np.asarray(breakpoints)
+        if raw.shape != (R,) or (raw.size and raw.dtype.kind not in "iuf"):
+            raise IdentificationError(
+                f"breakpoints must hold one number per regressor ({R}), got shape {raw.shape}"
+            )
+        bps = np.array(raw, dtype=np.float64)
+    if not np.all(np.isfinite(bps)):
+        raise IdentificationError(f"breakpoints must be finite, got {bps.tolist()}")
+    needs = np.isin(funs, _BREAKPOINT_CODES)
+    if np.any(needs & ~(bps > 0)):
+        raise IdentificationError(
+            f"{' and '.join(NEEDS_BREAKPOINT)} regressors need a breakpoint > 0, got "
+            f"{bps[needs].tolist()}"
+        )
+    if np.any(~needs & (bps != 0)):
+        raise IdentificationError(
+            "breakpoints must be 0 for regressors whose function takes none "
+            f"({', '.join(n for n in FUNCTIONS if n not in NEEDS_BREAKPOINT)})"
+        )
+    return funs, bps
 
 
 def full_order_regressors(ny: int, nu: int, order: int) -> np.ndarray:
@@ -225,3 +316,117 @@ def term_count_combinatorial(ny: int, nu: int, order: int, degree: int) -> int:
     ``C(R + L, L) - 1``."""
     R = ny * order + nu * (order + 1)
     return math.comb(R + degree, degree) - 1
+
+
+def _function_spec(spec):
+    """One validated spec: ``"abs"``, ``"sign_square"``, ``(name, b)`` with float b or "auto"."""
+    if isinstance(spec, str):
+        if spec in _PLAIN_FUNCTIONS:
+            return spec
+        if spec in NEEDS_BREAKPOINT:
+            raise IdentificationError(
+                f"regressor function {spec!r} needs a breakpoint: give ({spec!r}, b) with b > 0 "
+                f"(in the source signal's units) or ({spec!r}, 'auto'), inside the functions "
+                f"list; allowed specs: {_ALLOWED}"
+            )
+        raise IdentificationError(f"unknown regressor function {spec!r}; allowed: {_ALLOWED}")
+    if not isinstance(spec, (tuple, list)) or len(spec) != 2 or not isinstance(spec[0], str):
+        raise IdentificationError(
+            f"a regressor function spec is a name or a (name, breakpoint) pair, got {spec!r}; "
+            f"allowed: {_ALLOWED}"
+        )
+    name, b = spec
+    if name in _PLAIN_FUNCTIONS:
+        raise IdentificationError(
+            f"regressor function {name!r} takes no breakpoint, got {spec!r}; give it as {name!r}"
+        )
+    if name not in NEEDS_BREAKPOINT:
+        raise IdentificationError(f"unknown regressor function {name!r}; allowed: {_ALLOWED}")
+    if isinstance(b, str) and b == "auto":
+        return (name, "auto")
+    if isinstance(b, (bool, np.bool_)) or not isinstance(b, (int, float, np.integer, np.floating)):
+        raise IdentificationError(
+            f"breakpoint of {name!r} must be a finite number > 0 or 'auto', got {b!r}"
+        )
+    if not (math.isfinite(b) and b > 0):
+        raise IdentificationError(
+            f"breakpoint of {name!r} must be a finite number > 0 or 'auto', got {b!r}"
+        )
+    return (name, float(b))
+
+
+def function_specs(functions) -> tuple:
+    """Validate ``Narx``'s ``functions`` argument; returns the normalised tuple of specs.
+
+    Parameters
+    ----------
+    functions : sequence or None
+        Each item ``"abs"``, ``"sign_square"``, ``("deadzone", b)`` or ``("saturation", b)``
+        with ``b`` a finite number > 0 or ``"auto"``.
+
+    Returns
+    -------
+    tuple
+        Names as strings, breakpoint specs as ``(name, float)`` or ``(name, "auto")``; empty
+        for None.
+    """
+    if functions is None:
+        return ()
+    if isinstance(functions, (str, bytes)) or not isinstance(functions, (tuple, list)):
+        raise IdentificationError(
+            f"functions must be a list of regressor function specs, e.g. ['abs', "
+            f"('deadzone', 0.1)], got {functions!r}; allowed specs: {_ALLOWED}"
+        )
+    specs = tuple(_function_spec(f) for f in functions)
+    for i, spec in enumerate(specs):
+        if spec in specs[:i]:
+            raise IdentificationError(f"functions lists {spec!r} twice")
+    return specs
+
+
+def function_regressors(
+    regressors: np.ndarray, specs, *, sources: str, ny: int, scale: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The transformed regressors a channel gains from its function specs.
+
+    Parameters
+    ----------
+    regressors : ndarray (R, 2)
+        The channel's plain (source, lag) regressors.
+    specs : tuple
+        Normalised specs from :func:`function_specs`.
+    sources : {"inputs", "outputs", "all"}
+        Which plain regressors get the function versions.
+    ny : int
+        Number of outputs (sources below it are outputs).
+    scale : ndarray (n_sources,)
+        Standard deviation of each source channel, for ``"auto"`` breakpoints (multiples
+        :data:`AUTO_BREAKPOINTS` of it). A source with zero deviation gets no "auto" versions.
+
+    Returns
+    -------
+    regressors (F, 2), functions (F,), breakpoints (F,)
+        One row per spec, breakpoint and selected regressor, in that nesting order; exact
+        duplicates are dropped.
+    """
+    if sources not in FUNCTION_SOURCES:
+        raise IdentificationError(
+            f"function_sources must be one of {FUNCTION_SOURCES}, got {sources!r}"
+        )
+    is_out = regressors[:, 0] < ny
+    pick = {"inputs": ~is_out, "outputs": is_out, "all": np.ones_like(is_out)}[sources]
+    chosen = regressors[pick]
+    rows: dict[tuple, None] = {}
+    for spec in specs:
+        name, b = (spec, 0.0) if isinstance(spec, str) else spec
+        code = FUNCTIONS.index(name)
+        for frac in AUTO_BREAKPOINTS if b == "auto" else (None,):
+            for src, lag in chosen:
+                bp = b if frac is None else frac * float(scale[src])
+                if bp > 0 or name not in NEEDS_BREAKPOINT:
+                    rows[(int(src), int(lag), code, float(bp))] = None
+    table = list(rows)
+    regs = np.array([r[:2] for r in table], dtype=np.int64).reshape(-1, 2)
+    funs = np.array([r[2] for r in table], dtype=np.int64)
+    bps = np.array([r[3] for r in table], dtype=np.float64)
+    return regs, funs, bps

@@ -152,7 +152,7 @@ def test_horizon_continuation_refines_a_diverging_least_squares_start():
     u, y = _saturating_wiener()
     ls = Narx(order=3, degree=3)
     ls.n_inputs_, ls.n_outputs_ = 1, 1
-    ch = ls._structure(1, 1)
+    ch = ls._structure(1, 1, np.ones(2))
     ls.max_lag_ = ch[0].max_lag
     channels, coefs, _ = ls._least_squares_fixed(u[:, None], y[:, None], ch)
     flat = FlatModel.from_channels(channels, 1, 1)
@@ -229,7 +229,7 @@ def test_criterion_path_matches_refitting_every_frols_prefix(output_noise_data):
     u, y = output_noise_data
     model = Narx(na=2, nb=2, nk=1, degree=2)
     model.n_inputs_, model.n_outputs_ = 1, 1
-    ch = model._structure(1, 1)[0]
+    ch = model._structure(1, 1, np.ones(2))[0]
     X = regression_matrix(u[:, None], y[:, None], ch, ch.max_lag)
     target = y[ch.max_lag :]
     sel = forward_regression(X, target)
@@ -368,3 +368,29 @@ def test_a_stable_linear_autoregression_is_not_refused_for_a_zero_past_transient
     with pytest.raises(SimulationDivergedError):
         model.simulate(u)  # the transient does exceed the bound from a zero past
     model.simulate(u, y0=y[:2])  # and the record's own start runs bounded
+
+
+def test_sensitivity_jacobian_with_non_polynomial_terms_on_inputs_and_outputs():
+    """abs, dead zone, saturation and sign-square of inputs and of fed-back outputs: the
+    kernel's derivative of each function (away from the kinks) against finite differences."""
+    u = band_limited_noise(400, 1, cutoff=0.3, seed=2)[:, 0]
+    y = np.zeros(400)
+    for t in range(1, 400):  # a known model with a saturated output feedback
+        y[t] = 0.6 * np.clip(y[t - 1], -0.4, 0.4) + 0.5 * u[t - 1] + 0.2 * abs(u[t - 1])
+    functions = ["abs", "sign_square", ("deadzone", 0.3), ("saturation", 0.4)]
+    model = Narx(na=1, nb=2, nk=0, degree=2, functions=functions, function_sources="all")
+    model._fit_least_squares(u, y)
+    flat = FlatModel.from_channels(model.channels_, 1, 1)
+    assert flat.reg_fn.max() > 0  # the functions reach the kernel
+    theta = np.concatenate(model.coef_)
+    _e, J, _ = simulation_error(flat, theta, u[:, None], y[:, None], jacobian=True)
+    for j in range(flat.n_params):
+        h = 1e-6 * max(abs(theta[j]), 1.0)
+        tp, tm = theta.copy(), theta.copy()
+        tp[j] += h
+        tm[j] -= h
+        fd = -(
+            simulation_error(flat, tp, u[:, None], y[:, None])[0]
+            - simulation_error(flat, tm, u[:, None], y[:, None])[0]
+        ) / (2 * h)
+        assert np.linalg.norm(fd - J[:, j]) <= 1e-6 * max(np.linalg.norm(J[:, j]), 1e-12), j
