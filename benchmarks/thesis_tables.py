@@ -133,6 +133,18 @@ TABLES = [
                 _narx(4, 3, kind="full", focus="simulation", selection="simulation"),
                 thesis=(None,),
             ),
+            Row(
+                "vrig: the same plus dead-zone/saturation/|x| terms of the load (§7.4.1), IT00",
+                _narx(
+                    4,
+                    3,
+                    kind="full",
+                    focus="simulation",
+                    selection="simulation",
+                    functions=[("saturation", "auto"), ("deadzone", "auto"), "abs", "sign_square"],
+                ),
+                thesis=(None,),
+            ),
         ],
         "v[1][0] < v[2][0] < v[0][0]",
         "QanTiM IT05 < NARX IT00 < QanTiM IT00",

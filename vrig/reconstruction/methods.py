@@ -98,6 +98,9 @@ class InverseNarx(_InverseTimeDomain):
     (``kind="full"``) usable at all, since its least-squares fit diverges in free run.
     ``selection="simulation"`` chooses the terms by free-run error (SEMP; ``n_terms`` caps,
     ``criterion`` sizes), which keeps only the output-feedback terms that simulate well.
+    ``functions`` adds non-polynomial terms of the responses (e.g. ``[("saturation", "auto")]``:
+    a rig with free play needs a jump in its inverse, which a saturation with a small
+    breakpoint approximates; see :class:`identification.Narx`).
     """
 
     name = "narx"
@@ -112,11 +115,14 @@ class InverseNarx(_InverseTimeDomain):
         selection: str = "frols",
         n_terms: int | None = None,
         criterion: str | None = None,
+        functions=None,
+        function_sources: str = "inputs",
         **kw,
     ):
         super().__init__(**kw)
         self.order, self.degree, self.kind, self.focus = order, degree, kind, focus
         self.selection, self.n_terms, self.criterion = selection, n_terms, criterion
+        self.functions, self.function_sources = functions, function_sources
         self._model()  # validate the options now, not at identification
 
     def _model(self):
@@ -128,6 +134,8 @@ class InverseNarx(_InverseTimeDomain):
             selection=self.selection,
             n_terms=self.n_terms,
             criterion=self.criterion,
+            functions=self.functions,
+            function_sources=self.function_sources,
         )
 
 
