@@ -366,7 +366,11 @@ def test_tanks_simulation_row_is_chosen_on_training_data_only(tanks, monkeypatch
 def test_mr_damper_simulation_rows_are_chosen_on_training_data_only(mr_damper, monkeypatch):
     real = pdata.run(quick=True, only=["mr"], use_sysidentpy=False)
     sim = _sim_rows(real, "MR damper")
-    assert [("tanh" in r.model) for r in sim] == [False, True]
+    assert [("tanh" in r.model, "functions" in r.model) for r in sim] == [
+        (False, False),
+        (True, False),
+        (False, True),
+    ]
     assert all(np.isfinite(r.vrig) and r.terms > 0 and r.fit_s > 0 for r in sim)
     one_step = next(r for r in real.rows if r.dataset == "MR damper")
     assert sim[0].vrig < one_step.vrig and sim[1].vrig < sim[0].vrig
