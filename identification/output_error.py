@@ -189,10 +189,11 @@ class RefinementResult:
     history : list of float
         Cost after each accepted step.
     kept_step : int or None
-        With early stopping: the accepted step of the last stage whose held-out free run was
-        best (0: the stage's starting coefficients, i.e. no refinement helped on held-out
-        data; a short or unrepresentative held-out part can cause that: try ``holdout=0``).
-        None without a holdout.
+        With early stopping: the accepted step of the last stage that was kept, the latest
+        whose held-out free-run error is within 1 % of the best (0: the stage's starting
+        coefficients, i.e. refinement made the held-out error worse; a short or
+        unrepresentative held-out part can cause that: try ``holdout=0``). None without a
+        holdout.
     """
 
     theta: np.ndarray
@@ -217,13 +218,19 @@ def _check_budget(rows: int, n_params: int) -> None:
 
 
 class _Monitor:
-    """Early stopping on a held-out record: keeps the iterate with the best free-run error."""
+    """Early stopping on a held-out record.
 
-    def __init__(self, flat, u, y, w, bound, patience: int = 5):
+    Every accepted iterate's free-run error on the held-out part is recorded; the stage stops
+    when it has not improved for ``patience`` steps, and :meth:`choice` keeps the *latest*
+    iterate within ``flat`` (1 %) of the best held-out error: a flat held-out error is noise,
+    not over-fitting, and the further-refined iterate is kept.
+    """
+
+    def __init__(self, flat, u, y, w, bound, patience: int = 5, flat_tol: float = 0.01):
         self.flat, self.u, self.y, self.w, self.bound = flat, u, y, w, bound
-        self.patience = patience
-        self.best_theta, self.best, self.since = None, np.inf, 0
-        self.seen, self.best_step = 0, None
+        self.patience, self.flat_tol = patience, flat_tol
+        self.thetas: list[np.ndarray] = []
+        self.scores: list[float] = []
 
     def score(self, theta) -> float:
         e, _, _ = simulation_error(
@@ -233,14 +240,17 @@ class _Monitor:
 
     def update(self, theta) -> bool:
         """Record ``theta``; True when the held-out error has not improved for ``patience``."""
-        v = self.score(theta)
-        self.seen += 1
-        if v < self.best * (1 - 1e-9):
-            self.best_theta, self.best, self.since = theta.copy(), v, 0
-            self.best_step = self.seen - 1
-        else:
-            self.since += 1
-        return self.since >= self.patience
+        self.thetas.append(theta.copy())
+        self.scores.append(self.score(theta))
+        best = int(np.argmin(self.scores))
+        return len(self.scores) - 1 - best >= self.patience
+
+    def choice(self) -> int | None:
+        """Index of the iterate to keep (None when nothing was recorded or all diverged)."""
+        if not self.scores or not np.isfinite(min(self.scores)):
+            return None
+        limit = min(self.scores) * (1.0 + self.flat_tol)
+        return max(i for i, v in enumerate(self.scores) if v <= limit)
 
 
 def _lm_step(A, grad, mu):
@@ -351,9 +361,10 @@ def refine(
     bound : ndarray (ny,), optional
         Free-run bound per channel; a trial leaving it is rejected (default: finite only).
     holdout : float
-        Fraction of the record (its end) held out for early stopping: the last stage keeps the
-        iterate whose free run on the held-out part is best and stops when that has not
-        improved for 5 accepted steps. 0: no early stopping, the whole record is fitted.
+        Fraction of the record (its end) held out for early stopping: the last stage stops when
+        the free-run error on the held-out part has not improved for 5 accepted steps and keeps
+        the latest iterate within 1 % of the best held-out error. 0: no early stopping, the
+        whole record is fitted.
     """
     N, ny = y.shape
     p = flat.max_lag
@@ -394,8 +405,9 @@ def refine(
         )
         total += its
         history += hist
-    if monitor is not None and monitor.best_theta is not None:
-        theta = monitor.best_theta
+    kept = None if monitor is None else monitor.choice()
+    if kept is not None:
+        theta = monitor.thetas[kept]
         e, _, _ = simulation_error(flat, theta, u, y, horizon=stages[-1], weight=w, bound=bound)
         cost = float(e @ e) if e is not None else np.inf
     cov = None
@@ -404,7 +416,6 @@ def refine(
             flat, theta, u, y, horizon=stages[-1], weight=w, bound=bound, jacobian=True
         )
         cov = _covariance(e, J, flat)
-    kept = None if monitor is None else monitor.best_step
     return RefinementResult(theta, cost, initial, total, stages, cov, converged, history, kept)
 
 
