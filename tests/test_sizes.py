@@ -14,6 +14,7 @@ import numpy as np
 import pytest
 
 import identification.budget
+import vrig
 from identification import (
     IdentificationError,
     InsufficientDataError,
@@ -134,3 +135,16 @@ def test_demo_refuses_a_record_beyond_its_bound(capsys, samples):
 def test_cli_seeds_must_be_non_negative(capsys):
     assert main(["demo", "--seed", "-1"]) == 2
     assert "--seed must be >= 0, got -1" in capsys.readouterr().err
+
+
+def test_reconstruct_refuses_a_desired_record_longer_than_an_hour(tmp_path, capsys):
+    n = 3601 * 500  # the shaker runs at 500 Hz
+    desired = vrig.TimeHistory(np.zeros(n), 500.0, ["shaft_acc"], ["m/s^2"])
+    path = desired.save(tmp_path / "long.npz")
+    t0 = time.perf_counter()
+    code = main(
+        ["reconstruct", "--rig", "shaker", "--desired", str(path), "--out", str(tmp_path / "out")]
+    )
+    assert code == 2 and time.perf_counter() - t0 < 5.0  # reading 14 MB; nothing is played
+    err = capsys.readouterr().err
+    assert "3601 s long" in err and "at most 3600 s" in err and "--seconds" in err

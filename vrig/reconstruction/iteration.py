@@ -184,8 +184,7 @@ def _check_id_rms(id_rms, full: np.ndarray) -> np.ndarray:
 
 
 def _check_content(desired: TimeHistory, desres: TimeHistory, band) -> None:
-    """Refuse a desired channel with nothing to reproduce in the band (constant, a pure trend or
-    out of band): its η0 would be a ratio of round-off (2.3e14 % for a constant record)."""
+    """See :meth:`DriveIteration.check_desired`."""
     scale = np.abs(desired.data).max(axis=0)
     rms = np.sqrt(np.mean(desres.data**2, axis=0))
     empty = ~(rms > 1e-9 * scale)
@@ -260,7 +259,7 @@ class DriveIteration:
             )
         self.id_samples = round((id_duration or desired.duration) * rig.fs)
         self.desres = gprepro(desired, self.band)
-        _check_content(desired, self.desres, self.band)
+        self._desired = desired
         self.n = self.desres.n_samples
         self.names = [c.name for c in rig.inputs]
         self.units = [c.unit for c in rig.inputs]
@@ -340,10 +339,18 @@ class DriveIteration:
             y[self.n - m :] *= ramp[::-1, None]
         return y
 
+    def check_desired(self) -> None:
+        """Raise ``ValueError`` when a desired channel has nothing to reproduce in the band
+        (constant, a pure trend or out of band): its η0 would be a ratio of round-off
+        (2.3e14 % for a constant record). Called by :meth:`first_drive` and, before the
+        identification, by :func:`reconstruct`; identifying alone needs no desired content."""
+        _check_content(self._desired, self.desres, self.band)
+
     def first_drive(self) -> np.ndarray:
         """IT00DRV = inverse(DESRES), band-limited and tapered (:meth:`shape`), at the rig rate."""
         if self.target is None:
             raise RuntimeError("identify() first")
+        self.check_desired()
         return self.shape(self.up(self.target))
 
     def play(self, drive: np.ndarray, iteration: int):
@@ -472,6 +479,7 @@ def reconstruct(
         seed=seed,
         **method_options,
     )
+    engine.check_desired()
     engine.identify()
     drive = engine.first_drive()
     result = ReconstructionResult(
