@@ -8,7 +8,7 @@ This package never imports ``vrig`` or MuJoCo: it works on any (N, channels) rec
 >>> metrics.qantim_fit_dc(y_new, y_sim)                 # doctest: +SKIP
 """
 
-from . import metrics, solvers, validation
+from . import budget, metrics, solvers, validation
 from .error_model import ErrorSignalModel
 from .errors import (
     IdentificationError,
@@ -55,6 +55,7 @@ __all__ = [
     "StabilityWarning",
     "UnstableModelError",
     "band_limited_noise",
+    "budget",
     "correlation_tests",
     "criterion_value",
     "estimate_delay",

@@ -17,6 +17,7 @@ import numpy as np
 
 from ._transforms import FUNCTIONS
 from ._validation import as_signal, check_same_length, per_channel_int
+from .budget import check_allocation, product
 from .errors import (
     IdentificationError,
     InsufficientDataError,
@@ -36,9 +37,11 @@ from .structure import (
     TERM_KINDS,
     ChannelStructure,
     explicit_regressors,
+    format_count,
     full_order_regressors,
     function_regressors,
     function_specs,
+    polynomial_term_count,
     polynomial_terms,
 )
 
@@ -77,6 +80,15 @@ def _lag_table(value, ny: int, n_src: int, name: str, minimum: int) -> np.ndarra
     if np.any(a < minimum):
         raise IdentificationError(f"{name} values must be >= {minimum}, got {value!r}")
     return a.astype(np.int64)
+
+
+def _check_lag(lag, n_samples: int | None, what: str) -> None:
+    """The largest lag must leave samples to fit: checked before any table is built."""
+    if n_samples is not None and lag >= n_samples:
+        raise InsufficientDataError(
+            f"the largest lag {lag:.0f} ({what}) needs more than {lag:.0f} samples, but the record "
+            f"has {n_samples}: lower the {what} or provide a longer record"
+        )
 
 
 def _check_focus_options(focus, horizon, max_iter, stability_margin) -> None:
@@ -314,30 +326,73 @@ class Narx:
         self.function_sources = function_sources
 
     # ------------------------------------------------------------------ structure
-    def _structure(self, ny: int, nu: int, scale: np.ndarray) -> tuple[ChannelStructure, ...]:
+    def _structure(
+        self, ny: int, nu: int, scale: np.ndarray, n_samples: int | None = None
+    ) -> tuple[ChannelStructure, ...]:
         """Channel structures; ``scale`` (ny + nu,): the sources' standard deviations on the
-        identification data (for "auto" breakpoints)."""
+        identification data (for "auto" breakpoints). Sizes are checked before anything is
+        built: the largest lag against ``n_samples`` (the record length, when known), each
+        channel's term count (closed form) and its regression matrix against the memory
+        budget."""
         degrees = per_channel_int(self.degree, ny, "degree", minimum=1)
-        if self.order is not None:
-            orders = per_channel_int(self.order, ny, "order", minimum=0)
-            regs = [full_order_regressors(ny, nu, n) for n in orders]
-        else:
-            orders = (None,) * ny
-            na = _lag_table(self.na, ny, ny, "na", 0)
-            nb = _lag_table(self.nb, ny, nu, "nb", 0)
-            nk = _lag_table(0 if self.nk is None else self.nk, ny, nu, "nk", 0)
-            regs = [explicit_regressors(ny, nu, na[k], nb[k], nk[k]) for k in range(ny)]
+        regs, orders = self._regressors(ny, nu, n_samples)
+        rows = 0
+        if n_samples is not None:
+            rows = n_samples - max(int(r[:, 1].max()) if r.size else 0 for r in regs)
         channels = []
         for k in range(ny):
             if regs[k].shape[0] == 0 and not self.constant:
                 raise IdentificationError(
                     f"output channel {k} has no regressors (order 0 with no inputs, or na = nb = 0)"
                 )
+            count = polynomial_term_count(
+                regs[k], degrees[k], kind=self.kind, constant=self.constant, ny=ny
+            )
+            self._check_size(k, count, rows, regs[k].shape[0], degrees[k])
             terms = polynomial_terms(
                 regs[k], degrees[k], kind=self.kind, constant=self.constant, ny=ny
             )
-            channels.append(self._with_functions(regs[k], terms, orders[k], ny, scale))
+            ch = self._with_functions(regs[k], terms, orders[k], ny, scale)
+            if ch.n_terms > count:  # the function terms
+                self._check_size(k, ch.n_terms, rows, ch.n_regressors, degrees[k])
+            channels.append(ch)
         return tuple(channels)
+
+    def _regressors(self, ny: int, nu: int, n_samples: int | None):
+        """Each channel's linear regressors and full order (None with explicit na/nb/nk); the
+        largest lag is checked against the record length before the tables are built."""
+        if self.order is not None:
+            orders = per_channel_int(self.order, ny, "order", minimum=0)
+            _check_lag(max(orders), n_samples, "order")
+            return [full_order_regressors(ny, nu, n) for n in orders], orders
+        na = _lag_table(self.na, ny, ny, "na", 0)
+        nb = _lag_table(self.nb, ny, nu, "nb", 0)
+        nk = _lag_table(0 if self.nk is None else self.nk, ny, nu, "nk", 0)
+        input_lag = np.where(nb > 0, nk.astype(float) + nb - 1, 0.0)  # float: no int overflow
+        _check_lag(
+            max(float(na.max(initial=0)), float(input_lag.max(initial=0))), n_samples, "na/nb/nk"
+        )
+        regs = [explicit_regressors(ny, nu, na[k], nb[k], nk[k]) for k in range(ny)]
+        return regs, (None,) * ny
+
+    def _check_size(self, k: int, n_terms: int, rows: int, n_regs: int, degree: int) -> None:
+        """Refuse a channel whose regression matrix would exceed the memory budget (a model needs
+        at least as many samples as terms, so it is never smaller than terms x terms)."""
+        height = max(rows, n_terms)
+        remedy = (
+            "lower the order or the degree, or choose a smaller term set (kind='pure', "
+            "'quasi-static' or 'input-polynomial')"
+        )
+        if rows >= n_terms:
+            remedy += ", or fit a shorter (or decimated) record"
+        check_allocation(
+            product(height, n_terms, 8),
+            f"output channel {k}: Narx(kind={self.kind!r}, degree {degree}) on {n_regs:,} "
+            f"regressors has {format_count(n_terms)} terms; its regression matrix "
+            f"({format_count(height)} rows{'' if rows >= n_terms else ' (at least one per term)'}"
+            f" x {format_count(n_terms)} terms x 8 bytes)",
+            remedy,
+        )
 
     def _with_functions(self, regs, terms, order, ny: int, scale) -> ChannelStructure:
         """The channel with its function regressors appended, one linear term each."""
@@ -387,7 +442,7 @@ class Narx:
         check_same_length(u, y, "u", "y")
         N, nu = u.shape
         ny = y.shape[1]
-        channels = self._structure(ny, nu, np.concatenate([y.std(axis=0), u.std(axis=0)]))
+        channels = self._structure(ny, nu, np.concatenate([y.std(axis=0), u.std(axis=0)]), N)
         start = max(ch.max_lag for ch in channels)
         rows = N - start
         for k, ch in enumerate(channels):

@@ -33,12 +33,11 @@ import numpy as np
 from scipy import linalg
 
 from ._sensitivity import simulate_with_sensitivity
+from .budget import check_allocation, product
 from .errors import IdentificationError, SimulationDivergedError
 from .simulation import compile_plan, simulate_plan
 
 __all__ = ["FlatModel", "RefinementResult", "refine", "simulation_error"]
-
-_J_BUDGET_BYTES = 2 * 2**30  # refuse a Jacobian beyond 2 GiB
 
 
 @dataclass(frozen=True, eq=False)
@@ -125,6 +124,8 @@ def simulation_error(
     w = np.ones(ny) if weight is None else np.asarray(weight, dtype=np.float64)
     b = np.full(ny, np.inf) if bound is None else np.asarray(bound, dtype=np.float64)
     rows = (N - p) * ny
+    if jacobian:
+        _check_budget(rows, flat.n_params)
     if not jacobian and h >= N:  # one segment: the compiled plan-based free run is faster
         return _plan_error(flat, theta, u, y, w, b)
     E = np.empty(rows)
@@ -208,13 +209,11 @@ class RefinementResult:
 
 
 def _check_budget(rows: int, n_params: int) -> None:
-    need = 8 * rows * n_params
-    if need > _J_BUDGET_BYTES:
-        raise IdentificationError(
-            f"the output-error Jacobian would take {need / 2**30:.1f} GiB ({rows} residuals x "
-            f"{n_params} parameters; budget {_J_BUDGET_BYTES / 2**30:.0f} GiB): shorten the "
-            "record, select fewer terms (n_terms=...) or fit with focus='prediction'"
-        )
+    check_allocation(
+        product(rows, n_params, 8),
+        f"the output-error Jacobian ({rows:,} residuals x {n_params:,} parameters x 8 bytes)",
+        "shorten the record, select fewer terms (n_terms=...) or fit with focus='prediction'",
+    )
 
 
 class _Monitor:

@@ -12,6 +12,7 @@ import numpy as np
 
 from ._kernels import expand_terms
 from ._transforms import apply_array
+from .budget import check_allocation, product
 from .structure import ChannelStructure
 
 __all__ = ["lagged_regressors", "regression_matrix"]
@@ -34,6 +35,11 @@ def lagged_regressors(
     N = u.shape[0]
     ny = y.shape[1]
     rows = N - start
+    check_allocation(
+        product(rows, regressors.shape[0] + 1, 8),
+        f"the lagged regressors ({rows:,} rows x {regressors.shape[0] + 1:,} columns x 8 bytes)",
+        "use fewer lags or a shorter record",
+    )
     Z = np.empty((rows, regressors.shape[0] + 1), order="F")
     Z[:, 0] = 1.0
     for r, (src, lag) in enumerate(regressors):
@@ -65,7 +71,18 @@ def regression_matrix(
     Returns
     -------
     ndarray (N - start, n_terms + extra_columns), Fortran-ordered.
+
+    Raises
+    ------
+    IdentificationError
+        When the matrix would exceed the memory budget (:mod:`identification.budget`).
     """
+    rows, cols = u.shape[0] - start, channel.n_terms + extra_columns
+    check_allocation(
+        product(rows, cols, 8),
+        f"the regression matrix ({rows:,} rows x {cols:,} terms x 8 bytes)",
+        "use fewer terms (lower order or degree, or a smaller term set) or a shorter record",
+    )
     Z = lagged_regressors(u, y, channel.regressors, start, channel.functions, channel.breakpoints)
     out = np.empty((Z.shape[0], channel.n_terms + extra_columns), order="F")
     expand_terms(Z, channel.terms, out)

@@ -13,6 +13,7 @@ from dataclasses import dataclass
 import numba as nb
 import numpy as np
 
+from .budget import check_allocation, product
 from .errors import IdentificationError
 
 __all__ = ["ForwardSelection", "forward_regression"]
@@ -139,5 +140,11 @@ def forward_regression(X, y, *, n_terms: int | None = None, err_tol: float | Non
         raise IdentificationError(f"err_tol must be in [0, 1), got {err_tol!r}")
     if not np.any(y):
         raise IdentificationError("forward_regression: the output is identically zero")
+    check_allocation(
+        product(X.shape[0], M, 8),
+        f"forward regression's working copy of X ({X.shape[0]:,} rows x {M:,} candidate terms "
+        "x 8 bytes)",
+        "offer fewer candidate terms (lower order or degree) or use a shorter record",
+    )
     selected, errs = _frols(np.array(X, order="F"), np.ascontiguousarray(y), n_terms, err_tol)
     return ForwardSelection(selected=selected, err=errs)

@@ -22,14 +22,13 @@ regressor is a row of its own, with the same (source, lag) as a plain one.
 
 from __future__ import annotations
 
-import itertools
 import math
 from dataclasses import dataclass
-from functools import cache
 
 import numpy as np
 
 from ._transforms import FUNCTIONS, NEEDS_BREAKPOINT
+from .budget import check_allocation, product
 from .errors import IdentificationError
 
 __all__ = [
@@ -38,9 +37,11 @@ __all__ = [
     "TERM_KINDS",
     "ChannelStructure",
     "explicit_regressors",
+    "format_count",
     "full_order_regressors",
     "function_regressors",
     "function_specs",
+    "polynomial_term_count",
     "polynomial_terms",
     "term_count",
     "term_count_combinatorial",
@@ -203,17 +204,37 @@ def _checked_functions(functions, breakpoints, R: int) -> tuple[np.ndarray, np.n
     return funs, bps
 
 
+def _ranges(starts: np.ndarray, counts: np.ndarray) -> np.ndarray:
+    """Concatenation of ``arange(s, s + c)`` for each (s, c), without a Python loop."""
+    counts = np.asarray(counts, dtype=np.int64)
+    starts = np.asarray(starts, dtype=np.int64)
+    offsets = np.cumsum(counts) - counts
+    return np.arange(int(counts.sum()), dtype=np.int64) - np.repeat(offsets - starts, counts)
+
+
+def _check_regressor_table(R: int) -> None:
+    check_allocation(
+        product(R, 2, 8),
+        f"the regressor table ({R:,} regressors x 2 x 8 bytes)",
+        "lower the model order (the number of lags)",
+    )
+
+
 def full_order_regressors(ny: int, nu: int, order: int) -> np.ndarray:
     """Linear regressors of the full-order structure (eq. 4-15 / 5-3) for one output channel.
 
-    ``y_1(t-1) .. y_1(t-n), ..., y_ny(t-1) .. y_ny(t-n), u_1(t) .. u_1(t-n), ..., u_nu(t-n)``:
+    ``y_1(t-1) .. y_1(t-n), ..., y_ny(t-n), u_1(t) .. u_1(t-n), ..., u_nu(t-n)``:
     na = n for every output, nb = n + 1 terms for every input, nk = 0.
     """
     if order < 0:
         raise IdentificationError(f"order must be >= 0, got {order}")
-    rows = [(s, lag) for s in range(ny) for lag in range(1, order + 1)]
-    rows += [(ny + j, lag) for j in range(nu) for lag in range(0, order + 1)]
-    return np.array(rows, dtype=np.int64).reshape(-1, 2)
+    n = int(order)
+    _check_regressor_table(ny * n + nu * (n + 1))
+    out_rows = np.column_stack([np.repeat(np.arange(ny), n), np.tile(np.arange(1, n + 1), ny)])
+    in_rows = np.column_stack(
+        [np.repeat(np.arange(ny, ny + nu), n + 1), np.tile(np.arange(n + 1), nu)]
+    )
+    return np.concatenate([out_rows, in_rows]).astype(np.int64).reshape(-1, 2)
 
 
 def explicit_regressors(ny: int, nu: int, na, nb, nk) -> np.ndarray:
@@ -222,9 +243,96 @@ def explicit_regressors(ny: int, nu: int, na, nb, nk) -> np.ndarray:
     ``na[i]`` output lags 1..na[i] of output i; ``nb[j]`` input terms of input j starting at delay
     ``nk[j]``: lags nk[j] .. nk[j] + nb[j] - 1 (MATLAB ``arx`` convention).
     """
-    rows = [(s, lag) for s in range(ny) for lag in range(1, na[s] + 1)]
-    rows += [(ny + j, lag) for j in range(nu) for lag in range(nk[j], nk[j] + nb[j])]
-    return np.array(rows, dtype=np.int64).reshape(-1, 2)
+    na = np.asarray(na, dtype=np.int64).reshape(ny)
+    nb = np.asarray(nb, dtype=np.int64).reshape(nu)
+    nk = np.asarray(nk, dtype=np.int64).reshape(nu)
+    _check_regressor_table(int(na.sum()) + int(nb.sum()))
+    out_rows = np.column_stack([np.repeat(np.arange(ny), na), _ranges(np.ones(ny), na)])
+    in_rows = np.column_stack([np.repeat(np.arange(ny, ny + nu), nb), _ranges(nk, nb)])
+    return np.concatenate([out_rows, in_rows]).astype(np.int64).reshape(-1, 2)
+
+
+_MAX_COUNT_DIGITS = 4000  # term counts beyond 10**4000 are refused without being computed
+
+
+def _log10_comb(n: int, k: int) -> float:
+    """log10 of C(n, k), from the product formula (inf when it is astronomically large)."""
+    k = min(k, n - k)
+    if k <= 0:
+        return 0.0
+    if k > 10**6 or n > 1e300:  # C(n, k) >= 2**k: far beyond any count worth computing
+        return math.inf
+    i = np.arange(k, dtype=np.float64)
+    return float(np.sum(np.log10((float(n) - i) / (i + 1.0))))
+
+
+def _comb(n: int, k: int, what: str) -> int:
+    """``C(n, k)`` exactly; refuses (naming ``what``) a value with more than 4000 digits, which
+    no model could hold and whose exact computation alone would take long."""
+    log10 = _log10_comb(n, k)
+    if log10 > _MAX_COUNT_DIGITS:
+        size = "more than 1e1000000" if not math.isfinite(log10) else f"about 1e{log10:.0f}"
+        raise IdentificationError(
+            f"{what} has {size} terms, far beyond any memory: lower the order or the degree"
+        )
+    return math.comb(n, k)
+
+
+def format_count(n: int) -> str:
+    """A (possibly huge) integer count, readable: ``1,471,442,973`` or ``3.45e+92``."""
+    s = str(int(n))
+    if len(s) <= 16:
+        return f"{int(n):,}"
+    return f"{s[0]}.{s[1:3]}e+{len(s) - 1}"
+
+
+def polynomial_term_count(
+    regressors: np.ndarray, degree: int, *, kind: str = "full", constant: bool = False, ny: int = 0
+) -> int:
+    """Number of rows :func:`polynomial_terms` returns, in closed form (nothing is enumerated).
+
+    ``"full"``: ``C(R + L, L) - 1`` (eq. 5-10); ``"pure"``: ``R L``; ``"quasi-static"``:
+    ``R + S (L - 1)`` with S the lag-0 input regressors; ``"input-polynomial"``: ``R + C(I + L, L)
+    - 1 - I`` with I the input regressors; plus 1 with ``constant``. Same arguments as
+    :func:`polynomial_terms`.
+    """
+    R, L = int(regressors.shape[0]), int(degree)
+    what = f"a {kind!r} structure of degree {L} on {R:,} regressors"
+    if kind == "full":
+        count = _comb(R + L, L, what) - 1
+    elif kind == "pure":
+        count = R * L
+    elif kind == "quasi-static":
+        static = int(np.count_nonzero((regressors[:, 0] >= ny) & (regressors[:, 1] == 0)))
+        count = R + static * (L - 1)
+    else:  # input-polynomial
+        n_in = int(np.count_nonzero(regressors[:, 0] >= ny))
+        count = R + _comb(n_in + L, L, what) - 1 - n_in
+    return count + int(bool(constant))
+
+
+def _nondecreasing_rows(n_values: int, length: int) -> np.ndarray:
+    """Every non-decreasing sequence of ``length`` values from ``0 .. n_values - 1``, in
+    lexicographic order (the rows of ``itertools.combinations_with_replacement(range(n_values),
+    length)``), built column by column without a Python loop over the rows.
+
+    The table of length l + 1 is, for each first value a, the value a followed by the rows of the
+    length-l table whose first value is >= a (a suffix of that table, which is sorted)."""
+    values = np.arange(n_values, dtype=np.int64)
+    table = values[:, None]
+    for _ in range(length - 1):
+        start = np.searchsorted(table[:, 0], values, side="left")
+        counts = table.shape[0] - start
+        rows = _ranges(start, counts)
+        table = np.column_stack([np.repeat(values, counts), table[rows]])
+    return table
+
+
+def _padded(factors: np.ndarray, L: int) -> np.ndarray:
+    """Factor table (n, d) -> (n, L) with the constant factor 0 in front."""
+    out = np.zeros((factors.shape[0], L), dtype=np.int64)
+    out[:, L - factors.shape[1] :] = factors
+    return out
 
 
 def polynomial_terms(
@@ -238,7 +346,7 @@ def polynomial_terms(
         The channel's (source, lag) table.
     degree : int
         Polynomial degree L >= 1.
-    kind : {"full", "pure", "quasi-static"}
+    kind : {"full", "pure", "quasi-static", "input-polynomial"}
         ``"full"``: every monomial of degree 1..L of the regressors (eq. 5-8).
         ``"pure"``: linear terms plus pure powers x_i^2 .. x_i^L, no cross products
         (purely quadratic NARX, eq. 5-24, generalised to degree L).
@@ -251,71 +359,95 @@ def polynomial_terms(
         Add the constant term (first row, all factors 0).
     ny : int
         Number of outputs (needed by ``"quasi-static"`` to tell inputs from outputs).
+
+    Raises
+    ------
+    IdentificationError
+        When the table (terms x L x 8 bytes, counted in closed form by
+        :func:`polynomial_term_count` before anything is enumerated) would exceed the memory
+        budget (:mod:`identification.budget`).
     """
     if degree < 1:
         raise IdentificationError(f"degree must be >= 1, got {degree}")
     if kind not in TERM_KINDS:
         raise IdentificationError(f"unknown term kind {kind!r}; choose one of {TERM_KINDS}")
-    R = int(regressors.shape[0])
-    L = int(degree)
+    regressors = np.asarray(regressors, dtype=np.int64).reshape(-1, 2)
+    R, L = int(regressors.shape[0]), int(degree)
+    count = polynomial_term_count(regressors, L, kind=kind, constant=constant, ny=ny)
+    check_allocation(
+        product(count, L, 8),
+        f"the term index table of a {kind!r} structure of degree {L} on {R:,} regressors "
+        f"({format_count(count)} terms x {L} factors x 8 bytes)",
+        "lower the order or the degree, or choose a smaller term set (kind='pure', "
+        "'quasi-static' or 'input-polynomial')",
+    )
     if kind == "full":
-        combos = np.array(
-            list(itertools.combinations_with_replacement(range(R + 1), L)), dtype=np.int64
-        ).reshape(-1, L)
-        # combinations_with_replacement over [0, 1..R] yields the constant, then the linear,
+        # all non-decreasing index rows over [0, 1..R]: the constant, then the linear,
         # quadratic, ... terms, each in lexicographic order: the thesis's ordering.
+        combos = _nondecreasing_rows(R + 1, L)
         return combos if constant else combos[1:]
-    rows = []
-    if constant:
-        rows.append([0] * L)
-    rows += [[0] * (L - 1) + [i] for i in range(1, R + 1)]
+    blocks = [np.zeros((int(bool(constant)), L), dtype=np.int64)]
+    blocks.append(_padded(np.arange(1, R + 1, dtype=np.int64)[:, None], L))
     if kind == "input-polynomial":
-        inputs = [i + 1 for i, (src, _lag) in enumerate(regressors) if src >= ny]
+        inputs = np.flatnonzero(regressors[:, 0] >= ny) + 1
         for d in range(2, L + 1):
-            rows += [
-                [0] * (L - d) + list(c) for c in itertools.combinations_with_replacement(inputs, d)
-            ]
-        return np.array(rows, dtype=np.int64).reshape(-1, L)
+            blocks.append(_padded(inputs[_nondecreasing_rows(inputs.size, d)], L))
+        return np.concatenate(blocks)
     if kind == "pure":
-        powered = range(1, R + 1)
+        powered = np.arange(1, R + 1, dtype=np.int64)
     else:  # quasi-static: lag-0 input regressors
-        powered = [i + 1 for i, (src, lag) in enumerate(regressors) if src >= ny and lag == 0]
+        powered = np.flatnonzero((regressors[:, 0] >= ny) & (regressors[:, 1] == 0)) + 1
     for d in range(2, L + 1):
-        rows += [[0] * (L - d) + [i] * d for i in powered]
-    return np.array(rows, dtype=np.int64).reshape(-1, L)
+        blocks.append(_padded(np.repeat(powered[:, None], d, axis=1), L))
+    return np.concatenate(blocks)
 
 
-@cache
-def _nested_sum(m: int, depth: int) -> int:
-    # eq. 5-10: g(m, 1) = m;  g(m, d) = m + sum_{j=1}^{m} g(j, d-1)
-    if depth == 1:
-        return m
-    return m + sum(_nested_sum(j, depth - 1) for j in range(1, m + 1))
+def _check_counts(ny, nu, order, degree) -> int:
+    """Validated arguments of the term-count functions; returns R."""
+    for name, v, lo in (("ny", ny, 0), ("nu", nu, 0), ("order", order, 0), ("degree", degree, 1)):
+        if not isinstance(v, (int, np.integer)) or isinstance(v, bool) or v < lo:
+            raise IdentificationError(f"{name} must be an integer >= {lo}, got {v!r}")
+    return int(ny) * int(order) + int(nu) * (int(order) + 1)
 
 
 def term_count(ny: int, nu: int, order: int, degree: int) -> int:
     """Maximum number of NARX terms of one output channel, eq. 5-10 of the reference text.
 
     ``M_k = R + sum_{R1=1}^{R} [R1 + sum_{R2=1}^{R1} [R2 + ... + sum_{RL=1}^{R(L-1)} RL]]`` with
-    ``R = ny*n_k + nu*(n_k + 1)`` (full-order structure, no constant term).
+    ``R = ny*n_k + nu*(n_k + 1)`` (full-order structure, no constant term). The nested sums
+    count the monomials of degree 1..L in R variables, so they are evaluated in closed form,
+    ``C(R + L, L) - 1`` (no recursion, no loop over R).
+
+    Raises
+    ------
+    IdentificationError
+        When no model of this size can be built: its term index table (M x L x 8 bytes) would
+        exceed the memory budget (:mod:`identification.budget`); the message names the count.
+        :func:`term_count_combinatorial` returns the bare number for any size.
 
     Examples
     --------
     >>> term_count(1, 2, 2, 2)   # Example 5.1 / Appendix E
     44
     """
-    for name, v, lo in (("ny", ny, 0), ("nu", nu, 0), ("order", order, 0), ("degree", degree, 1)):
-        if not isinstance(v, (int, np.integer)) or v < lo:
-            raise IdentificationError(f"{name} must be an integer >= {lo}, got {v!r}")
-    R = ny * order + nu * (order + 1)
-    return int(_nested_sum(R, degree)) if R > 0 else 0
+    R = _check_counts(ny, nu, order, degree)
+    what = f"term_count(ny={ny}, nu={nu}, order={order}, degree={degree}) (R = {R:,} regressors)"
+    count = _comb(R + int(degree), int(degree), what) - 1 if R > 0 else 0
+    check_allocation(
+        product(count, degree, 8),
+        f"{what}: {format_count(count)} terms; their index table (terms x {degree} factors x "
+        "8 bytes)",
+        "no model of this size can be built; lower the order or the degree",
+    )
+    return count
 
 
 def term_count_combinatorial(ny: int, nu: int, order: int, degree: int) -> int:
     """Closed form of eq. 5-10: the number of monomials of degree 1..L in R variables,
-    ``C(R + L, L) - 1``."""
-    R = ny * order + nu * (order + 1)
-    return math.comb(R + degree, degree) - 1
+    ``C(R + L, L) - 1``, for any size (no memory budget; counts beyond 10^4000 are refused)."""
+    R = _check_counts(ny, nu, order, degree)
+    what = f"term_count_combinatorial(ny={ny}, nu={nu}, order={order}, degree={degree})"
+    return _comb(R + int(degree), int(degree), what) - 1
 
 
 def _function_spec(spec):

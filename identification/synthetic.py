@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 from scipy import signal
 
+from .budget import check_allocation, product
 from .errors import IdentificationError, SimulationDivergedError
 from .models import Narx
 from .regression import regression_matrix
@@ -19,10 +20,16 @@ def band_limited_noise(n_samples: int, n_channels: int = 1, *, cutoff: float = 0
     """
     if not 0 < cutoff < 1:
         raise IdentificationError(f"cutoff must be a fraction of Nyquist in (0, 1), got {cutoff!r}")
-    if n_samples < 16 or n_channels < 1:
-        raise IdentificationError("need n_samples >= 16 and n_channels >= 1")
-    rng = np.random.default_rng(seed)
+    for name, v, lo in (("n_samples", n_samples, 16), ("n_channels", n_channels, 1)):
+        if not isinstance(v, (int, np.integer)) or isinstance(v, bool) or v < lo:
+            raise IdentificationError(f"{name} must be an integer >= {lo}, got {v!r}")
     warm = 256
+    check_allocation(
+        product(n_samples + warm, n_channels, 8),
+        f"band-limited noise of {n_samples:,} samples x {n_channels} channels x 8 bytes",
+        "generate fewer samples or channels",
+    )
+    rng = np.random.default_rng(seed)
     e = rng.standard_normal((n_samples + warm, n_channels))
     sos = signal.butter(6, cutoff, output="sos")
     x = signal.sosfilt(sos, e, axis=0)[warm:]

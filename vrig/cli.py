@@ -34,6 +34,7 @@ __all__ = ["main"]
 
 
 _METHODS = ("arx", "narx", "split", "frf")
+_MAX_SECONDS = 3600.0  # longest record a command plays or reconstructs (--seconds, --desired)
 
 
 class _UsageError(Exception):
@@ -47,6 +48,17 @@ class _Failure(Exception):
 # ---------------------------------------------------------------------------------------------
 # parser
 # ---------------------------------------------------------------------------------------------
+def _whole_number(text: str) -> int:
+    """An integer argument, also written as ``2e4``: its range is checked by the command."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
+    if not (np.isfinite(value) and value == int(value)):
+        raise argparse.ArgumentTypeError(f"not a whole number: {text!r}")
+    return int(value)
+
+
 def _parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(
         prog="vrig",
@@ -56,7 +68,12 @@ def _parser() -> argparse.ArgumentParser:
     sub = p.add_subparsers(dest="command", required=True)
     demo = sub.add_parser("demo", help="identify and simulate a generated non-linear MIMO system")
     demo.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
-    demo.add_argument("--samples", type=int, default=20_000, help="record length (default 20000)")
+    demo.add_argument(
+        "--samples",
+        type=_whole_number,
+        default=20_000,
+        help="record length, 2000..500000 (default 20000; 2e4 is accepted)",
+    )
     demo.add_argument(
         "--noise",
         type=float,
@@ -306,8 +323,10 @@ def _cmd_reconstruct(args) -> int:
         raise _UsageError(f"--iterations must be 0..99, got {args.iterations}")
     if not 0 < args.gain <= 2:
         raise _UsageError(f"--gain must lie in (0, 2], got {args.gain:g}")
-    if args.seconds is not None and not (np.isfinite(args.seconds) and 2 <= args.seconds <= 3600):
-        raise _UsageError(f"--seconds must be 2..3600, got {args.seconds:g}")
+    if args.seconds is not None and not (
+        np.isfinite(args.seconds) and 2 <= args.seconds <= _MAX_SECONDS
+    ):
+        raise _UsageError(f"--seconds must be 2..{_MAX_SECONDS:g}, got {args.seconds:g}")
     if args.desired is not None and not Path(args.desired).is_file():
         raise _UsageError(f"--desired: no file {args.desired}")
     rig = _load_rig(args.rig, seed=args.seed)
@@ -329,6 +348,11 @@ def _cmd_reconstruct(args) -> int:
                     f"{args.desired}"
                 )
             field = field.window(0.0, args.seconds)
+        if field.duration > _MAX_SECONDS:
+            raise _UsageError(
+                f"--desired {args.desired} is {field.duration:g} s long; at most "
+                f"{_MAX_SECONDS:g} s are reconstructed at once: pass --seconds to use its start"
+            )
         source = f"{args.desired} ({field.duration:g} s)"
         for note in notes:
             print(f"note: {note}")
@@ -415,8 +439,8 @@ def _cmd_repeatability(args) -> int:
 
     if not 2 <= args.runs <= 50:
         raise _UsageError(f"--runs must be 2..50 (the text uses 5), got {args.runs}")
-    if not (np.isfinite(args.seconds) and 2 <= args.seconds <= 3600):
-        raise _UsageError(f"--seconds must be 2..3600, got {args.seconds:g}")
+    if not (np.isfinite(args.seconds) and 2 <= args.seconds <= _MAX_SECONDS):
+        raise _UsageError(f"--seconds must be 2..{_MAX_SECONDS:g}, got {args.seconds:g}")
     rig = _load_rig(args.rig, seed=args.seed)
     band = _band(rig, args.band)
     out = Path(args.out) if args.out else Path("results") / f"{Path(rig.name).stem}-repeatability"
@@ -493,14 +517,21 @@ def main(argv: list[str] | None = None) -> int:
         return _cmd_bench(raw[1:])
     args = _parser().parse_args(argv)
     args.argv = list(sys.argv[1:] if argv is None else argv)
+    if getattr(args, "seed", 0) < 0:
+        print(f"vrig {args.command}: --seed must be >= 0, got {args.seed}", file=sys.stderr)
+        return 2
     if args.command == "demo":
-        from .demo import run_demo
+        from .demo import MAX_SAMPLES, MIN_SAMPLES, run_demo
 
-        if args.samples < 2000:
-            print("vrig demo: --samples must be >= 2000", file=sys.stderr)
+        if not MIN_SAMPLES <= args.samples <= MAX_SAMPLES:
+            print(
+                f"vrig demo: --samples must be >= {MIN_SAMPLES} and <= {MAX_SAMPLES} (a longer "
+                f"record's regression matrix exceeds the 2 GiB memory budget), got {args.samples}",
+                file=sys.stderr,
+            )
             return 2
         if not 0 <= args.noise < 1:
-            print("vrig demo: --noise must be in [0, 1)", file=sys.stderr)
+            print(f"vrig demo: --noise must be in [0, 1), got {args.noise:g}", file=sys.stderr)
             return 2
         from identification.errors import UnstableModelError
 

@@ -13,7 +13,13 @@ import numpy as np
 
 from identification import Narx, band_limited_noise, metrics, random_narx
 
-__all__ = ["run_demo"]
+__all__ = ["MAX_SAMPLES", "MIN_SAMPLES", "run_demo"]
+
+MIN_SAMPLES = 2000
+"""Shortest demo record: the cubic model has 454 terms per output."""
+MAX_SAMPLES = 500_000
+"""Longest demo record: its regression matrix (375,000 identification rows x 454 terms x 8 bytes =
+1.3 GB) stays within the identification package's 2 GiB memory budget per array."""
 
 
 def _row(cells, widths):
@@ -24,7 +30,24 @@ def run_demo(*, seed: int = 0, n_samples: int = 20_000, noise: float = 0.01) -> 
     """Identify a random stable 3-output, 2-input cubic NARX (order 2) and print the figures.
 
     Returns the figures as a dict (errors in %, times in seconds).
+
+    Raises
+    ------
+    ValueError
+        ``n_samples`` outside ``MIN_SAMPLES .. MAX_SAMPLES``, or ``noise`` outside [0, 1),
+        checked before anything is generated.
     """
+    if (
+        not isinstance(n_samples, (int, np.integer))
+        or isinstance(n_samples, bool)
+        or not MIN_SAMPLES <= n_samples <= MAX_SAMPLES
+    ):
+        raise ValueError(
+            f"n_samples must be an integer >= {MIN_SAMPLES} and <= {MAX_SAMPLES:,} (the "
+            f"regression matrix of a longer record exceeds the memory budget), got {n_samples!r}"
+        )
+    if not (np.isfinite(noise) and 0 <= noise < 1):
+        raise ValueError(f"noise must be a fraction in [0, 1), got {noise!r}")
     rng = np.random.default_rng(seed)
     truth = random_narx(3, 2, 2, 3, seed=rng)
     u = band_limited_noise(n_samples, 2, cutoff=0.3, seed=rng)

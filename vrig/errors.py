@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-__all__ = ["RigLimitError", "RigModelError", "SimulationInstabilityError"]
+__all__ = ["RigLimitError", "RigModelError", "RigParameterError", "SimulationInstabilityError"]
 
 
 class RigLimitError(RuntimeError):
@@ -48,3 +48,22 @@ class SimulationInstabilityError(RuntimeError):
 
 class RigModelError(ValueError):
     """A rig model (MJCF or its side-car description) is inconsistent or incomplete."""
+
+
+class RigParameterError(RigModelError):
+    """A rig value (a side-car entry or a ``load_rig`` override) is missing its type, is not a
+    finite number, lies outside its allowed range, or is an unknown key.
+
+    Attributes
+    ----------
+    key : str
+        Where the value sits, e.g. ``"outputs[0].transducer.noise_rms"`` or ``"moving_mass"``.
+    value : object
+        The offending value.
+    allowed : str
+        The allowed range or values, e.g. ``"a finite number > 0"``.
+    """
+
+    def __init__(self, message: str, key: str = "", value=None, allowed: str = ""):
+        super().__init__(message)
+        self.key, self.value, self.allowed = key, value, allowed

@@ -13,6 +13,8 @@ from collections.abc import Callable, Sequence
 import numpy as np
 from scipy import signal
 
+from identification.budget import check_allocation, product
+
 from .timehistory import TimeHistory
 
 __all__ = [
@@ -23,6 +25,23 @@ __all__ = [
     "sine_sweep",
     "triangular_psd",
 ]
+
+
+def _check_record(n_samples, fs, channels: int, what: str) -> None:
+    """Validate a generated record's size before anything is allocated: ``n_samples`` an
+    integer >= 8, ``fs`` finite > 0, and samples x channels x 8 bytes within the memory budget
+    (:mod:`identification.budget`, 2 GiB per array)."""
+    if not isinstance(n_samples, (int, np.integer)) or isinstance(n_samples, bool):
+        raise ValueError(f"n_samples must be an integer, got {n_samples!r}")
+    if n_samples < 8:
+        raise ValueError(f"n_samples must be >= 8, got {n_samples}")
+    if not (isinstance(fs, (int, float, np.integer, np.floating)) and np.isfinite(fs) and fs > 0):
+        raise ValueError(f"fs must be a finite sample rate > 0 Hz, got {fs!r}")
+    check_allocation(
+        product(n_samples, channels, 8),
+        f"{what} of {int(n_samples):,} samples x {channels} channel(s) x 8 bytes",
+        "generate a shorter record",
+    )
 
 
 def _band(f, band):
@@ -93,12 +112,16 @@ def random_drive(
     seed : int or numpy.random.Generator
     names, unit : channel names and unit of the returned TimeHistory.
     """
-    if n_samples < 8:
-        raise ValueError(f"n_samples must be >= 8, got {n_samples}")
-    if not fs > 0:
-        raise ValueError(f"fs must be > 0 Hz, got {fs}")
+    if not isinstance(channels, (int, np.integer)) or isinstance(channels, bool) or channels < 1:
+        raise ValueError(f"channels must be a positive integer, got {channels!r}")
+    _check_record(n_samples, fs, int(channels), "the random drive")
     if rms is not None and peak is not None:
         raise ValueError("give rms or peak, not both")
+    for name, level in (("rms", rms), ("peak", peak)):
+        if level is not None and not np.all(
+            np.isfinite(np.asarray(level, float)) & (np.asarray(level, float) >= 0)
+        ):
+            raise ValueError(f"{name} must be finite and >= 0 for every channel, got {level!r}")
     shapes = list(psd) if isinstance(psd, Sequence) else [psd] * channels
     if len(shapes) != channels:
         raise ValueError(f"{len(shapes)} PSDs for {channels} channels")
@@ -142,6 +165,11 @@ def sine_sweep(
     """Linear or logarithmic sine sweep from ``f0`` to ``f1`` Hz (scipy.signal.chirp)."""
     if kind not in ("linear", "log"):
         raise ValueError(f"kind must be 'linear' or 'log', got {kind!r}")
+    if not (np.isfinite(duration) and duration > 0):
+        raise ValueError(f"duration must be a finite number of seconds > 0, got {duration!r}")
+    if not (np.isfinite(fs) and fs > 0):
+        raise ValueError(f"fs must be a finite sample rate > 0 Hz, got {fs!r}")
+    _check_record(max(round(duration * fs), 8), fs, 1, "the sine sweep")
     if not (0 <= f0 < fs / 2 and 0 < f1 <= fs / 2) or (kind == "log" and f0 <= 0):
         raise ValueError(
             f"sweep {f0}-{f1} Hz must lie in (0, fs/2 = {fs / 2}] (log sweeps need f0 > 0)"

@@ -217,9 +217,9 @@ class DriveIterationEnv(gym.Env):
         self.task = IterationTask(
             edges=self.edges,
             tolerance=float(tolerance),
-            trip_penalty=float(trip_penalty),
-            energy_penalty=float(energy_penalty),
-            step_penalty=float(step_penalty),
+            trip_penalty=trip_penalty,
+            energy_penalty=energy_penalty,
+            step_penalty=step_penalty,
         )
         self.max_iterations = int(max_iterations)
         self.layout = ActionLayout(
@@ -305,6 +305,9 @@ class DriveIterationEnv(gym.Env):
 
     # ------------------------------------------------------------------ API
     def reset(self, *, seed: int | None = None, options: dict | None = None):
+        # the episode is over until this reset succeeds: a reset that raises leaves no episode
+        # for ``step`` to continue (it would mix the old drive with the new target)
+        self._done = True
         super().reset(seed=seed)
         options = dict(options or {})
         unknown = set(options) - {"desired", "field_seed", "run_seed"}
@@ -336,7 +339,9 @@ class DriveIterationEnv(gym.Env):
 
     def step(self, action):
         if self._done:
-            raise RuntimeError("the episode is over: call reset() first")
+            raise RuntimeError(
+                "no episode in progress (it ended, or the last reset() raised): call reset() first"
+            )
         gains, reidentify, clipped = self._gains(action)
         ph, task = self.physics, self.task
         eta_before = self.scores[0]

@@ -89,6 +89,21 @@ class IterationTask:
     energy_penalty: float = 0.1
     step_penalty: float = 0.0
 
+    def __post_init__(self):
+        """Penalties finite and >= 0, the tolerance finite and > 0 (a NaN or infinite penalty
+        would make every reward NaN or infinite)."""
+        if not (np.isfinite(self.tolerance) and self.tolerance > 0):
+            raise ValueError(f"tolerance must be a finite number > 0 [%], got {self.tolerance!r}")
+        for name in ("trip_penalty", "energy_penalty", "step_penalty"):
+            value = getattr(self, name)
+            if not (
+                isinstance(value, (int, float, np.number))
+                and not isinstance(value, bool)
+                and np.isfinite(value)
+                and value >= 0
+            ):
+                raise ValueError(f"{name} must be a finite number >= 0, got {value!r}")
+
     @property
     def n_bands(self) -> int:
         return len(self.edges) - 1

@@ -27,7 +27,17 @@ from ..signals import random_drive, triangular_psd
 from ..timehistory import TimeHistory
 from .methods import make_method
 
-__all__ = ["DriveIteration", "ReconstructionResult", "band_gains", "pseudo_damage", "reconstruct"]
+__all__ = [
+    "MAX_ITERATIONS",
+    "DriveIteration",
+    "ReconstructionResult",
+    "band_gains",
+    "pseudo_damage",
+    "reconstruct",
+]
+
+MAX_ITERATIONS = 99
+"""Most iterations after IT00 (the records are named IT00 .. IT99)."""
 
 
 def pseudo_damage(x: np.ndarray, *, slope: float = 5.0) -> float:
@@ -136,6 +146,58 @@ def band_gains(x: np.ndarray, fs: float, gains: np.ndarray, edges) -> np.ndarray
     return np.fft.irfft(X * gains[:, band].T, n=2 * n, axis=0)[:n]
 
 
+def _check_seed(seed) -> int:
+    if not isinstance(seed, (int, np.integer)) or isinstance(seed, bool) or seed < 0:
+        raise ValueError(f"seed must be a non-negative integer, got {seed!r}")
+    return int(seed)
+
+
+def _check_band(band, fs: float) -> tuple[float, float]:
+    """The simulation band: two finite numbers with 0 <= low < high <= fs/2 (Nyquist)."""
+    try:
+        lo, hi = (float(b) for b in band)
+    except (TypeError, ValueError):
+        raise ValueError(f"bandwidth must be (low, high) in Hz, got {band!r}") from None
+    if not (np.isfinite(lo) and np.isfinite(hi) and 0 <= lo < hi <= fs / 2):
+        raise ValueError(
+            f"bandwidth must satisfy 0 <= low < high <= fs/2 = {fs / 2:g} Hz (Nyquist), got "
+            f"({lo:g}, {hi:g})"
+        )
+    return lo, hi
+
+
+def _check_id_rms(id_rms, full: np.ndarray) -> np.ndarray:
+    """Identification drive RMS per channel: finite, > 0 and at most the full scale."""
+    rms = np.asarray(id_rms if id_rms is not None else 0.05 * full, float)
+    try:
+        rms = np.broadcast_to(rms, full.shape)
+    except ValueError:
+        raise ValueError(
+            f"id_rms must be one value or one per drive channel ({full.size}), got {id_rms!r}"
+        ) from None
+    if not np.all(np.isfinite(rms) & (rms > 0) & (rms <= full)):
+        raise ValueError(
+            f"id_rms must be finite, > 0 and <= each drive's full scale {full.tolist()}, "
+            f"got {rms.tolist()}"
+        )
+    return rms
+
+
+def _check_content(desired: TimeHistory, desres: TimeHistory, band) -> None:
+    """See :meth:`DriveIteration.check_desired`."""
+    scale = np.abs(desired.data).max(axis=0)
+    rms = np.sqrt(np.mean(desres.data**2, axis=0))
+    empty = ~(rms > 1e-9 * scale)
+    if empty.any():
+        k = int(np.argmax(empty))
+        raise ValueError(
+            f"desired channel {desired.names[k]!r} has no content in the simulation band "
+            f"{band[0]:g}-{band[1]:g} Hz after de-trending and DC removal (RMS {rms[k]:.3g} "
+            f"against a peak of {scale[k]:.3g}): a constant or out-of-band record cannot be "
+            "reconstructed"
+        )
+
+
 class DriveIteration:
     """One reconstruction, step by step: the engine of :func:`reconstruct` and of the gymnasium
     environments (so a policy's fixed gain reproduces ``reconstruct`` exactly).
@@ -174,8 +236,8 @@ class DriveIteration:
                 f"desired has {desired.n_channels} channels, the rig {len(rig.outputs)} responses"
             )
         self.rig = rig
-        self.seed = int(seed)
-        self.band = tuple(bandwidth) if bandwidth is not None else tuple(rig.bandwidth)
+        self.seed = _check_seed(seed)
+        self.band = _check_band(bandwidth if bandwidth is not None else rig.bandwidth, rig.fs)
         self.id_band = identification_band(self.band, fs=rig.fs)
         self.method = make_method(method, **method_options)
         if decimation is None:
@@ -188,12 +250,16 @@ class DriveIteration:
         self.taper = float(taper)
         self.n_inputs = len(rig.inputs)
         full = np.array([c.full_scale for c in rig.inputs])
-        self.id_rms = np.broadcast_to(
-            np.asarray(id_rms if id_rms is not None else 0.05 * full, float), (self.n_inputs,)
-        )
+        self.id_rms = _check_id_rms(id_rms, full)
         self.id_psd = id_psd
+        if id_duration is not None and not (np.isfinite(id_duration) and id_duration > 0):
+            raise ValueError(
+                f"id_duration must be a finite number of seconds > 0 (or None: the desired "
+                f"record's length), got {id_duration!r}"
+            )
         self.id_samples = round((id_duration or desired.duration) * rig.fs)
         self.desres = gprepro(desired, self.band)
+        self._desired = desired
         self.n = self.desres.n_samples
         self.names = [c.name for c in rig.inputs]
         self.units = [c.unit for c in rig.inputs]
@@ -273,10 +339,18 @@ class DriveIteration:
             y[self.n - m :] *= ramp[::-1, None]
         return y
 
+    def check_desired(self) -> None:
+        """Raise ``ValueError`` when a desired channel has nothing to reproduce in the band
+        (constant, a pure trend or out of band): its η0 would be a ratio of round-off
+        (2.3e14 % for a constant record). Called by :meth:`first_drive` and, before the
+        identification, by :func:`reconstruct`; identifying alone needs no desired content."""
+        _check_content(self._desired, self.desres, self.band)
+
     def first_drive(self) -> np.ndarray:
         """IT00DRV = inverse(DESRES), band-limited and tapered (:meth:`shape`), at the rig rate."""
         if self.target is None:
             raise RuntimeError("identify() first")
+        self.check_desired()
         return self.shape(self.up(self.target))
 
     def play(self, drive: np.ndarray, iteration: int):
@@ -307,6 +381,26 @@ class DriveIteration:
                 raise ValueError("per-band gains need the band edges")
             return drive + band_gains(corr, self.rig.fs, g, edges)
         return drive + np.broadcast_to(g, (self.n_inputs,)) * corr
+
+
+def _check_loop_options(iterations, divergence, min_increase, gain, n_inputs: int) -> np.ndarray:
+    """Validate the iteration loop's options; returns the gain per drive channel."""
+    if not isinstance(iterations, (int, np.integer)) or not 0 <= iterations <= MAX_ITERATIONS:
+        raise ValueError(
+            f"iterations must be an integer in 0..{MAX_ITERATIONS} (records are named IT00 to "
+            f"IT{MAX_ITERATIONS}), got {iterations!r}"
+        )
+    if not (isinstance(divergence, (int, float, np.number)) and divergence >= 1):
+        raise ValueError(
+            f"divergence must be a factor >= 1 (np.inf: never stop on divergence), got "
+            f"{divergence!r}"
+        )
+    if not (isinstance(min_increase, (int, float, np.number)) and min_increase >= 0):
+        raise ValueError(f"min_increase must be >= 0 percentage points, got {min_increase!r}")
+    gain = np.broadcast_to(np.asarray(gain, dtype=float), (n_inputs,)).copy()
+    if np.any(~np.isfinite(gain)) or np.any(gain <= 0) or np.any(gain > 2):
+        raise ValueError(f"gain must lie in (0, 2], got {gain}")
+    return gain
 
 
 def reconstruct(
@@ -371,11 +465,7 @@ def reconstruct(
     """
     if strategy not in ("fixed", "adaptive"):
         raise ValueError(f"strategy must be 'fixed' or 'adaptive', got {strategy!r}")
-    if not isinstance(iterations, (int, np.integer)) or iterations < 0:
-        raise ValueError(f"iterations must be a non-negative integer, got {iterations!r}")
-    gain = np.broadcast_to(np.asarray(gain, dtype=float), (len(rig.inputs),)).copy()
-    if np.any(~np.isfinite(gain)) or np.any(gain <= 0) or np.any(gain > 2):
-        raise ValueError(f"gain must lie in (0, 2], got {gain}")
+    gain = _check_loop_options(iterations, divergence, min_increase, gain, len(rig.inputs))
     engine = DriveIteration(
         rig,
         desired,
@@ -389,6 +479,7 @@ def reconstruct(
         seed=seed,
         **method_options,
     )
+    engine.check_desired()
     engine.identify()
     drive = engine.first_drive()
     result = ReconstructionResult(

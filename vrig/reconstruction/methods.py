@@ -36,6 +36,14 @@ class _InverseTimeDomain:
         raise NotImplementedError
 
     def __init__(self, *, lead="auto", max_lead: int = 32, responses=None, max_radius=0.995):
+        if lead != "auto" and not _is_count(lead):
+            raise ValueError(f"lead must be 'auto' or a number of samples >= 0, got {lead!r}")
+        if not _is_count(max_lead):
+            raise ValueError(f"max_lead must be a number of samples >= 0, got {max_lead!r}")
+        if max_radius is not None and not (
+            isinstance(max_radius, (int, float, np.number)) and 0 < max_radius <= 1
+        ):
+            raise ValueError(f"max_radius must lie in (0, 1] or be None, got {max_radius!r}")
         self.lead = lead
         self.max_lead = max_lead
         self.responses = _names(responses, "responses")
@@ -74,6 +82,7 @@ class InverseArx(_InverseTimeDomain):
     def __init__(self, order: int = 4, **kw):
         super().__init__(**kw)
         self.order = order
+        self._model()  # validate the order now, not at identification
 
     def _model(self):
         return Arx(order=self.order)
@@ -154,8 +163,8 @@ class SplitSpectra:
     def __init__(
         self, split_hz: float, low=None, high=None, *, low_responses=None, high_responses=None
     ):
-        if not split_hz > 0:
-            raise ValueError(f"split_hz must be > 0 Hz, got {split_hz!r}")
+        if not (isinstance(split_hz, (int, float, np.number)) and 0 < split_hz < np.inf):
+            raise ValueError(f"split_hz must be a finite frequency > 0 Hz, got {split_hz!r}")
         self.split_hz = split_hz
         self.low = low or InverseArx(4)
         self.high = high or InverseArx(4)
@@ -187,6 +196,11 @@ class SplitSpectra:
         )
 
 
+def _is_count(v) -> bool:
+    """A non-negative integer (not a bool)."""
+    return isinstance(v, (int, np.integer)) and not isinstance(v, bool) and v >= 0
+
+
 def _names(names, what):
     if names is None:
         return None
@@ -210,6 +224,14 @@ class InverseFrf:
     name = "frf"
 
     def __init__(self, *, nperseg: int = 512, rcond: float = 1e-3, tikhonov: float = 1e-3):
+        if not (_is_count(nperseg) and nperseg >= 8):
+            raise ValueError(f"nperseg must be an integer >= 8, got {nperseg!r}")
+        if not (isinstance(rcond, (int, float, np.number)) and 0 <= rcond < 1):
+            raise ValueError(
+                f"rcond must be a relative singular-value threshold in [0, 1), got {rcond!r}"
+            )
+        if not (isinstance(tikhonov, (int, float, np.number)) and 0 <= tikhonov < np.inf):
+            raise ValueError(f"tikhonov must be a finite number >= 0, got {tikhonov!r}")
         self.nperseg, self.rcond, self.tikhonov = nperseg, rcond, tikhonov
 
     def identify(self, iddrv: TimeHistory, idres: TimeHistory) -> None:

@@ -23,6 +23,9 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import signal
 
+from ..errors import RigParameterError
+from ._checks import check_number
+
 __all__ = ["AntiAliasFilter", "Transducer", "acquire"]
 
 
@@ -38,6 +41,20 @@ class Transducer:
     mains_hz: float = 50.0
     bits: int = 0  # ADC resolution over ±full scale; 0 = no quantisation
 
+    def __post_init__(self):
+        """Validate every field (a :class:`~vrig.errors.RigParameterError` names it)."""
+        if not isinstance(self.kind, str):
+            raise RigParameterError(
+                f"transducer kind must be a string, got {self.kind!r}", "kind", self.kind, "a string"
+            )
+        check_number("gain", self.gain, nonzero=True)
+        for key in ("noise_rms", "highpass_hz", "mains_amplitude"):
+            check_number(key, getattr(self, key), minimum=0)
+        check_number("mains_hz", self.mains_hz, exclusive_minimum=0)
+        object.__setattr__(
+            self, "bits", check_number("bits", self.bits, integer=True, minimum=0, maximum=32)
+        )
+
 
 @dataclass(frozen=True)
 class AntiAliasFilter:
@@ -45,6 +62,12 @@ class AntiAliasFilter:
 
     order: int = 6
     cutoff: float = 0.4  # fraction of the DAQ sample rate fs (0.4 fs: 80 % of Nyquist)
+
+    def __post_init__(self):
+        """Validate: ``order`` an integer in [1, 20], ``cutoff`` in (0, 0.5) of fs."""
+        order = check_number("anti_alias.order", self.order, integer=True, minimum=1, maximum=20)
+        object.__setattr__(self, "order", order)
+        check_number("anti_alias.cutoff", self.cutoff, exclusive_minimum=0, exclusive_maximum=0.5)
 
     def sos(self, fs: float, physics_rate: float) -> np.ndarray:
         wn = self.cutoff * fs / (physics_rate / 2.0)
@@ -62,6 +85,16 @@ class AntiAliasFilter:
         return h
 
 
+_MIN_HIGHPASS = 1e-12
+"""High-pass corners below this fraction of the physics rate are DC coupling: their time constant
+(> 1e11 physics steps) exceeds any record, and the filter's steady state is singular in floating
+point (a corner of 1e-276 Hz made ``sosfilt_zi`` fail)."""
+
+
+def _highpass_active(t: Transducer, physics_rate: float) -> bool:
+    return t.highpass_hz > _MIN_HIGHPASS * physics_rate
+
+
 def _highpass_sos(corner_hz: float, physics_rate: float) -> np.ndarray:
     return signal.butter(1, corner_hz, btype="highpass", fs=physics_rate, output="sos")
 
@@ -69,7 +102,7 @@ def _highpass_sos(corner_hz: float, physics_rate: float) -> np.ndarray:
 def transducer_response(t: Transducer, f, physics_rate: float) -> np.ndarray:
     """Complex response of the transducer's dynamics and gain at ``f`` [Hz]."""
     h = np.full(np.shape(f), t.gain, dtype=complex)
-    if t.highpass_hz > 0:
+    if _highpass_active(t, physics_rate):
         _, hp = signal.sosfreqz(
             _highpass_sos(t.highpass_hz, physics_rate), worN=np.asarray(f, float), fs=physics_rate
         )
@@ -97,7 +130,7 @@ def acquire(
     x = np.empty_like(raw)
     for j, t in enumerate(transducers):
         col = raw[:, j] * t.gain
-        if t.highpass_hz > 0:  # started in its steady state for the initial value (powered before)
+        if _highpass_active(t, physics_rate):  # started in its steady state (powered before)
             sos = _highpass_sos(t.highpass_hz, physics_rate)
             col, _ = signal.sosfilt(sos, col, zi=signal.sosfilt_zi(sos) * col[0])
         x[:, j] = col

@@ -43,6 +43,9 @@ from numba import types
 from numba.core import cgutils
 from numba.extending import intrinsic
 
+from ..errors import RigParameterError
+from ._checks import check_number
+
 __all__ = ["MAX_CHANNELS", "TRIP_KINDS", "HydraulicActuator", "install", "trip_record"]
 
 MAX_CHANNELS = 16
@@ -51,6 +54,7 @@ _NINT = 8
 _UD_HEADER = 8
 _UD_PER_CHANNEL = 8
 TRIP_KINDS = {1: "stroke", 2: "force", 3: "following error"}
+_NON_NEGATIVE = ("leakage", "kp", "ki", "kd", "pressure_feedback")
 
 
 @dataclass(frozen=True)
@@ -80,6 +84,13 @@ class HydraulicActuator:
     error_limit: float = 0.01  # following-error interlock [m]
     controller_rate: float = 5000.0  # controller update rate [Hz] (<= physics rate)
 
+    def __post_init__(self):
+        """Validate every field: a finite number, > 0 (>= 0 for ``leakage``, the gains and
+        ``pressure_feedback``); a :class:`~vrig.errors.RigParameterError` names it."""
+        for f in fields(self):
+            bound = {"minimum": 0} if f.name in _NON_NEGATIVE else {"exclusive_minimum": 0}
+            check_number(f.name, getattr(self, f.name), **bound)
+
     @property
     def velocity_limit(self) -> float:
         """No-load velocity at full valve opening ``Q_max / A`` [m/s]."""
@@ -94,8 +105,10 @@ class HydraulicActuator:
         names = {f.name for f in fields(self)}
         unknown = set(changes) - names
         if unknown:
-            raise ValueError(
-                f"unknown hydraulic parameter(s) {sorted(unknown)}; known: {sorted(names)}"
+            raise RigParameterError(
+                f"unknown hydraulic parameter(s) {sorted(unknown)}; known: {sorted(names)}",
+                key=", ".join(sorted(unknown)),
+                allowed=", ".join(sorted(names)),
             )
         return HydraulicActuator(**{**asdict(self), **changes})
 

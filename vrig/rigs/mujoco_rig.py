@@ -16,7 +16,7 @@ import mujoco
 import numpy as np
 from mujoco import rollout
 
-from ..errors import RigLimitError, RigModelError, SimulationInstabilityError
+from ..errors import RigLimitError, RigModelError, RigParameterError, SimulationInstabilityError
 from ..timehistory import TimeHistory
 from . import hydraulics
 from .daq import acquire
@@ -26,12 +26,15 @@ from .spec import (
     OutputDef,
     RigDescription,
     check_drive_limits,
+    check_outputs_for_rate,
     read_description,
 )
 
 __all__ = ["MujocoRig"]
 
 _STATE = mujoco.mjtState.mjSTATE_FULLPHYSICS
+_MAX_DECIMATION = 10_000  # physics steps per DAQ sample
+_ELEMENTS = ("joint", "body", "geom", "site", "actuator", "tendon", "equality", "sensor")
 
 
 class MujocoRig:
@@ -60,18 +63,26 @@ class MujocoRig:
         )
         if fidelity not in ("full", "fast"):
             raise ValueError(f"fidelity must be 'full' or 'fast', got {fidelity!r}")
+        if not isinstance(seed, (int, np.integer)) or isinstance(seed, bool) or seed < 0:
+            raise ValueError(f"seed must be a non-negative integer, got {seed!r}")
         unknown = set(overrides) - set(desc.parameters)
         if unknown:
-            raise ValueError(
+            raise RigParameterError(
                 f"unknown parameter(s) {sorted(unknown)} for rig {desc.name!r}; documented "
-                f"parameters: {sorted(desc.parameters)}"
+                f"parameters: {sorted(desc.parameters)}",
+                key=", ".join(sorted(unknown)),
+                allowed=", ".join(sorted(desc.parameters)),
             )
         self._desc = desc
         self.fidelity = fidelity
         self.parameters = {
-            k: (overrides[k] if k in overrides else p.value) for k, p in desc.parameters.items()
+            k: (p.check(overrides[k]) if k in overrides else p.value)
+            for k, p in desc.parameters.items()
         }
-        spec = mujoco.MjSpec.from_file(str(desc.mjcf))
+        try:
+            spec = mujoco.MjSpec.from_file(str(desc.mjcf))
+        except ValueError as exc:
+            raise RigModelError(f"{desc.mjcf}: MuJoCo could not read the model: {exc}") from exc
         self._inputs, self._outputs = list(desc.inputs), list(desc.outputs)
         for name, value in self.parameters.items():
             self._apply(spec, desc.parameters[name], value)
@@ -87,7 +98,7 @@ class MujocoRig:
         self.timestep = float(self.model.opt.timestep)
         ratio = 1.0 / (desc.fs * self.timestep)
         self.decimation = round(ratio)
-        if abs(ratio - self.decimation) > 1e-6 or self.decimation < 1:
+        if abs(ratio - self.decimation) > 1e-6 or not 1 <= self.decimation <= _MAX_DECIMATION:
             hint = (
                 " (fidelity='fast' halves the physics rate: it needs fs to divide half the "
                 "documented physics rate)"
@@ -96,7 +107,7 @@ class MujocoRig:
             )
             raise RigModelError(
                 f"{desc.name}: the physics rate {1 / self.timestep:g} Hz must be an integer multiple "
-                f"of fs = {desc.fs:g} Hz{hint}"
+                f"(1..{_MAX_DECIMATION}) of fs = {desc.fs:g} Hz{hint}"
             )
         self._bind()
         self._presettle()
@@ -105,44 +116,46 @@ class MujocoRig:
 
     # ------------------------------------------------------------------ set-up
     def _apply(self, spec: mujoco.MjSpec, param, value) -> None:
+        """Apply one parameter's rules; any failure is a RigModelError naming the parameter
+        (a channel setting it makes invalid, e.g. a high-pass corner beyond fs/2, included)."""
         for rule in param.apply:
-            v = rule.get("map", {}).get(str(value).lower(), value) if "map" in rule else value
-            if "scale" in rule:
-                v = v * rule["scale"]
-            if "input" in rule or "output" in rule:
-                self._apply_channel(rule, v, param.name)
-                continue
-            kind = next(
-                (
-                    k
-                    for k in (
-                        "joint",
-                        "body",
-                        "geom",
-                        "site",
-                        "actuator",
-                        "tendon",
-                        "equality",
-                        "sensor",
-                    )
-                    if k in rule
-                ),
-                None,
-            )
-            if kind is None:
-                raise RigModelError(f"parameter {param.name!r}: rule {rule} names no element")
-            element = getattr(spec, kind)(rule[kind])
-            if element is None:
-                raise RigModelError(f"parameter {param.name!r}: no {kind} named {rule[kind]!r}")
-            attr = rule["attr"]
-            current = getattr(element, attr)
-            if rule.get("symmetric"):
-                v = [-float(v), float(v)]
-            if "index" in rule:
-                arr = np.array(current, dtype=float)
-                arr[rule["index"]] = v
-                v = arr
-            setattr(element, attr, v)
+            try:
+                self._apply_rule(spec, param, rule, value)
+                check_outputs_for_rate(self._outputs, self._desc.fs, f"rule {rule}")
+            except RigParameterError as exc:
+                raise RigParameterError(
+                    f"parameter {param.name!r} = {value!r}: {exc}", exc.key, exc.value, exc.allowed
+                ) from None
+            except RigModelError:
+                raise
+            except (AttributeError, TypeError, IndexError, KeyError, ValueError) as exc:
+                raise RigModelError(
+                    f"rig {self._desc.name!r}: parameter {param.name!r} = {value!r} cannot be "
+                    f"applied by the rule {rule} ({type(exc).__name__}: {exc})"
+                ) from None
+
+    def _apply_rule(self, spec: mujoco.MjSpec, param, rule: dict, value) -> None:
+        v = rule.get("map", {}).get(str(value).lower(), value) if "map" in rule else value
+        if "scale" in rule:
+            v = v * rule["scale"]
+        if "input" in rule or "output" in rule:
+            self._apply_channel(rule, v, param.name)
+            return
+        kind = next((k for k in _ELEMENTS if k in rule), None)
+        if kind is None:
+            raise RigModelError(f"parameter {param.name!r}: rule {rule} names no element")
+        element = getattr(spec, kind)(rule[kind])
+        if element is None:
+            raise RigModelError(f"parameter {param.name!r}: no {kind} named {rule[kind]!r}")
+        attr = rule["attr"]
+        current = getattr(element, attr)
+        if rule.get("symmetric"):
+            v = [-float(v), float(v)]
+        if "index" in rule:
+            arr = np.array(current, dtype=float)
+            arr[rule["index"]] = v
+            v = arr
+        setattr(element, attr, v)
 
     def _apply_channel(self, rule, value, pname) -> None:
         if "input" in rule:
@@ -430,6 +443,11 @@ class MujocoRig:
         full = np.array([o.spec.full_scale for o in self._outputs])
         sampled, _ = self._acquire(raw, full, rng)
         sampled = sampled[settle // dec :]
+        if not np.all(np.isfinite(sampled)):  # e.g. a huge transducer gain overflowed
+            raise SimulationInstabilityError(
+                f"{self.name}: non-finite response after the transducer chain (check the "
+                "transducer gains and noise levels)"
+            )
         peak = np.abs(sampled).max(axis=0)
         over = peak > full
         if over.any():

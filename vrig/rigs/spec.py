@@ -8,17 +8,32 @@ See ``models/README.md`` for the format.
 
 from __future__ import annotations
 
+import contextlib
+import functools
 import json
+import math
 from dataclasses import dataclass, field
 from pathlib import Path
 
+import jsonschema
 import numpy as np
 
-from ..errors import RigLimitError, RigModelError
+from ..errors import RigLimitError, RigModelError, RigParameterError
+from ._checks import check_number, describe_range
 from .daq import AntiAliasFilter, Transducer
 from .hydraulics import HydraulicActuator
 
-__all__ = ["ChannelSpec", "Parameter", "RigDescription", "check_drive_limits", "read_description"]
+__all__ = [
+    "ChannelSpec",
+    "Parameter",
+    "RigDescription",
+    "check_drive_limits",
+    "check_outputs_for_rate",
+    "read_description",
+    "rig_schema",
+    "schema_path",
+    "validate_description",
+]
 
 
 @dataclass(frozen=True)
@@ -48,13 +63,25 @@ class ChannelSpec:
     description: str = ""
     limits: dict = field(default_factory=dict)
 
+    def __post_init__(self):
+        if not (isinstance(self.name, str) and self.name):
+            raise RigParameterError(
+                f"channel name must be a non-empty string, got {self.name!r}", "name", self.name
+            )
+        check_number(f"{self.name}: full_scale", self.full_scale, exclusive_minimum=0)
+
     def __str__(self) -> str:
         return f"{self.name} [{self.unit}] ±{self.full_scale:g} ({self.kind})"
 
 
 @dataclass(frozen=True)
 class Parameter:
-    """A documented, overridable rig parameter."""
+    """A documented, overridable rig parameter.
+
+    A numeric parameter's allowed range is given by ``minimum``, ``exclusive_minimum``,
+    ``maximum``, ``exclusive_maximum`` (the side-car's ``minimum``, ``exclusiveMinimum``, ...;
+    none: any finite number); a string parameter's values by ``enum``.
+    """
 
     name: str
     value: object
@@ -62,6 +89,52 @@ class Parameter:
     description: str
     source: str
     apply: tuple
+    minimum: float | None = None
+    exclusive_minimum: float | None = None
+    maximum: float | None = None
+    exclusive_maximum: float | None = None
+    enum: tuple | None = None
+
+    @property
+    def allowed(self) -> str:
+        """The allowed values in words."""
+        if isinstance(self.value, str):
+            if self.enum is None:
+                return "a string"
+            return "one of " + ", ".join(repr(v) for v in self.enum)
+        return describe_range(
+            minimum=self.minimum,
+            exclusive_minimum=self.exclusive_minimum,
+            maximum=self.maximum,
+            exclusive_maximum=self.exclusive_maximum,
+        ) + (f" [{self.unit}]" if self.unit and self.unit != "-" else "")
+
+    def check(self, value):
+        """``value`` if it is allowed for this parameter, else :class:`RigParameterError`
+        naming the parameter and its allowed range (the type follows the default's)."""
+        if isinstance(self.value, str):
+            ok = isinstance(value, str) and (self.enum is None or value in self.enum)
+        else:
+            try:
+                check_number(
+                    self.name,
+                    value,
+                    minimum=self.minimum,
+                    exclusive_minimum=self.exclusive_minimum,
+                    maximum=self.maximum,
+                    exclusive_maximum=self.exclusive_maximum,
+                )
+                ok = True
+            except RigParameterError:
+                ok = False
+        if not ok:
+            raise RigParameterError(
+                f"parameter {self.name!r} must be {self.allowed}, got {value!r}",
+                key=self.name,
+                value=value,
+                allowed=self.allowed,
+            )
+        return value
 
 
 @dataclass(frozen=True)
@@ -71,6 +144,9 @@ class InputDef:
     joint: str | None
     hydraulic: HydraulicActuator | None
     noise_rms: float  # valve-command noise (hydraulic) or drive noise in drive units (direct)
+
+    def __post_init__(self):
+        check_number(f"{self.spec.name}: noise_rms", self.noise_rms, minimum=0)
 
 
 @dataclass(frozen=True)
@@ -100,37 +176,99 @@ class RigDescription:
     notes: tuple[str, ...] = ()
 
 
-def _need(d: dict, key: str, where: str):
-    if key not in d:
-        raise RigModelError(f"{where}: missing required key {key!r}")
-    return d[key]
+def schema_path() -> Path:
+    """The published JSON Schema of the side-car: ``models/rig.schema.json`` of a source
+    checkout, else the installed ``vrig.models/rig.schema.json``."""
+    checkout = Path(__file__).resolve().parents[2] / "models" / "rig.schema.json"
+    if checkout.exists():
+        return checkout
+    from importlib.resources import files
+
+    return Path(str(files("vrig.models") / "rig.schema.json"))
 
 
-def read_description(path) -> RigDescription:
-    """Read and validate a ``*.rig.json`` side-car file."""
-    path = Path(path)
+@functools.cache
+def rig_schema() -> dict:
+    """The side-car's JSON Schema (draft 2020-12) as a dict."""
+    return json.loads(schema_path().read_text())
+
+
+def _json_path(parts) -> str:
+    out = ""
+    for p in parts:
+        out += f"[{p}]" if isinstance(p, int) else (f".{p}" if out else str(p))
+    return out or "(top level)"
+
+
+def _non_finite(node, path=()):
+    """Paths and values of every NaN or infinite number in a parsed JSON document."""
+    if isinstance(node, float) and not math.isfinite(node):
+        yield path, node
+    elif isinstance(node, dict):
+        for k, v in node.items():
+            yield from _non_finite(v, (*path, k))
+    elif isinstance(node, list):
+        for i, v in enumerate(node):
+            yield from _non_finite(v, (*path, i))
+
+
+def _schema_allowed(error) -> str:
+    """What the failing part of the schema allows, in words."""
+    sub = error.schema if isinstance(error.schema, dict) else {}
+    if error.validator == "additionalProperties":
+        return "allowed keys: " + ", ".join(sorted(sub.get("properties", {})))
+    if "enum" in sub:
+        return "allowed: " + ", ".join(repr(v) for v in sub["enum"])
+    if sub.get("type") in ("number", "integer"):
+        return "allowed: " + describe_range(
+            minimum=sub.get("minimum"),
+            exclusive_minimum=sub.get("exclusiveMinimum"),
+            maximum=sub.get("maximum"),
+            exclusive_maximum=sub.get("exclusiveMaximum"),
+            integer=sub["type"] == "integer",
+            nonzero="not" in sub,
+        )
+    return sub.get("description", "")
+
+
+def validate_description(raw, where: str = "side-car") -> None:
+    """Check a parsed side-car against :func:`rig_schema` (and for NaN/infinite numbers, which
+    JSON Schema cannot see); raises :class:`RigParameterError` naming the key and what is
+    allowed (unknown keys such as a misspelt ``noise_rmss`` included)."""
+    for path, value in _non_finite(raw):
+        key = _json_path(path)
+        raise RigParameterError(
+            f"{where}: {key} is {value!r}: every number must be finite", key, value, "finite"
+        )
+    error = jsonschema.exceptions.best_match(
+        jsonschema.Draft202012Validator(rig_schema()).iter_errors(raw)
+    )
+    if error is not None:
+        key = _json_path(error.absolute_path)
+        allowed = _schema_allowed(error)
+        raise RigParameterError(
+            f"{where}: {key}: {error.message}" + (f" ({allowed})" if allowed else ""),
+            key,
+            error.instance,
+            allowed,
+        )
+
+
+@contextlib.contextmanager
+def _located(where: str):
+    """Re-raise a value error of a dataclass check with the side-car location in front."""
     try:
-        raw = json.loads(path.read_text())
-    except json.JSONDecodeError as exc:
-        raise RigModelError(f"{path}: not valid JSON ({exc})") from exc
-    where = str(path)
-    mjcf = path.parent / _need(raw, "mjcf", where)
-    if not mjcf.exists():
-        raise RigModelError(f"{where}: MJCF file {mjcf} not found")
-    fs = float(_need(raw, "fs", where))
-    inputs = []
-    for i, item in enumerate(_need(raw, "inputs", where)):
-        w = f"{where} inputs[{i}]"
-        kind = _need(item, "kind", w)
-        if kind not in ("hydraulic", "direct"):
-            raise RigModelError(f"{w}: kind must be 'hydraulic' or 'direct', got {kind!r}")
-        hyd = None
-        limits = {}
+        yield
+    except RigParameterError as exc:
+        raise RigParameterError(f"{where}: {exc}", exc.key, exc.value, exc.allowed) from None
+
+
+def _read_input(item: dict, w: str) -> InputDef:
+    kind = item["kind"]
+    hyd, limits = None, {}
+    with _located(w):
         if kind == "hydraulic":
-            try:
-                hyd = HydraulicActuator().replace(**item.get("hydraulic", {}))
-            except ValueError as exc:
-                raise RigModelError(f"{w}: {exc}") from None
+            hyd = HydraulicActuator().replace(**item.get("hydraulic", {}))
             limits = {
                 "stroke": hyd.stroke,
                 "force": hyd.force_limit,
@@ -138,69 +276,120 @@ def read_description(path) -> RigDescription:
                 "following_error": hyd.error_limit,
             }
         spec = ChannelSpec(
-            name=_need(item, "name", w),
-            unit=_need(item, "unit", w),
-            full_scale=float(_need(item, "full_scale", w)),
+            name=item["name"],
+            unit=item["unit"],
+            full_scale=float(item["full_scale"]),
             kind=kind,
             description=item.get("description", ""),
             limits=limits,
         )
         if hyd is not None and spec.full_scale > hyd.stroke:
-            raise RigModelError(
-                f"{w}: full scale {spec.full_scale} exceeds the stroke {hyd.stroke}"
+            raise RigParameterError(
+                f"full_scale {spec.full_scale} exceeds the stroke {hyd.stroke}",
+                "full_scale",
+                spec.full_scale,
+                f"a number in (0, {hyd.stroke:g}] (the stroke)",
             )
-        inputs.append(
-            InputDef(
-                spec,
-                _need(item, "actuator", w),
-                item.get("joint"),
-                hyd,
-                float(item.get("noise_rms", 0.0)),
-            )
-        )
-    outputs = []
-    for i, item in enumerate(_need(raw, "outputs", where)):
-        w = f"{where} outputs[{i}]"
-        tr = item.get("transducer", {})
-        try:
-            transducer = Transducer(**tr)
-        except TypeError as exc:
-            raise RigModelError(f"{w}: bad transducer entry ({exc})") from None
+        return InputDef(spec, item["actuator"], item.get("joint"), hyd, item.get("noise_rms", 0.0))
+
+
+def _read_output(item: dict, w: str) -> OutputDef:
+    with _located(w):
+        transducer = Transducer(**item.get("transducer", {}))
         spec = ChannelSpec(
-            name=_need(item, "name", w),
-            unit=_need(item, "unit", w),
-            full_scale=float(_need(item, "full_scale", w)),
+            name=item["name"],
+            unit=item["unit"],
+            full_scale=float(item["full_scale"]),
             kind=transducer.kind,
             description=item.get("description", ""),
             limits={"range": float(item["full_scale"])},
         )
-        outputs.append(
-            OutputDef(spec, _need(item, "sensor", w), int(item.get("component", 0)), transducer)
+    return OutputDef(spec, item["sensor"], int(item.get("component", 0)), transducer)
+
+
+def _read_parameter(name: str, p: dict, w: str) -> Parameter:
+    param = Parameter(
+        name=name,
+        value=p["value"],
+        unit=p.get("unit", "-"),
+        description=p["description"],
+        source=p.get("source", ""),
+        apply=tuple(p["apply"]),
+        minimum=p.get("minimum"),
+        exclusive_minimum=p.get("exclusiveMinimum"),
+        maximum=p.get("maximum"),
+        exclusive_maximum=p.get("exclusiveMaximum"),
+        enum=tuple(p["enum"]) if "enum" in p else None,
+    )
+    with _located(w):
+        param.check(param.value)  # the default must lie in the parameter's own range
+    return param
+
+
+def check_outputs_for_rate(outputs, fs: float, where: str) -> None:
+    """A transducer's high-pass corner must lie below the DAQ Nyquist frequency fs/2."""
+    for o in outputs:
+        check_number(
+            f"{o.spec.name}: transducer.highpass_hz",
+            o.transducer.highpass_hz,
+            where=where,
+            minimum=0,
+            exclusive_maximum=fs / 2,
         )
+
+
+def _band(raw: dict, fs: float, where: str) -> tuple[float, float]:
+    band = tuple(float(b) for b in raw.get("bandwidth_hz", (0.0, fs / 4)))
+    if not 0 <= band[0] < band[1] <= fs / 2:
+        allowed = f"[low, high] with 0 <= low < high <= fs/2 = {fs / 2:g} Hz"
+        raise RigParameterError(
+            f"{where}: bandwidth_hz must be {allowed}, got {list(band)}", "bandwidth_hz", band, allowed
+        )
+    return band
+
+
+def read_description(path) -> RigDescription:
+    """Read and validate a ``*.rig.json`` side-car file.
+
+    Raises
+    ------
+    RigModelError
+        Not JSON, or the MJCF file is missing.
+    RigParameterError
+        (a RigModelError) a value of the wrong type, not finite, outside its allowed range
+        (:func:`rig_schema` and the checks it names), or an unknown key.
+    """
+    path = Path(path)
+    try:
+        raw = json.loads(path.read_text())
+    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
+        raise RigModelError(f"{path}: not valid JSON ({exc})") from exc
+    where = str(path)
+    validate_description(raw, where)
+    mjcf = path.parent / raw["mjcf"]
+    if not mjcf.is_file():
+        raise RigModelError(f"{where}: MJCF file {mjcf} not found")
+    fs = float(raw["fs"])
+    inputs = [_read_input(item, f"{where} inputs[{i}]") for i, item in enumerate(raw["inputs"])]
+    outputs = [_read_output(it, f"{where} outputs[{i}]") for i, it in enumerate(raw["outputs"])]
     names = [c.spec.name for c in inputs] + [c.spec.name for c in outputs]
     if len(set(names)) != len(names):
         raise RigModelError(f"{where}: channel names must be unique, got {names}")
-    params = {}
-    for name, p in raw.get("parameters", {}).items():
-        w = f"{where} parameters.{name}"
-        params[name] = Parameter(
-            name=name,
-            value=_need(p, "value", w),
-            unit=p.get("unit", "-"),
-            description=_need(p, "description", w),
-            source=p.get("source", ""),
-            apply=tuple(_need(p, "apply", w)),
-        )
-    aa = AntiAliasFilter(**raw.get("anti_alias", {}))
-    band = tuple(float(b) for b in raw.get("bandwidth_hz", (0.0, fs / 4)))
+    check_outputs_for_rate(outputs, fs, where)
+    params = {
+        name: _read_parameter(name, p, f"{where} parameters.{name}")
+        for name, p in raw.get("parameters", {}).items()
+    }
+    with _located(where):
+        aa = AntiAliasFilter(**raw.get("anti_alias", {}))
     return RigDescription(
-        name=_need(raw, "name", where),
+        name=raw["name"],
         title=raw.get("title", ""),
         description=raw.get("description", ""),
         path=path,
         mjcf=mjcf,
         fs=fs,
-        bandwidth=band,
+        bandwidth=_band(raw, fs, where),
         settle_time=float(raw.get("settle_time", 0.0)),
         anti_alias=aa,
         inputs=tuple(inputs),
