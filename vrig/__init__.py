@@ -5,7 +5,7 @@ signals, processing, reconstruction workflow, gymnasium environments and CLI liv
 """
 
 from . import envs as _envs  # noqa: F401  (registers the vrig/ gymnasium environments)
-from .errors import RigLimitError, RigModelError, SimulationInstabilityError
+from .errors import ReconstructionError, RigLimitError, RigModelError, SimulationInstabilityError
 from .field import pseudo_field
 from .reconstruction import ReconstructionResult, reconstruct
 from .rigs import ChannelSpec, FileRig, MujocoRig, list_rigs, load_rig, rig_path
@@ -18,6 +18,7 @@ __all__ = [
     "ChannelSpec",
     "FileRig",
     "MujocoRig",
+    "ReconstructionError",
     "ReconstructionResult",
     "RigLimitError",
     "RigModelError",

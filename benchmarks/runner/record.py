@@ -161,7 +161,11 @@ def _desired(rig_name: str, fidelity: str, seconds: float, desired: int):
 
 
 def _error(stage: str, exc: BaseException) -> dict:
-    return {"stage": stage, "type": type(exc).__name__, "message": str(exc)}
+    """``{stage, type, message}``; a :class:`vrig.ReconstructionError` (nothing could be played)
+    is reported by the type of the error that caused it."""
+    cause = getattr(exc, "cause", None)
+    kind = type(cause if isinstance(cause, BaseException) else exc).__name__
+    return {"stage": stage, "type": kind, "message": str(exc)}
 
 
 def _split(th, holdout: float):
