@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import signal
 import sys
 import threading
@@ -25,6 +26,7 @@ from dataclasses import asdict, replace
 from pathlib import Path
 
 from .execute import BACKENDS, SettingsMismatchError, Store, execute
+from .lifetime import LockHeldError, PidLock, die_with_parent
 from .record import RecordKey, Settings
 from .registry import default_plugin_specs, get_method, load_plugins, method_names, plugin_spec
 from .report import write_outputs
@@ -142,11 +144,35 @@ def _thesis_available() -> str | None:
     return None
 
 
-def _thesis_child(out: str, quick: bool, conn) -> None:
-    """Run the thesis reproduction (in its own process; its log goes to a file)."""
+THESIS_LOCK = "thesis_reproduction.lock"
+"""Lock file of the thesis reproduction in a results folder (owner's pid; see lifetime.py)."""
+
+
+def _thesis_child(out: str, quick: bool, conn, parent_pid: int | None = None) -> None:
+    """Run the thesis reproduction (in its own process; its log goes to a file).
+
+    The process dies with the runner (``parent_pid``; :func:`~.lifetime.die_with_parent`) and
+    holds ``thesis_reproduction.lock`` in ``out`` while it writes there: when another run's
+    thesis reproduction holds it, this one is skipped, so two never write the same files."""
+    if parent_pid is not None:
+        die_with_parent(parent_pid)
+    out_dir = Path(out)
+    try:
+        with PidLock(out_dir / THESIS_LOCK):
+            result = _thesis_report(out_dir, quick)
+    except LockHeldError as exc:
+        result = (
+            f"thesis reproduction skipped: another run's (pid {exc.pid}) is writing "
+            f"{out_dir / 'thesis_reproduction.md'}",
+            True,
+        )
+    conn.send(result)
+    conn.close()
+
+
+def _thesis_report(out_dir: Path, quick: bool) -> tuple[str, bool]:
     import contextlib
 
-    out_dir = Path(out)
     t = time.perf_counter()
     with (
         open(out_dir / "thesis_reproduction.log", "w", encoding="utf-8", buffering=1) as fh,
@@ -157,7 +183,7 @@ def _thesis_child(out: str, quick: bool, conn) -> None:
             from benchmarks.thesis_tables import thesis_report
 
             thesis_report(out_dir, quick)
-            result = (
+            return (
                 f"thesis reproduction {out_dir / 'thesis_reproduction.md'} "
                 f"({time.perf_counter() - t:.0f} s; log thesis_reproduction.log)",
                 True,
@@ -166,9 +192,7 @@ def _thesis_child(out: str, quick: bool, conn) -> None:
             import traceback
 
             traceback.print_exc()
-            result = (f"thesis reproduction FAILED: {type(exc).__name__}: {exc}", False)
-    conn.send(result)
-    conn.close()
+            return (f"thesis reproduction FAILED: {type(exc).__name__}: {exc}", False)
 
 
 class _Thesis:
@@ -180,7 +204,9 @@ class _Thesis:
 
         ctx = multiprocessing.get_context("spawn")
         self.recv, send = ctx.Pipe(duplex=False)
-        self.proc = ctx.Process(target=_thesis_child, args=(str(out), quick, send), daemon=False)
+        self.proc = ctx.Process(
+            target=_thesis_child, args=(str(out), quick, send, os.getpid()), daemon=False
+        )
         self.proc.start()
         send.close()
 
@@ -273,7 +299,7 @@ def cmd_run(args) -> int:
         )
         return 130
     wanted = {store.path(k).name for k in keys}
-    records = [r for r in store.all_records() if f"{r['id']}.json" in wanted]
+    records = [r for r in store.all_records(settings) if f"{r['id']}.json" in wanted]
     written = write_outputs(out, records, asdict(settings), plots=not args.no_plots)
     if thesis is not None:
         if not args.quiet:
@@ -319,6 +345,8 @@ def cmd_run(args) -> int:
 def cmd_report(args) -> int:
     store = Store(args.out)
     records = store.all_records()
+    for name, why in store.rejected().items():
+        print(f"benchmarks report: left out {name}: {why}", file=sys.stderr)
     if not records:
         print(f"benchmarks report: no records in {args.out}/records", file=sys.stderr)
         return 2
