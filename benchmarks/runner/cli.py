@@ -10,12 +10,15 @@
     python -m benchmarks list                              # rigs and registered methods
 
 Exit status: 0 done (failed *records* are results, not errors), 1 the thesis report failed,
-2 bad arguments or a results folder made with other settings.
+2 bad arguments, a plugin that does not load, a results folder that cannot be written or was made
+with other settings, 3 an unexpected error (``VRIG_DEBUG=1`` shows the traceback), 130
+interrupted (Ctrl-C, SIGTERM). Every error is one line on stderr.
 """
 
 from __future__ import annotations
 
 import argparse
+import importlib.util
 import json
 import os
 import signal
@@ -28,7 +31,14 @@ from pathlib import Path
 from .execute import BACKENDS, SettingsMismatchError, Store, execute
 from .lifetime import LockHeldError, PidLock, die_with_parent
 from .record import RecordKey, Settings
-from .registry import default_plugin_specs, get_method, load_plugins, method_names, plugin_spec
+from .registry import (
+    PluginError,
+    default_plugin_specs,
+    get_method,
+    load_plugins,
+    method_names,
+    plugin_spec,
+)
 from .report import write_outputs
 
 __all__ = ["FULL", "QUICK", "main"]
@@ -262,6 +272,9 @@ def cmd_run(args) -> int:
     except SettingsMismatchError as exc:
         print(f"benchmarks run: {exc}", file=sys.stderr)
         return 2
+    except OSError as exc:
+        print(f"benchmarks run: --out {out}: cannot write there ({exc})", file=sys.stderr)
+        return 2
     print(
         f"benchmark: {len(rigs)} rigs × {len(methods)} methods ({', '.join(methods)}) × "
         f"{len(desired)} desired × {len(seeds)} seeds -> {out}/"
@@ -370,9 +383,48 @@ def cmd_list(args) -> int:
     return 0
 
 
+class _BadInput(Exception):
+    """Bad input found before the run: one line, exit status 2."""
+
+
+def _check_run_args(args) -> None:
+    if args.workers is not None and args.workers < 1:
+        raise _BadInput(f"--workers must be >= 1, got {args.workers}")
+    for flag, values in (("--desired", args.desired), ("--seeds", args.seeds)):
+        if values and min(values) < 0:
+            raise _BadInput(f"{flag} must be integers >= 0, got {values}")
+    if args.backend == "ray" and importlib.util.find_spec("ray") is None:
+        raise _BadInput("--backend ray needs Ray: pip install 'vrig[ray]' (or 'ray>=2.9')")
+    if args.out is not None and args.out.exists() and not args.out.is_dir():
+        raise _BadInput(f"--out {args.out} is a file, not a folder")
+
+
 def main(argv: list[str] | None = None, *, prog: str | None = None) -> int:
+    """``python -m benchmarks`` / ``vrig bench``; returns the exit status (module doc)."""
     parser = _parser()
     if prog:
         parser.prog = prog
     args = parser.parse_args(argv)
-    return {"run": cmd_run, "report": cmd_report, "list": cmd_list}[args.command](args)
+    name = f"{parser.prog} {args.command}".replace("python -m benchmarks", "benchmarks")
+    try:
+        if args.command == "run":
+            _check_run_args(args)
+        return {"run": cmd_run, "report": cmd_report, "list": cmd_list}[args.command](args)
+    except KeyboardInterrupt:
+        print(f"{name}: interrupted", file=sys.stderr)
+        return 130
+    except (_BadInput, PluginError) as exc:
+        print(f"{name}: " + " ".join(str(exc).split()), file=sys.stderr)
+        return 2
+    except OSError as exc:  # e.g. a disk that filled up while the outputs were written
+        print(f"{name}: failed: {exc}", file=sys.stderr)
+        return 1
+    except Exception as exc:
+        if os.environ.get("VRIG_DEBUG"):
+            raise
+        msg = " ".join(f"{type(exc).__name__}: {exc}".split())
+        print(
+            f"{name}: unexpected error {msg} (a bug: VRIG_DEBUG=1 shows the traceback)",
+            file=sys.stderr,
+        )
+        return 3

@@ -9,6 +9,7 @@ See ``models/README.md`` for the format.
 from __future__ import annotations
 
 import json
+import math
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -106,18 +107,69 @@ def _need(d: dict, key: str, where: str):
     return d[key]
 
 
+def _number(d: dict, key: str, where: str, *, low: float = 0.0, strict: bool = True, default=None):
+    """``d[key]`` as a finite float above ``low`` (``strict``) or at least ``low``."""
+    value = _need(d, key, where) if default is None else d.get(key, default)
+    try:
+        x = float(value)
+    except (TypeError, ValueError):
+        x = float("nan")
+    if not (math.isfinite(x) and (x > low if strict else x >= low)):
+        bound = f"> {low:g}" if strict else f">= {low:g}"
+        raise RigModelError(f"{where}: {key} must be a finite number {bound}, got {value!r}")
+    return x
+
+
+def _band(raw: dict, fs: float, where: str) -> tuple[float, float]:
+    band = raw.get("bandwidth_hz", (0.0, fs / 4))
+    try:
+        lo, hi = (float(b) for b in band)
+    except (TypeError, ValueError):
+        lo = hi = float("nan")
+    if not (math.isfinite(lo) and math.isfinite(hi) and 0 <= lo < hi <= fs / 2):
+        raise RigModelError(
+            f"{where}: bandwidth_hz must be [low, high] with 0 <= low < high <= fs/2 = "
+            f"{fs / 2:g} Hz, got {band!r}"
+        )
+    return lo, hi
+
+
 def read_description(path) -> RigDescription:
-    """Read and validate a ``*.rig.json`` side-car file."""
+    """Read and validate a ``*.rig.json`` side-car file.
+
+    Raises
+    ------
+    RigModelError
+        The file cannot be read, is not JSON, or a key is missing or out of range (the message
+        names the file, the key and the allowed range).
+    """
     path = Path(path)
+    try:
+        return _read_description(path)
+    except RigModelError:
+        raise
+    except (TypeError, ValueError, AttributeError, KeyError) as exc:  # a malformed structure
+        raise RigModelError(
+            f"{path}: malformed rig description ({type(exc).__name__}: {exc})"
+        ) from None
+
+
+def _read_description(path: Path) -> RigDescription:
     try:
         raw = json.loads(path.read_text())
     except json.JSONDecodeError as exc:
         raise RigModelError(f"{path}: not valid JSON ({exc})") from exc
+    except (OSError, UnicodeDecodeError) as exc:
+        raise RigModelError(f"{path}: cannot read the rig description ({exc})") from None
     where = str(path)
+    if not isinstance(raw, dict):
+        raise RigModelError(
+            f"{where}: a rig description is a JSON object, got {type(raw).__name__}"
+        )
     mjcf = path.parent / _need(raw, "mjcf", where)
-    if not mjcf.exists():
+    if not mjcf.is_file():
         raise RigModelError(f"{where}: MJCF file {mjcf} not found")
-    fs = float(_need(raw, "fs", where))
+    fs = _number(raw, "fs", where)
     inputs = []
     for i, item in enumerate(_need(raw, "inputs", where)):
         w = f"{where} inputs[{i}]"
@@ -140,7 +192,7 @@ def read_description(path) -> RigDescription:
         spec = ChannelSpec(
             name=_need(item, "name", w),
             unit=_need(item, "unit", w),
-            full_scale=float(_need(item, "full_scale", w)),
+            full_scale=_number(item, "full_scale", w),
             kind=kind,
             description=item.get("description", ""),
             limits=limits,
@@ -155,7 +207,7 @@ def read_description(path) -> RigDescription:
                 _need(item, "actuator", w),
                 item.get("joint"),
                 hyd,
-                float(item.get("noise_rms", 0.0)),
+                _number(item, "noise_rms", w, strict=False, default=0.0),
             )
         )
     outputs = []
@@ -169,7 +221,7 @@ def read_description(path) -> RigDescription:
         spec = ChannelSpec(
             name=_need(item, "name", w),
             unit=_need(item, "unit", w),
-            full_scale=float(_need(item, "full_scale", w)),
+            full_scale=_number(item, "full_scale", w),
             kind=transducer.kind,
             description=item.get("description", ""),
             limits={"range": float(item["full_scale"])},
@@ -192,7 +244,7 @@ def read_description(path) -> RigDescription:
             apply=tuple(_need(p, "apply", w)),
         )
     aa = AntiAliasFilter(**raw.get("anti_alias", {}))
-    band = tuple(float(b) for b in raw.get("bandwidth_hz", (0.0, fs / 4)))
+    band = _band(raw, fs, where)
     return RigDescription(
         name=_need(raw, "name", where),
         title=raw.get("title", ""),
@@ -201,7 +253,7 @@ def read_description(path) -> RigDescription:
         mjcf=mjcf,
         fs=fs,
         bandwidth=band,
-        settle_time=float(raw.get("settle_time", 0.0)),
+        settle_time=_number(raw, "settle_time", where, strict=False, default=0.0),
         anti_alias=aa,
         inputs=tuple(inputs),
         outputs=tuple(outputs),
