@@ -393,7 +393,7 @@ def _read_field(args, rig, band):
         return field, source, {"DESDRV": desdrv}
     try:
         field = io.read(args.desired)
-    except (ValueError, OSError, KeyError, TypeError, EOFError) as exc:
+    except Exception as exc:  # whatever a damaged file makes the reader raise: bad input
         raise _UsageError(f"--desired: cannot read {args.desired}: {exc}") from None
     field, notes = _check_desired(field, rig)
     if args.seconds is not None:
