@@ -208,3 +208,159 @@ def test_ray_backend_equals_serial(serial_run, tmp_path, request):
     }
     assert len(want) == 2
     assert _by_id(other.all_records()) == want
+
+
+# ---------------------------------------------------------------------------------------------
+# clean shutdown: no process outlives a killed runner; malformed records are recomputed
+# ---------------------------------------------------------------------------------------------
+SLEEPY_PLUGIN = """
+import multiprocessing, os, time
+from pathlib import Path
+from benchmarks.runner import register_method
+from vrig.reconstruction import InverseArx
+
+if multiprocessing.parent_process() is not None:  # loaded in a pool worker: a long record
+    Path(os.environ["VRIG_TEST_MARKERS"], str(os.getpid())).write_text("started")
+    time.sleep(60)
+register_method("sleepy", lambda: InverseArx(2))
+"""
+
+
+def _descendants(pid: int) -> set[int]:
+    """Pids of every live descendant of ``pid`` (Linux /proc)."""
+    children: dict[int, list[int]] = {}
+    for stat in Path("/proc").glob("[0-9]*/stat"):
+        try:
+            text = stat.read_text()
+        except OSError:
+            continue
+        fields = text[text.rindex(")") + 2 :].split()
+        children.setdefault(int(fields[1]), []).append(int(stat.parent.name))
+    out, todo = set(), [pid]
+    while todo:
+        for child in children.get(todo.pop(), []):
+            out.add(child)
+            todo.append(child)
+    return out
+
+
+def _running(pid: int) -> bool:
+    try:
+        text = Path(f"/proc/{pid}/stat").read_text()
+    except OSError:
+        return False
+    return text[text.rindex(")") + 2] not in "ZX"
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="reads /proc")
+def test_kill_9_of_the_runner_leaves_no_worker_or_thesis_process(tmp_path):
+    """A record in a pool worker and the thesis reproduction alongside; the runner is killed
+    with SIGKILL while the worker is busy: every process it started is gone soon after (on
+    today's code the worker and the thesis report run on)."""
+    plugin, markers, out = tmp_path / "sleepy.py", tmp_path / "markers", tmp_path / "out"
+    plugin.write_text(SLEEPY_PLUGIN)
+    markers.mkdir()
+    env = {**os.environ, "PYTHONPATH": str(ROOT), "VRIG_TEST_MARKERS": str(markers)}
+    cmd = [
+        sys.executable, "-m", "benchmarks", "run", "--rigs", "shock-absorber", "--methods",
+        "sleepy", "--desired", "0", "--seconds", "4", "--iterations", "0", "--fidelity",
+        "fast", "--backend", "process", "--workers", "1", "--plugin", str(plugin), "--no-plots",
+        "--quick", "--out", str(out),
+    ]  # fmt: skip
+    proc = subprocess.Popen(
+        cmd, cwd=ROOT, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE
+    )
+    started: set[int] = set()
+    try:
+        deadline = time.monotonic() + 90
+        while not list(markers.iterdir()) and proc.poll() is None:
+            assert time.monotonic() < deadline, "the worker did not start"
+            time.sleep(0.05)
+        assert proc.poll() is None, proc.stderr.read().decode()
+        started = _descendants(proc.pid)
+        workers = {int(p.name) for p in markers.iterdir()}
+        assert workers <= started and len(started) >= 2  # the worker + the thesis process
+        proc.kill()
+        proc.wait()
+        deadline = time.monotonic() + 5
+        while any(_running(p) for p in started) and time.monotonic() < deadline:
+            time.sleep(0.05)
+        assert not [p for p in started if _running(p)]
+    finally:
+        proc.kill()
+        proc.wait()
+        for p in started:  # what the test started, by pid (only left on a failure)
+            if _running(p):
+                os.kill(p, 9)
+
+
+def test_tampered_foreign_and_nan_records_are_recomputed(serial_run, tmp_path):
+    import shutil
+
+    store, _ = serial_run
+    shutil.copytree(store.out, tmp_path / "run")
+    other = Store(tmp_path / "run")
+    arx, fir, frf = (other.path(k) for k in KEYS)
+    rec = json.loads(arx.read_text())
+    rec["eta0_best"] = float("nan")  # a NaN score (json writes NaN)
+    arx.write_text(json.dumps(rec))
+    fir.write_text(frf.read_text())  # a foreign record: frf's under fir's name
+    rec = json.loads(frf.read_text())
+    rec["eta0_per_iteration"] = ";".join(map(str, rec["eta0_per_iteration"]))  # wrong type
+    frf.write_text(json.dumps(rec))
+    assert not any(other.finished(k, SETTINGS) for k in KEYS)
+    assert other.all_records(SETTINGS) == [] and len(other.rejected(SETTINGS)) == 3
+    summary = execute(
+        KEYS, SETTINGS, other, plugin_specs=default_plugin_specs(), backend="serial", log=None
+    )
+    assert sorted(summary["computed"]) == sorted(p.stem for p in (arx, fir, frf))
+    assert _by_id(other.all_records(SETTINGS)) == _by_id(store.all_records())
+
+
+def test_a_record_of_another_key_or_with_a_bad_id_is_not_finished(serial_run, tmp_path):
+    from benchmarks.runner.record import check_record
+
+    store, _ = serial_run
+    rec = store.load(KEYS[0])
+    assert check_record(rec, KEYS[0], SETTINGS) is None
+    assert "not of" in check_record(rec, KEYS[1], SETTINGS)
+    assert "does not match" in check_record({**rec, "id": "x"}, KEYS[0], SETTINGS)
+    assert "other settings" in check_record(rec, KEYS[0], Settings(seconds=5.0))
+    bad_key = {**rec, "key": {**rec["key"], "seed": "0"}}
+    assert "integers" in check_record(bad_key, None, SETTINGS)
+    assert "status" in check_record({**rec, "status": "running"}, KEYS[0], SETTINGS)
+    assert "finite" in check_record({**rec, "rms_error": float("inf")}, KEYS[0], SETTINGS)
+
+
+def test_the_thesis_report_does_not_overlap_another_runs(tmp_path, monkeypatch):
+    """While another process holds the folder's thesis lock, a run's thesis reproduction is
+    skipped (and touches nothing); once that process is dead its lock is stale."""
+    import multiprocessing
+
+    from benchmarks import thesis_tables
+    from benchmarks.runner import cli
+
+    calls = []
+    monkeypatch.setattr(thesis_tables, "thesis_report", lambda out, quick: calls.append(out))
+    holder = subprocess.Popen(
+        [sys.executable, "-c", "import sys, time; from benchmarks.runner.lifetime import PidLock; "
+         "PidLock(sys.argv[1]).acquire(); print('locked', flush=True); time.sleep(60)",
+         str(tmp_path / cli.THESIS_LOCK)],
+        cwd=ROOT, env={**os.environ, "PYTHONPATH": str(ROOT)}, stdout=subprocess.PIPE,
+    )  # fmt: skip
+    try:
+        assert holder.stdout.readline() == b"locked\n"
+
+        def run_child():
+            recv, send = multiprocessing.Pipe(duplex=False)
+            cli._thesis_child(str(tmp_path), True, send)
+            return recv.recv()
+
+        line, ok = run_child()
+        assert ok and "skipped" in line and f"pid {holder.pid}" in line
+        assert calls == [] and not (tmp_path / "thesis_reproduction.log").exists()
+    finally:
+        holder.kill()
+        holder.wait()
+    line, ok = run_child()  # the holder is dead: its lock is stale
+    assert ok and "skipped" not in line and calls == [tmp_path]

@@ -5,6 +5,8 @@ from __future__ import annotations
 import contextlib
 import io
 import json
+import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -12,6 +14,11 @@ import pytest
 import vrig
 import vrig.io
 from vrig.cli import main
+
+ROOT = Path(__file__).resolve().parents[1]
+MODELS = ROOT / "models"
+if str(ROOT) not in sys.path:  # benchmarks/ (vrig bench) is a source-checkout package
+    sys.path.insert(0, str(ROOT))
 
 
 def test_demo_identifies_and_reports(capsys):
@@ -254,3 +261,248 @@ def test_demo_says_when_the_stability_contract_refuses_the_fit(capsys):
     assert main(["demo", "--samples", "4000", "--seed", "5"]) == 1
     err = capsys.readouterr().err
     assert "diverges on its own identification input" in err and "--samples" in err
+
+
+# ---------------------------------------------------------------------------------------------
+# hostile input: one line on stderr, a documented exit code, never a traceback
+# ---------------------------------------------------------------------------------------------
+def _one_line(capsys) -> str:
+    err = capsys.readouterr().err
+    assert "Traceback" not in err
+    lines = [ln for ln in err.splitlines() if ln.strip() and "it/s]" not in ln]  # no tqdm bars
+    assert len(lines) == 1, err
+    return lines[0]
+
+
+def _no_run(monkeypatch):
+    """Fail the test if a rig is run (so a check is shown to come before the run)."""
+
+    def refuse(*args, **kwargs):
+        raise AssertionError("the rig ran before the bad argument was reported")
+
+    monkeypatch.setattr("vrig.cli.pseudo_field", refuse)
+
+
+def test_the_help_documents_the_exit_codes(capsys):
+    with pytest.raises(SystemExit):
+        main(["reconstruct", "--help"])
+    out = " ".join(capsys.readouterr().out.split())
+    for code in (
+        "0 success",
+        "1 the rig or the iteration failed",
+        "2 bad input",
+        "130 interrupted",
+    ):
+        assert code in out
+
+
+@pytest.mark.parametrize(
+    "argv",
+    [
+        ["demo", "--seed", "-1"],
+        ["reconstruct", "--rig", "shock-absorber", "--seed", "-1"],
+        ["repeatability", "--rig", "shock-absorber", "--seed", "-1"],
+    ],
+)
+def test_a_negative_seed_is_bad_input(argv, capsys, monkeypatch, tmp_path):
+    _no_run(monkeypatch)
+    assert main([*argv, *(["--out", str(tmp_path / "o")] if argv[0] != "demo" else [])]) == 2
+    assert "--seed must be an integer >= 0, got -1" in _one_line(capsys)
+
+
+@pytest.mark.parametrize("command", ["reconstruct", "repeatability"])
+def test_out_under_a_file_is_refused_before_the_run(command, capsys, monkeypatch, tmp_path):
+    _no_run(monkeypatch)
+    (tmp_path / "afile").write_text("x")
+    out = tmp_path / "afile" / "sub"
+    argv = [command, "--rig", "shock-absorber", "--seconds", "2", "--out", str(out)]
+    assert main(argv) == 2
+    line = _one_line(capsys)
+    assert line.startswith(f"vrig {command}: --out ") and "is a file, not a folder" in line
+
+
+@pytest.mark.skipif(not Path("/proc/self").is_dir(), reason="needs /proc (Linux)")
+@pytest.mark.parametrize("command", ["reconstruct", "repeatability"])
+def test_out_in_an_unwritable_place_is_refused_before_the_run(command, capsys, monkeypatch):
+    _no_run(monkeypatch)
+    out = Path("/proc/vrig-no-such-folder/results")  # nobody can create folders in /proc
+    argv = [command, "--rig", "shock-absorber", "--seconds", "2", "--out", str(out)]
+    assert main(argv) == 2
+    assert f"--out {out}: cannot write there" in _one_line(capsys)
+
+
+def _side_car(tmp_path, **changes) -> Path:
+    d = json.loads((MODELS / "shock-absorber" / "shock-absorber.rig.json").read_text())
+    d["mjcf"] = str(MODELS / "shock-absorber" / "shock-absorber.xml")
+    d.update(changes)
+    path = tmp_path / "user.rig.json"
+    path.write_text(json.dumps(d))
+    return path
+
+
+@pytest.mark.parametrize(
+    "changes,message",
+    [
+        ({"fs": 0}, "fs: 0 is less than or equal to the minimum of 0 (allowed: a finite number > 0)"),
+        ({"fs": "nan"}, "fs: 'nan' is not of type 'number' (allowed: a finite number > 0)"),
+        ({"fs": "fast"}, "fs: 'fast' is not of type 'number' (allowed: a finite number > 0)"),
+        ({"bandwidth_hz": [5, 1]}, "bandwidth_hz must be [low, high] with 0 <= low < high"),
+        ({"settle_time": -1}, "settle_time: -1 is less than the minimum of 0 (allowed: a finite"),
+    ],
+)
+def test_describe_a_bad_side_car_is_bad_input(changes, message, capsys, tmp_path):
+    path = _side_car(tmp_path, **changes)
+    assert main(["describe", str(path)]) == 2
+    line = _one_line(capsys)
+    assert line.startswith(f"vrig describe: {path}: ") and message in line
+
+
+def test_describe_a_folder_named_like_a_side_car_is_bad_input(capsys, tmp_path):
+    (tmp_path / "dir.rig.json").mkdir()
+    assert main(["describe", str(tmp_path / "dir.rig.json")]) == 2
+    assert "no rig file" in _one_line(capsys)
+
+
+@pytest.mark.parametrize("command", ["list", "run"])
+def test_a_plugin_that_raises_is_bad_input(command, capsys, tmp_path):
+    plugin = tmp_path / "broken.py"
+    plugin.write_text("raise RuntimeError('this plugin is broken')\n")
+    argv = ["bench", command, "--plugin", str(plugin)]
+    assert main(argv + (["--out", str(tmp_path / "o")] if command == "run" else [])) == 2
+    line = _one_line(capsys)
+    assert f"plugin {plugin} failed to load: RuntimeError: this plugin is broken" in line
+    assert main(["bench", "list", "--plugin", "no_such_plugin_module"]) == 2
+    assert "ModuleNotFoundError" in _one_line(capsys)
+
+
+@pytest.mark.parametrize(
+    "extra,message",
+    [
+        (["--workers", "0"], "--workers must be >= 1, got 0"),
+        (["--desired", "-1"], "--desired must be integers >= 0"),
+        (["--seeds", "0", "-2"], "--seeds must be integers >= 0"),
+        (["--out", "AFILE"], "is a file, not a folder"),
+    ],
+)
+def test_bench_run_bad_input(extra, message, capsys, tmp_path):
+    (tmp_path / "afile").write_text("x")
+    extra = [str(tmp_path / "afile") if e == "AFILE" else e for e in extra]
+    out = [] if "--out" in extra else ["--out", str(tmp_path / "o")]
+    argv = ["bench", "run", "--rigs", "shock-absorber", "--methods", "arx", *out, *extra]
+    assert main(argv) == 2
+    assert message in _one_line(capsys)
+    assert not (tmp_path / "o").exists()
+
+
+def _desired_files(tmp_path) -> dict:
+    files = {"folder": tmp_path / "folder.csv", "not a zip": tmp_path / "damaged.npz"}
+    files["folder"].mkdir()
+    files["not a zip"].write_bytes(b"PK\x03\x04" + bytes(40))  # a zip header, then nothing
+    files["constant"] = tmp_path / "constant.npz"
+    vrig.TimeHistory(np.full((3000, 1), 5.0), 500.0, ["damper_load"], ["N"]).save(files["constant"])
+    files["huge"] = tmp_path / "huge.npz"
+    t = np.arange(3000) / 500.0
+    big = 1e6 * np.sin(2 * np.pi * t)[:, None]  # 1 MN against a ±10 kN load cell
+    vrig.TimeHistory(big, 500.0, ["damper_load"], ["N"]).save(files["huge"])
+    return files
+
+
+@pytest.mark.parametrize(
+    "which,message",
+    [
+        ("folder", "--desired: a folder, not a file"),
+        ("not a zip", "--desired: cannot read"),
+        ("constant", "--desired channel 'damper_load' is constant"),
+        ("huge", "beyond the rig's transducer range ±10000 N"),
+    ],
+)
+def test_an_unusable_desired_file_is_bad_input(which, message, capsys, monkeypatch, tmp_path):
+    files = _desired_files(tmp_path)
+    path = files[which]
+    argv = ["reconstruct", "--rig", "shock-absorber", "--desired", str(path)]
+    assert main([*argv, "--out", str(tmp_path / "o")]) == 2
+    line = _one_line(capsys)
+    assert line.startswith("vrig reconstruct: ") and message in line
+    assert not (tmp_path / "o").exists()
+
+
+def test_a_demo_whose_model_diverges_fails_with_one_line(capsys):
+    # this seed's least-squares cubic model diverges in free run on the validation input
+    assert main(["demo", "--samples", "2000", "--seed", "99999999999999999999"]) == 1
+    line = _one_line(capsys)
+    assert line.startswith("vrig demo: failed: free-run simulation diverged")
+
+
+def test_a_reconstruction_that_cannot_play_it00_keeps_the_identification(
+    capsys, monkeypatch, tmp_path
+):
+    """IT00DRV beyond the drive's full scale (the inverse scaled up 1000x here): exit 1, one
+    line saying what to change, and the identification records, model, summary and the refused
+    drive (record and plot) in --out."""
+    from vrig.reconstruction.iteration import DriveIteration
+
+    first = DriveIteration.first_drive
+    monkeypatch.setattr(DriveIteration, "first_drive", lambda self: 1000 * first(self))
+    out = tmp_path / "failed"
+    argv = ["reconstruct", "--rig", "shock-absorber", "--seconds", "4", "--format", "npz"]
+    assert main([*argv, "--out", str(out)]) == 1
+    line = _one_line(capsys)
+    assert line.startswith("vrig reconstruct: failed: no iteration played: IT00: interlock")
+    assert "IT00DRV was not sent" in line and "use a smaller desired response" in line
+    names = {p.name for p in out.iterdir()}
+    expected = {"IDDRV.npz", "IDRES.npz", "FIELD01.npz", "DESRES01.npz", "DESDRV.npz"}
+    expected |= {"REFUSED00.npz", "model.npz", "summary.json", "refused_drive_vs_limits.png"}
+    assert names == expected
+    refused = vrig.TimeHistory.load(out / "REFUSED00.npz")
+    assert np.abs(refused.data).max() > vrig.load_rig("shock-absorber").inputs[0].full_scale
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["iterations_run"] == -1 and summary["rejected"] == "REFUSED00"
+
+
+@pytest.mark.parametrize(
+    "target,argv",
+    [
+        ("vrig.cli._parser", ["rigs"]),
+        ("vrig.rigs.list_rigs", ["rigs"]),
+        ("vrig.rigs.read_description", ["describe", "shock-absorber"]),
+        ("vrig.reconstruction.reconstruct", ["reconstruct", "--rig", "shock-absorber"]),
+        ("vrig.demo.run_demo", ["demo"]),
+        ("benchmarks.runner.cli.cmd_list", ["bench", "list"]),
+    ],
+)
+def test_ctrl_c_anywhere_exits_130_with_one_line(target, argv, capsys, monkeypatch, tmp_path):
+    def interrupt(*args, **kwargs):
+        raise KeyboardInterrupt
+
+    monkeypatch.chdir(tmp_path)
+    if target.startswith("benchmarks"):
+        import benchmarks.runner.cli  # noqa: F401
+    if target == "vrig.reconstruction.reconstruct":
+        argv = [*argv, "--seconds", "2", "--out", str(tmp_path / "o")]
+        monkeypatch.setattr("vrig.cli.pseudo_field", lambda rig, band, s, seed: _tiny(rig))
+    monkeypatch.setattr(target, interrupt)
+    try:
+        code = main(argv)
+    except KeyboardInterrupt:
+        pytest.fail("KeyboardInterrupt escaped main()")
+    assert code == 130
+    assert _one_line(capsys).endswith(": interrupted")
+
+
+def _tiny(rig):
+    t = np.arange(2000) / rig.fs
+    field = vrig.TimeHistory(np.sin(t)[:, None], rig.fs, ["damper_load"], ["N"])
+    return vrig.TimeHistory(1e-3 * np.sin(t)[:, None], rig.fs, ["actuator_disp"], ["m"]), field
+
+
+def test_an_unexpected_error_is_one_line_and_exit_3(capsys, monkeypatch):
+    def bug(*args, **kwargs):
+        raise ZeroDivisionError("float division by zero")
+
+    monkeypatch.setattr("vrig.rigs.list_rigs", bug)
+    assert main(["rigs"]) == 3
+    line = _one_line(capsys)
+    assert line == (
+        "vrig rigs: unexpected error ZeroDivisionError: float division by zero (a bug: "
+        "VRIG_DEBUG=1 shows the traceback)"
+    )

@@ -68,11 +68,157 @@ def test_a_diverging_iteration_stops_and_keeps_the_best_drive(shaker_case):
     assert res.errors[-1].mean() > 1.5 * res.errors.min()
 
 
-def test_a_drive_beyond_limits_is_never_sent(shaker_case):
+def test_a_drive_beyond_limits_is_never_sent(shaker_case, tmp_path):
+    """IT00DRV beyond the full scale: nothing is played, but the identification records, the
+    model and the refused drive come back in the error and are saved and plotted."""
+    from vrig.plots import save_reconstruction_plots
+
     rig, desired = shaker_case
+    played = []
     huge = desired.with_data(desired.data * 50)
-    with pytest.raises(vrig.RigLimitError, match="IT00DRV"):
-        reconstruct(rig, huge, method="arx", iterations=2, bandwidth=BAND)
+    with pytest.raises(vrig.ReconstructionError, match="IT00DRV") as err:
+        reconstruct(_Recording(rig, played), huge, method="arx", iterations=2, bandwidth=BAND)
+    assert len(played) == 1  # only the identification drive went out
+    exc = err.value
+    assert exc.stage == "IT00" and isinstance(exc.cause, vrig.RigLimitError)
+    assert exc.__cause__ is exc.cause
+    res = exc.result
+    assert res.drives == [] and res.errors.shape == (0, 1) and res.best_iteration == -1
+    np.testing.assert_array_equal(res.id_drive.data, played[0])
+    assert res.id_response is not None and hasattr(res.method, "inverse")  # the fitted model
+    full = rig.inputs[0].full_scale
+    assert res.rejected_name == "REFUSED00" and np.abs(res.rejected_drive.data).max() > full
+    assert "IT00" in res.stopped and "not sent" in res.stopped
+    with pytest.raises(ValueError, match="no iteration was played"):
+        _ = res.final_drive
+
+    folder = vrig.TestFolder(tmp_path / "failed")
+    folder.save(exc.result, field=huge, rig=rig, fmt="npz")
+    assert list(folder.files()) == ["IDDRV", "IDRES", "FIELD01", "DESRES01", "REFUSED00"]
+    np.testing.assert_array_equal(folder.read("REFUSED00").data, res.rejected_drive.data)
+    np.testing.assert_array_equal(folder.read("IDDRV").data, played[0])
+    summary = folder.summary()
+    assert summary["iterations_run"] == -1 and summary["best_iteration"] is None
+    assert summary["rejected"] == "REFUSED00" and "IT00DRV was not sent" in summary["stop_reason"]
+    ((model, lead),) = folder.load_models().values()
+    assert lead == res.method.inverse.lead_
+    x = np.random.default_rng(0).standard_normal((200, 1))
+    np.testing.assert_allclose(model.simulate(x), res.method.inverse.model.simulate(x))
+    pngs = save_reconstruction_plots(exc.result, tmp_path / "failed", rig=rig)
+    assert [p.name for p in pngs] == ["refused_drive_vs_limits.png"]
+
+
+class _Recording:
+    """A rig proxy that records every drive it is asked to play and raises ``fail[k]`` (an
+    exception) on the k-th run (0: the identification drive, 1: IT00DRV, ...)."""
+
+    def __init__(self, rig, played, fail=None):
+        self.rig, self.played, self.fail = rig, played, dict(fail or {})
+        for name in ("inputs", "outputs", "fs", "name", "bandwidth"):
+            setattr(self, name, getattr(rig, name))
+
+    def run(self, drive, seed=None):
+        k = len(self.played)
+        self.played.append(np.array(drive.data))
+        if k in self.fail:
+            raise self.fail[k]
+        return self.rig.run(drive, seed=seed)
+
+
+def _trip(kind="following error"):
+    return vrig.RigLimitError(kind, "amplifier_voltage", 1.25, 3.0, 2.0, "V")
+
+
+@pytest.mark.parametrize(
+    "failure,stopped,rejected",
+    [
+        (lambda: _trip(), "IT01: interlock: following error", "TRIPPED01"),
+        (
+            lambda: vrig.SimulationInstabilityError("mjWARN_BADQACC at t = 1.2 s"),
+            "IT01: SimulationInstabilityError: mjWARN_BADQACC",
+            "TRIPPED01",
+        ),
+    ],
+)
+def test_a_rig_failure_after_it00_keeps_every_iteration_played(
+    shaker_case, failure, stopped, rejected
+):
+    rig, desired = shaker_case
+    played = []
+    res = reconstruct(
+        _Recording(rig, played, {3: failure()}), desired, iterations=4, bandwidth=BAND
+    )
+    assert len(played) == 4  # IDDRV, IT00DRV, IT01DRV, IT02DRV (tripped)
+    assert len(res.drives) == len(res.responses) == res.errors.shape[0] == 2
+    for drv, sent in zip(res.drives, played[1:3], strict=True):
+        np.testing.assert_array_equal(drv.data, sent)
+    assert res.stopped.startswith(stopped.replace("IT01", "IT02"))
+    assert res.rejected_name == rejected.replace("01", "02")
+    np.testing.assert_array_equal(res.rejected_drive.data, played[3])
+    assert res.best_iteration == int(np.argmin(res.errors.mean(axis=1)))
+    assert res.final_drive is res.drives[res.best_iteration]
+    assert type(res.error) is type(failure())
+
+
+class _DivergesOnCorrections(InverseArx):
+    """An inverse whose free run diverges (or returns NaN) on the n-th ``drive`` call: call 0 is
+    inverse(DESRES), call 1 the correction from IT00RES, ..."""
+
+    def __init__(self, order, at, how):
+        super().__init__(order)
+        self.at, self.how, self.calls = at, how, 0
+
+    def drive(self, response):
+        self.calls += 1
+        out = super().drive(response)
+        if self.calls - 1 == self.at:
+            if self.how == "raise":
+                from identification import SimulationDivergedError
+
+                raise SimulationDivergedError(0, "amplifier_voltage", 17, 1e9, 1e6)
+            out = out.copy()
+            out[17, 0] = np.nan
+        return out
+
+
+@pytest.mark.parametrize("how", ["raise", "nan"])
+def test_a_diverged_inverse_after_it00_keeps_every_iteration_played(shaker_case, how):
+    rig, desired = shaker_case
+    played = []
+    method = _DivergesOnCorrections(4, at=2, how=how)  # the correction from IT01RES
+    res = reconstruct(_Recording(rig, played), desired, method=method, iterations=4, bandwidth=BAND)
+    assert len(played) == 3 and len(res.drives) == 2 == res.errors.shape[0]
+    assert res.stopped.startswith("IT02DRV")
+    assert "SimulationDivergedError" in res.stopped
+    assert ("not finite" in res.stopped) == (how == "nan")
+    assert res.rejected_drive is None and res.final_drive is res.drives[res.best_iteration]
+
+
+@pytest.mark.parametrize("how", ["raise", "nan"])
+def test_a_diverged_inverse_at_it00_still_returns_the_identification(shaker_case, how):
+    rig, desired = shaker_case
+    played = []
+    method = _DivergesOnCorrections(4, at=0, how=how)  # inverse(DESRES) itself
+    with pytest.raises(vrig.ReconstructionError) as err:
+        reconstruct(_Recording(rig, played), desired, method=method, bandwidth=BAND)
+    assert len(played) == 1 and err.value.stage == "model"
+    res = err.value.result
+    np.testing.assert_array_equal(res.id_drive.data, played[0])
+    assert res.id_response is not None and res.method is method and res.drives == []
+
+
+def test_an_identification_drive_that_always_trips_is_kept(shaker_case):
+    rig, desired = shaker_case
+    played = []
+    trips = {k: _trip() for k in range(4)}  # full, 1/2, 1/4, 1/8 of the RMS
+    with pytest.raises(vrig.ReconstructionError, match="identification") as err:
+        reconstruct(_Recording(rig, played, trips), desired, bandwidth=BAND)
+    res = err.value.result
+    assert len(played) == 4 and err.value.stage == "identification"
+    assert res.id_drive is None and res.id_response is None
+    assert res.rejected_name == "TRIPPEDID"
+    np.testing.assert_array_equal(res.rejected_drive.data, played[-1])
+    np.testing.assert_allclose(played[-1], played[0] / 8)
 
 
 def test_pseudo_damage_scales_with_the_slope():
@@ -228,8 +374,9 @@ def test_inverse_on_a_subset_of_responses_scores_every_response():
     assert res.method.inverse.model.n_inputs_ == 1  # the inverse sees response b only
     # b = 2 u(t-1) is exactly invertible: both responses are reproduced
     assert res.errors[-1].max() < 2.0
-    with pytest.raises(KeyError):
+    with pytest.raises(vrig.ReconstructionError, match="no channel 'c'") as err:
         reconstruct(rig, desired, method=InverseArx(2, responses=["c"]), iterations=0)
+    assert isinstance(err.value.cause, KeyError) and err.value.result.id_response is not None
 
 
 def test_multiple_transducer_split_spectra_uses_each_bands_own_response():

@@ -5,7 +5,13 @@ signals, processing, reconstruction workflow, gymnasium environments and CLI liv
 """
 
 from . import envs as _envs  # noqa: F401  (registers the vrig/ gymnasium environments)
-from .errors import RigLimitError, RigModelError, RigParameterError, SimulationInstabilityError
+from .errors import (
+    ReconstructionError,
+    RigLimitError,
+    RigModelError,
+    RigParameterError,
+    SimulationInstabilityError,
+)
 from .field import pseudo_field
 from .reconstruction import ReconstructionResult, reconstruct
 from .rigs import ChannelSpec, FileRig, MujocoRig, list_rigs, load_rig, rig_path
@@ -18,6 +24,7 @@ __all__ = [
     "ChannelSpec",
     "FileRig",
     "MujocoRig",
+    "ReconstructionError",
     "ReconstructionResult",
     "RigLimitError",
     "RigModelError",

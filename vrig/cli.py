@@ -15,14 +15,26 @@
 thirds of their transducer ranges; 1 s fade-in and fade-out). It writes the QanTiM test folder
 (:class:`vrig.testfolder.TestFolder`) and the plots (:mod:`vrig.plots`) into ``--out``.
 
-Exit codes: 0 success, 1 the rig or the iteration failed (interlock trip, unstable model), 2 bad
-arguments.
+Exit codes (every error is one line on stderr, ``vrig COMMAND: ...``, never a traceback):
+
+=====  ========================================================================================
+0      success
+1      the rig or the iteration failed (interlock trip, unstable simulation or model; what was
+       made is kept in the results folder)
+2      bad input: arguments, ``--desired`` files, rig descriptions, results folders that cannot
+       be written, plugins that do not load
+3      an unexpected error (a bug: ``VRIG_DEBUG=1`` shows the traceback)
+130    interrupted (Ctrl-C)
+=====  ========================================================================================
 """
 
 from __future__ import annotations
 
 import argparse
+import contextlib
+import os
 import sys
+import tempfile
 import time
 from pathlib import Path
 
@@ -34,6 +46,7 @@ __all__ = ["main"]
 
 
 _METHODS = ("arx", "narx", "split", "frf")
+_DEMO_SAMPLES = (2000, 100_000)  # = vrig.demo's MIN/MAX_SAMPLES (454 terms per output)
 _MAX_SECONDS = 3600.0  # longest record a command plays or reconstructs (--seconds, --desired)
 
 
@@ -43,6 +56,14 @@ class _UsageError(Exception):
 
 class _Failure(Exception):
     """The rig or the iteration failed: reported with the command's name, exit code 1."""
+
+
+EXIT_OK, EXIT_FAILED, EXIT_USAGE, EXIT_BUG, EXIT_INTERRUPTED = 0, 1, 2, 3, 130
+_EXIT_CODES = (
+    "exit codes: 0 success; 1 the rig or the iteration failed (trip, unstable simulation or "
+    "model); 2 bad input (arguments, files, rig descriptions, unwritable --out, plugins); 3 an "
+    "unexpected error (VRIG_DEBUG=1 shows the traceback); 130 interrupted (Ctrl-C)"
+)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -64,15 +85,21 @@ def _parser() -> argparse.ArgumentParser:
         prog="vrig",
         description="vrig: virtual test rigs, ARX/NARX "
         "identification and dynamic response reconstruction",
+        epilog=_EXIT_CODES,
     )
     sub = p.add_subparsers(dest="command", required=True)
-    demo = sub.add_parser("demo", help="identify and simulate a generated non-linear MIMO system")
-    demo.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+    demo = sub.add_parser(
+        "demo", help="identify and simulate a generated non-linear MIMO system", epilog=_EXIT_CODES
+    )
+    demo.add_argument(
+        "--seed", type=int, default=0, help="random seed, an integer >= 0 (default 0)"
+    )
     demo.add_argument(
         "--samples",
         type=_whole_number,
         default=20_000,
-        help="record length, 2000..500000 (default 20000; 2e4 is accepted)",
+        help=f"record length {_DEMO_SAMPLES[0]}..{_DEMO_SAMPLES[1]} (default 20000; 2e4 is "
+        "accepted)",
     )
     demo.add_argument(
         "--noise",
@@ -82,7 +109,9 @@ def _parser() -> argparse.ArgumentParser:
     )
 
     sub.add_parser("rigs", help="list the shipped rigs")
-    desc = sub.add_parser("describe", help="a rig's channels, limits and parameters")
+    desc = sub.add_parser(
+        "describe", help="a rig's channels, limits and parameters", epilog=_EXIT_CODES
+    )
     desc.add_argument("rig", help="rig name (see `vrig rigs`) or a user rig's .rig.json/.xml")
 
     rec = sub.add_parser(
@@ -92,6 +121,7 @@ def _parser() -> argparse.ArgumentParser:
         "response, print the per-iteration error table and write the QanTiM test folder and "
         "plots. Without --desired the desired response is a pseudo-field response: the rig's "
         "response to a road-like random drive (triangular PSD over the simulation band).",
+        epilog=_EXIT_CODES,
     )
     rec.add_argument("--rig", required=True, help="rig name (see `vrig rigs`) or rig file")
     rec.add_argument(
@@ -137,7 +167,7 @@ def _parser() -> argparse.ArgumentParser:
         help="length of the pseudo-field record (default 30 s); with --desired, use only the "
         "first SECONDS of the file",
     )
-    rec.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+    rec.add_argument("--seed", type=int, default=0, help="random seed, an integer >= 0 (default 0)")
     rec.add_argument(
         "--format",
         dest="fmt",
@@ -160,6 +190,7 @@ def _parser() -> argparse.ArgumentParser:
     rep = sub.add_parser(
         "repeatability",
         help="play one random drive several times: repeatability and SNR per channel",
+        epilog=_EXIT_CODES,
     )
     rep.add_argument("--rig", required=True, help="rig name (see `vrig rigs`) or rig file")
     rep.add_argument("--runs", type=int, default=5, help="number of runs (default 5, as §3.1)")
@@ -171,7 +202,7 @@ def _parser() -> argparse.ArgumentParser:
         metavar=("LOW", "HIGH"),
         help="drive band [Hz] (default as for reconstruct)",
     )
-    rep.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+    rep.add_argument("--seed", type=int, default=0, help="random seed, an integer >= 0 (default 0)")
     rep.add_argument("--out", help="folder of the plot (default ./results/<rig>-repeatability)")
     return p
 
@@ -184,9 +215,38 @@ def _load_rig(name: str, *, seed: int = 0):
 
     if not name.endswith((".json", ".xml")) and name not in list_rigs():
         raise _UsageError(f"unknown rig {name!r}; available rigs: {', '.join(list_rigs())}")
-    if name.endswith((".json", ".xml")) and not Path(name).exists():
+    if name.endswith((".json", ".xml")) and not Path(name).is_file():
         raise _UsageError(f"no rig file {name}")
     return load_rig(name, seed=seed)
+
+
+def _check_seed(seed: int) -> None:
+    if seed < 0:
+        raise _UsageError(f"--seed must be an integer >= 0, got {seed}")
+
+
+def _check_writable(path: Path, flag: str = "--out") -> None:
+    """Before the run: ``path`` is (or can be made) a folder this process can write into.
+
+    Creates what is missing and a temporary file to prove it, then removes both again."""
+    created = []
+    try:
+        for p in [*reversed(path.parents), path]:
+            if not p.exists():
+                p.mkdir()
+                created.append(p)
+            elif not p.is_dir():
+                raise _UsageError(f"{flag} {path}: {p} is a file, not a folder")
+        fd, probe = tempfile.mkstemp(dir=path, prefix=".vrig-write-test-")
+        os.close(fd)
+        os.unlink(probe)
+    except OSError as exc:
+        why = exc.strerror or str(exc)
+        raise _UsageError(f"{flag} {path}: cannot write there ({why})") from None
+    finally:
+        for p in reversed(created):
+            with contextlib.suppress(OSError):
+                p.rmdir()
 
 
 def _band(rig, band) -> tuple[float, float]:
@@ -230,6 +290,22 @@ def _check_desired(desired, rig):
     if list(desired.units) != units:
         notes.append(f"units {list(desired.units)} differ from the rig's {units}")
     return desired, notes
+
+
+def _check_content(desired, rig) -> None:
+    """The desired record (as it will be used) is something the rig can reproduce."""
+    data = np.asarray(desired.data)
+    for k, c in enumerate(rig.outputs):
+        peak = float(np.max(np.abs(data[:, k])))
+        if peak > c.full_scale:
+            raise _UsageError(
+                f"--desired channel {c.name!r} peaks at {peak:.6g} {c.unit}, beyond the rig's "
+                f"transducer range ±{c.full_scale:g} {c.unit}: the rig cannot produce it"
+            )
+        if np.ptp(data[:, k]) == 0:
+            raise _UsageError(
+                f"--desired channel {c.name!r} is constant: there is nothing to reconstruct"
+            )
 
 
 def _method(args, band):
@@ -312,13 +388,46 @@ def _cmd_describe(args) -> int:
     return 0
 
 
-def _cmd_reconstruct(args) -> int:
-    from . import io
-    from .plots import save_reconstruction_plots
-    from .reconstruction import reconstruct
-    from .testfolder import TestFolder
+def _read_field(args, rig, band):
+    """The desired (field) record: ``--desired`` or a pseudo-field response.
 
-    t_start = time.perf_counter()
+    Returns (field, description, extra records)."""
+    from . import io
+
+    if args.desired is None:
+        seconds = 30.0 if args.seconds is None else args.seconds
+        desdrv, field = pseudo_field(rig, band, seconds, seed=args.seed)
+        rms = np.sqrt(np.mean(desdrv.data**2, axis=0)) / [c.full_scale for c in rig.inputs]
+        source = (
+            f"pseudo-field response to a {seconds:g} s random drive (triangular PSD "
+            f"{band[0]:g}-{band[1]:g} Hz, {100 * rms.max():.3g} % of full scale rms, seed "
+            f"{args.seed})"
+        )
+        return field, source, {"DESDRV": desdrv}
+    try:
+        field = io.read(args.desired)
+    except Exception as exc:  # whatever a damaged file makes the reader raise: bad input
+        raise _UsageError(f"--desired: cannot read {args.desired}: {exc}") from None
+    field, notes = _check_desired(field, rig)
+    if args.seconds is not None:
+        if args.seconds > field.duration:
+            raise _UsageError(
+                f"--seconds {args.seconds:g} is longer than the {field.duration:g} s in "
+                f"{args.desired}"
+            )
+        field = field.window(0.0, args.seconds)
+    if field.duration > _MAX_SECONDS:
+        raise _UsageError(
+            f"--desired {args.desired} is {field.duration:g} s long; at most "
+            f"{_MAX_SECONDS:g} s are reconstructed at once: pass --seconds to use its start"
+        )
+    _check_content(field, rig)
+    for note in notes:
+        print(f"note: {note}")
+    return field, f"{args.desired} ({field.duration:g} s)", {}
+
+
+def _check_reconstruct_args(args) -> None:
     if args.iterations < 0 or args.iterations > 99:
         raise _UsageError(f"--iterations must be 0..99, got {args.iterations}")
     if not 0 < args.gain <= 2:
@@ -327,49 +436,41 @@ def _cmd_reconstruct(args) -> int:
         np.isfinite(args.seconds) and 2 <= args.seconds <= _MAX_SECONDS
     ):
         raise _UsageError(f"--seconds must be 2..{_MAX_SECONDS:g}, got {args.seconds:g}")
+    _check_seed(args.seed)
     if args.desired is not None and not Path(args.desired).is_file():
-        raise _UsageError(f"--desired: no file {args.desired}")
+        what = "a folder, not a file" if Path(args.desired).is_dir() else "no file"
+        raise _UsageError(f"--desired: {what} {args.desired}")
+
+
+def _cmd_reconstruct(args) -> int:
+    from .reconstruction import reconstruct
+
+    t_start = time.perf_counter()
+    _check_reconstruct_args(args)
     rig = _load_rig(args.rig, seed=args.seed)
     band = _band(rig, args.band)
     method, method_text = _method(args, band)
     out = _out_dir(args.out, f"{Path(rig.name).stem}-{args.method}", args.overwrite)
-
-    records = {}
-    if args.desired is not None:
-        try:
-            field = io.read(args.desired)
-        except (ValueError, OSError) as exc:
-            raise _UsageError(f"--desired: cannot read {args.desired}: {exc}") from None
-        field, notes = _check_desired(field, rig)
-        if args.seconds is not None:
-            if args.seconds > field.duration:
-                raise _UsageError(
-                    f"--seconds {args.seconds:g} is longer than the {field.duration:g} s in "
-                    f"{args.desired}"
-                )
-            field = field.window(0.0, args.seconds)
-        if field.duration > _MAX_SECONDS:
-            raise _UsageError(
-                f"--desired {args.desired} is {field.duration:g} s long; at most "
-                f"{_MAX_SECONDS:g} s are reconstructed at once: pass --seconds to use its start"
-            )
-        source = f"{args.desired} ({field.duration:g} s)"
-        for note in notes:
-            print(f"note: {note}")
-    else:
-        seconds = 30.0 if args.seconds is None else args.seconds
-        desdrv, field = pseudo_field(rig, band, seconds, seed=args.seed)
-        records["DESDRV"] = desdrv
-        rms = np.sqrt(np.mean(desdrv.data**2, axis=0)) / [c.full_scale for c in rig.inputs]
-        source = (
-            f"pseudo-field response to a {seconds:g} s random drive (triangular PSD "
-            f"{band[0]:g}-{band[1]:g} Hz, {100 * rms.max():.3g} % of full scale rms, seed "
-            f"{args.seed})"
-        )
+    if args.desired is not None:  # a file: read and check it first
+        field, source, records = _read_field(args, rig, band)
+    _check_writable(out)  # before the run, not after it
+    if args.desired is None:  # a pseudo-field response: a rig run
+        field, source, records = _read_field(args, rig, band)
     print(f"rig       {rig.name}: {rig.description.title}")
     print(f"method    {method_text}, gain {args.gain:g}, {args.iterations} iterations")
     print(f"band      {band[0]:g}-{band[1]:g} Hz (simulation bandwidth)")
     print(f"desired   {source}")
+    settings = {
+        "command": "vrig reconstruct",
+        "argv": args.argv,
+        "method": method_text,
+        "gain": args.gain,
+        "iterations": args.iterations,
+        "seed": args.seed,
+        "desired": source,
+    }
+    save = {"field": field, "records": records, "settings": settings}
+    from .errors import ReconstructionError
 
     try:
         result = reconstruct(
@@ -384,6 +485,11 @@ def _cmd_reconstruct(args) -> int:
         )
     except ValueError as exc:  # e.g. a desired record too short for the model
         raise _Failure(str(exc)) from exc
+    except ReconstructionError as exc:  # nothing played: keep what was made, say what to change
+        written = _save(exc.result, out, rig, args, save)
+        raise _Failure(
+            f"{exc} ({_advice(exc)}); kept {', '.join(p.name for p in written)} in {out}/"
+        ) from exc
     print()
     print(result.table())
     best = result.best_iteration
@@ -398,37 +504,46 @@ def _cmd_reconstruct(args) -> int:
         + ", ".join(f"{d:.3g}" for d in result.damage_ratio[best])
     )
     print(f"stopped   {result.stopped or f'after all {args.iterations} iterations'}")
-
-    settings = {
-        "command": "vrig reconstruct",
-        "argv": args.argv,
-        "method": method_text,
-        "gain": args.gain,
-        "iterations": args.iterations,
-        "seed": args.seed,
-        "desired": source,
-    }
-    folder = TestFolder(out)
-    written = folder.save(
-        result,
-        field=field,
-        fmt=args.fmt,
-        rig=rig,
-        records=records,
-        settings=settings,
-        overwrite=args.overwrite,
-    )
-    plots = save_reconstruction_plots(result, out, rig=rig)
-    print(
-        f"\ntest folder {out}/ ({len(written)} files: "
-        + ", ".join(p.name for p in written[:6])
-        + ", ..., "
-        + ", ".join(p.name for p in written[-5:])
-        + ")"
-    )
-    print("plots      " + ", ".join(str(p) for p in plots))
+    written = _save(result, out, rig, args, save)
     print(f"time       {time.perf_counter() - t_start:.1f} s")
     return 0
+
+
+def _save(result, out: Path, rig, args, save: dict) -> list[Path]:
+    """Write the test folder and the plots of a result (also one with no iteration played)."""
+    from .plots import save_reconstruction_plots
+    from .testfolder import TestFolder
+
+    written = TestFolder(out).save(result, fmt=args.fmt, rig=rig, overwrite=args.overwrite, **save)
+    plots = save_reconstruction_plots(result, out, rig=rig)
+    names = [p.name for p in written]
+    shown = names if len(names) <= 11 else [*names[:6], "...", *names[-5:]]
+    print(f"\ntest folder {out}/ ({len(written)} files: {', '.join(shown)})")
+    print("plots      " + ", ".join(str(p) for p in plots))
+    return written + plots
+
+
+def _advice(exc) -> str:
+    """What to change after a reconstruction that could not play any iteration."""
+    from .errors import RigLimitError
+
+    cause = exc.cause
+    if exc.stage == "identification":
+        return (
+            "the identification drive trips the rig even at 1/8 of its amplitude: check the "
+            "rig's limits, or use a narrower --band"
+        )
+    if exc.stage == "model":
+        return "the inverse model failed: try a lower --order, --method arx or frf, or a narrower --band"
+    if isinstance(cause, RigLimitError) and cause.time != cause.time:  # refused, never sent
+        return (
+            "IT00DRV needs more than the drive's full scale (drive_vs_limits: "
+            "refused_drive_vs_limits.png): use a smaller desired response or a narrower --band"
+        )
+    return (
+        "IT00DRV tripped the rig: try a smaller desired response, a narrower --band or a "
+        "lower --order"
+    )
 
 
 def _cmd_repeatability(args) -> int:
@@ -441,11 +556,13 @@ def _cmd_repeatability(args) -> int:
         raise _UsageError(f"--runs must be 2..50 (the text uses 5), got {args.runs}")
     if not (np.isfinite(args.seconds) and 2 <= args.seconds <= _MAX_SECONDS):
         raise _UsageError(f"--seconds must be 2..{_MAX_SECONDS:g}, got {args.seconds:g}")
+    _check_seed(args.seed)
     rig = _load_rig(args.rig, seed=args.seed)
     band = _band(rig, args.band)
     out = Path(args.out) if args.out else Path("results") / f"{Path(rig.name).stem}-repeatability"
     if out.exists() and not out.is_dir():
         raise _UsageError(f"--out {out} is a file, not a folder")
+    _check_writable(out)  # before the runs, not after them
 
     drive, first = pseudo_field(rig, band, args.seconds, seed=args.seed)
     rms = np.sqrt(np.mean(drive.data**2, axis=0)) / [c.full_scale for c in rig.inputs]
@@ -485,7 +602,29 @@ def _cmd_repeatability(args) -> int:
     return 0
 
 
+def _cmd_demo(args) -> int:
+    from identification.errors import SimulationDivergedError, UnstableModelError
+
+    from .demo import run_demo
+
+    lo, hi = _DEMO_SAMPLES
+    if not lo <= args.samples <= hi:
+        raise _UsageError(f"--samples must be >= {lo} and <= {hi}, got {args.samples}")
+    if not 0 <= args.noise < 1:
+        raise _UsageError(f"--noise must be in [0, 1), got {args.noise:g}")
+    _check_seed(args.seed)
+    try:
+        run_demo(seed=args.seed, n_samples=args.samples, noise=args.noise)
+    except (UnstableModelError, SimulationDivergedError) as exc:  # the fit was refused
+        raise _Failure(
+            f"{exc} ({args.samples} samples are few for the 454 terms per output: try more "
+            "--samples, or another --seed)"
+        ) from exc
+    return 0
+
+
 _COMMANDS = {
+    "demo": _cmd_demo,
     "rigs": _cmd_rigs,
     "describe": _cmd_describe,
     "reconstruct": _cmd_reconstruct,
@@ -500,76 +639,80 @@ def _cmd_bench(argv: list[str]) -> int:
     try:
         from benchmarks.runner.cli import main as bench_main
     except ImportError as exc:
-        print(
-            "vrig bench: the benchmark runner is not importable "
-            f"({exc}). It lives in benchmarks/ of the source checkout (not in the wheel): run "
-            "`vrig bench ...` or `python -m benchmarks ...` from the repository root of a "
-            "clone (git clone ...; pip install -e .).",
-            file=sys.stderr,
-        )
-        return 2
+        raise _UsageError(
+            f"the benchmark runner is not importable ({exc}). It lives in benchmarks/ of the "
+            "source checkout (not in the wheel): run `vrig bench ...` or `python -m benchmarks "
+            "...` from the repository root of a clone (git clone ...; pip install -e .)."
+        ) from None
     return bench_main(argv, prog="vrig bench")
 
 
-def main(argv: list[str] | None = None) -> int:
-    raw = list(sys.argv[1:] if argv is None else argv)
-    if raw[:1] == ["bench"]:
-        return _cmd_bench(raw[1:])
-    args = _parser().parse_args(argv)
-    args.argv = list(sys.argv[1:] if argv is None else argv)
-    if getattr(args, "seed", 0) < 0:
-        print(f"vrig {args.command}: --seed must be >= 0, got {args.seed}", file=sys.stderr)
-        return 2
-    if args.command == "demo":
-        from .demo import MAX_SAMPLES, MIN_SAMPLES, run_demo
+def _say(command: str, text: str) -> None:
+    """One line on stderr: ``vrig COMMAND: text`` (newlines in messages are folded)."""
+    print(f"vrig {command}: " + " ".join(str(text).split()), file=sys.stderr)
 
-        if not MIN_SAMPLES <= args.samples <= MAX_SAMPLES:
-            print(
-                f"vrig demo: --samples must be >= {MIN_SAMPLES} and <= {MAX_SAMPLES} (a longer "
-                f"record's regression matrix exceeds the 2 GiB memory budget), got {args.samples}",
-                file=sys.stderr,
-            )
-            return 2
-        if not 0 <= args.noise < 1:
-            print(f"vrig demo: --noise must be in [0, 1), got {args.noise:g}", file=sys.stderr)
-            return 2
-        from identification.errors import UnstableModelError
 
-        try:
-            run_demo(seed=args.seed, n_samples=args.samples, noise=args.noise)
-        except UnstableModelError as exc:  # the stability contract refused the fit
-            print(
-                f"vrig demo: {exc} ({args.samples} samples are few for the 454 terms per output: "
-                "try more --samples)",
-                file=sys.stderr,
-            )
-            return 1
-        return 0
+def _run(command: str, func, arg) -> int:
+    """Run a command; map every error to one line on stderr and an exit code (module doc)."""
     from identification.errors import IdentificationError, SimulationDivergedError
 
-    from .errors import RigLimitError, RigModelError, SimulationInstabilityError
+    from .errors import (
+        ReconstructionError,
+        RigLimitError,
+        RigModelError,
+        SimulationInstabilityError,
+    )
 
-    try:
-        return _COMMANDS[args.command](args)
-    except _UsageError as exc:
-        print(f"vrig {args.command}: {exc}", file=sys.stderr)
-        return 2
-    except RigModelError as exc:
-        print(f"vrig {args.command}: {exc}", file=sys.stderr)
-        return 2
-    except (
+    failures = (
         _Failure,
+        ReconstructionError,
         RigLimitError,
         SimulationInstabilityError,
         IdentificationError,
         SimulationDivergedError,
-    ) as exc:
-        print(
-            f"vrig {args.command}: failed: {exc}\n(try a narrower --band, a lower --order or "
-            "--gain, or a smaller desired response)",
-            file=sys.stderr,
+    )
+    try:
+        return func(arg)
+    except (_UsageError, RigModelError) as exc:
+        _say(command, exc)
+        return EXIT_USAGE
+    except failures as exc:
+        hint = (
+            ""
+            if isinstance(exc, _Failure)
+            else (
+                " (try a narrower --band, a lower --order or --gain, or a smaller desired response)"
+            )
         )
-        return 1
+        _say(command, f"failed: {exc}{hint}")
+        return EXIT_FAILED
+    except OSError as exc:  # e.g. a disk that filled up while the results were written
+        _say(command, f"failed: {exc}")
+        return EXIT_FAILED
+    except Exception as exc:
+        if os.environ.get("VRIG_DEBUG"):
+            raise
+        _say(
+            command,
+            f"unexpected error {type(exc).__name__}: {exc} (a bug: VRIG_DEBUG=1 shows "
+            "the traceback)",
+        )
+        return EXIT_BUG
+
+
+def main(argv: list[str] | None = None) -> int:
+    """The ``vrig`` command (see the module docstring); returns the exit code."""
+    raw = list(sys.argv[1:] if argv is None else argv)
+    command = raw[0] if raw else "vrig"
+    try:
+        if raw[:1] == ["bench"]:
+            return _run("bench", _cmd_bench, raw[1:])
+        args = _parser().parse_args(raw)
+        args.argv = raw
+        return _run(args.command, _COMMANDS[args.command], args)
+    except KeyboardInterrupt:
+        _say(command, "interrupted")
+        return EXIT_INTERRUPTED
 
 
 if __name__ == "__main__":  # pragma: no cover

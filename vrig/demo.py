@@ -17,7 +17,7 @@ __all__ = ["MAX_SAMPLES", "MIN_SAMPLES", "run_demo"]
 
 MIN_SAMPLES = 2000
 """Shortest demo record: the cubic model has 454 terms per output."""
-MAX_SAMPLES = 500_000
+MAX_SAMPLES = 100_000  # the cubic model regresses on 454 terms per output
 """Longest demo record: its regression matrix (375,000 identification rows x 454 terms x 8 bytes =
 1.3 GB) stays within the identification package's 2 GiB memory budget per array."""
 

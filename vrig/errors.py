@@ -2,7 +2,13 @@
 
 from __future__ import annotations
 
-__all__ = ["RigLimitError", "RigModelError", "RigParameterError", "SimulationInstabilityError"]
+__all__ = [
+    "ReconstructionError",
+    "RigLimitError",
+    "RigModelError",
+    "RigParameterError",
+    "SimulationInstabilityError",
+]
 
 
 class RigLimitError(RuntimeError):
@@ -67,3 +73,35 @@ class RigParameterError(RigModelError):
     def __init__(self, message: str, key: str = "", value=None, allowed: str = ""):
         super().__init__(message)
         self.key, self.value, self.allowed = key, value, allowed
+
+
+class ReconstructionError(RuntimeError):
+    """A reconstruction failed before any iteration was played (identification or IT00).
+
+    Raised by :func:`vrig.reconstruct` ``from`` the original exception (a
+    :class:`RigLimitError`, :class:`SimulationInstabilityError`, an identification error, ...),
+    carrying what was made before the failure so that it can still be saved and inspected
+    (:meth:`vrig.TestFolder.save` writes it). Failures after IT00 do not raise: they stop the
+    loop and :func:`vrig.reconstruct` returns the iterations played (``result.stopped``).
+
+    Attributes
+    ----------
+    result : ReconstructionResult
+        A result with zero iterations (``drives == []``, ``errors`` of shape (0, n_outputs),
+        ``best_iteration == -1``): the identification drive and response (``None`` when the
+        identification drive itself could not be played), the method (identified when the fit
+        succeeded), the desired response, ``stopped`` (why) and ``rejected`` (the drive that
+        was refused or tripped the rig, when there is one).
+    cause : Exception
+        The original exception (also ``__cause__``).
+    stage : str
+        ``"identification"`` (IDDRV could not be played), ``"model"`` (the inverse model could
+        not be fitted or diverged on the desired response) or ``"IT00"`` (IT00DRV was refused
+        or tripped the rig).
+    """
+
+    def __init__(self, message: str, *, result, cause: BaseException, stage: str):
+        super().__init__(message)
+        self.result = result
+        self.cause = cause
+        self.stage = stage

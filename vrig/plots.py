@@ -344,8 +344,12 @@ def save_reconstruction_plots(result, folder, rig=None, *, dpi: int = 110) -> li
 
     Files: ``overlay.png`` (FINRES vs DESRES, whole record), ``overlay_zoom.png`` (a few
     seconds in the middle), ``psd.png``, ``error_vs_iteration.png`` and, when ``rig`` is given,
-    ``drive_vs_limits.png`` (FINDRV against the rig's drive full scales). Existing files of these
-    names are replaced.
+    ``drive_vs_limits.png`` (FINDRV against the rig's drive full scales). When the loop stopped on
+    a drive that was refused or tripped the rig (``result.rejected_drive``) and ``rig`` is given,
+    that drive is plotted against the limits too: ``refused_drive_vs_limits.png`` or
+    ``tripped_drive_vs_limits.png``. A result with no iteration played (from a
+    :class:`~vrig.ReconstructionError`) gets only that plot. Existing files of these names are
+    replaced.
 
     Returns
     -------
@@ -354,6 +358,34 @@ def save_reconstruction_plots(result, folder, rig=None, *, dpi: int = 110) -> li
     """
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
+    figures = _rejected_figure(result, rig)
+    if len(np.asarray(result.errors)):  # at least one iteration played
+        figures.update(_result_figures(result, rig))
+    written = []
+    for name, fig in figures.items():
+        path = folder / name
+        fig.savefig(path, dpi=dpi)
+        written.append(path)
+    return written
+
+
+def _rejected_figure(result, rig) -> dict:
+    """``{file name: figure}`` of the drive the loop stopped on (refused or tripped), if any."""
+    drive = getattr(result, "rejected_drive", None)
+    if drive is None or rig is None:
+        return {}
+    name = result.rejected_name
+    kind = "refused" if name.startswith("REFUSED") else "tripped"
+    verb = "refused before it was sent" if kind == "refused" else "tripped the rig"
+    return {
+        f"{kind}_drive_vs_limits.png": drive_vs_limits(
+            drive, rig.inputs, title=f"{name}: the drive that {verb}\n{result.stopped[:150]}"
+        )
+    }
+
+
+def _result_figures(result, rig) -> dict:
+    """``{file name: figure}`` of a result with at least one iteration played."""
     best = int(result.best_iteration)
     desired, achieved = result.desired, result.final_response
     errors = np.asarray(result.errors)[best]
@@ -388,9 +420,4 @@ def save_reconstruction_plots(result, folder, rig=None, *, dpi: int = 110) -> li
             rig.inputs,
             title=f"final drive FINDRV (IT{best:02d}DRV) and the rig's limits",
         )
-    written = []
-    for name, fig in figures.items():
-        path = folder / name
-        fig.savefig(path, dpi=dpi)
-        written.append(path)
-    return written
+    return figures

@@ -12,7 +12,14 @@ RITxxRES       the raw rig response to ITxxDRV
 ITxxRES        the processed response (compared with DESRES01)
 FINDRV01       the best iteration's drive
 FINRES01       the best iteration's processed response
+REFUSEDxx      a drive refused before it was sent (xx the iteration, ``ID`` identification)
+TRIPPEDxx      a drive that tripped the rig (interlock or unstable simulation)
 =============  ========================================================================
+
+A reconstruction that failed before any iteration was played (the result of a
+:class:`~vrig.ReconstructionError`) is saved too: the identification records and model that were
+made, the refused or tripped drive, and the summary with ``iterations_run`` -1 and
+``best_iteration`` null.
 
 plus the inverse model(s) (``model.npz``; ``model_low.npz``/``model_high.npz`` for split
 spectra; see :meth:`identification.Narx.load`) and ``summary.json`` (method, bandwidth,
@@ -59,6 +66,7 @@ _NAME_PATTERNS = (
     r"R?IT\d\d(?:DRV|RES)",
     r"FINDRV\d\d",
     r"FINRES\d\d",
+    r"(?:REFUSED|TRIPPED)(?:\d\d|ID)",
 )
 _RECORD = re.compile(
     r"^(" + "|".join(_NAME_PATTERNS) + r")\.(drv|rsp|csv|mat|npz)$", flags=re.IGNORECASE
@@ -67,7 +75,8 @@ _MODEL = re.compile(r"^model(_low|_high)?\.npz$")
 
 
 def _is_drive(name: str) -> bool:
-    return "DRV" in name.upper()
+    n = name.upper()
+    return "DRV" in n or n.startswith(("REFUSED", "TRIPPED"))
 
 
 def _order_key(name: str) -> tuple:
@@ -80,6 +89,8 @@ def _order_key(name: str) -> tuple:
     for rank, prefix in enumerate(("DESDRV", "IDDRV", "IDRES", "FIELD", "DESRES"), start=0):
         if n.startswith(prefix):
             return (rank, 0, 0, n)
+    if n.startswith(("REFUSED", "TRIPPED")):
+        return (7, 0, 0, n)
     return (6, 0, 0 if n.startswith("FINDRV") else 1, n)
 
 
@@ -226,13 +237,12 @@ class TestFolder:
                 )
             if not isinstance(th, TimeHistory):
                 raise TypeError(f"record {name!r} must be a TimeHistory")
-        if not result.drives:
-            raise ValueError("the result holds no iteration: nothing to save")
         self._prepare(overwrite)
 
         todo: dict[str, TimeHistory] = {
-            "IDDRV": result.id_drive,
-            "IDRES": result.id_response,
+            name: th
+            for name, th in (("IDDRV", result.id_drive), ("IDRES", result.id_response))
+            if th is not None
         }
         if field is not None:
             if not isinstance(field, TimeHistory):
@@ -245,8 +255,11 @@ class TestFolder:
             todo[f"IT{it:02d}DRV"] = drv
             todo[f"RIT{it:02d}RES"] = raw
             todo[f"IT{it:02d}RES"] = res
-        todo["FINDRV01"] = result.final_drive
-        todo["FINRES01"] = result.final_response
+        if result.drives:
+            todo["FINDRV01"] = result.final_drive
+            todo["FINRES01"] = result.final_response
+        if getattr(result, "rejected_drive", None) is not None:
+            todo[result.rejected_name] = result.rejected_drive
         for name, th in extra.items():
             todo[name.upper()] = th
 
@@ -278,7 +291,9 @@ class TestFolder:
         decimation_note = "recorded by reconstruct"
         errors = np.asarray(result.errors)
         n_run = errors.shape[0]
-        best = int(result.best_iteration)
+        best = int(result.best_iteration) if n_run else None
+        candidates = (result.id_drive, getattr(result, "rejected_drive", None), *result.drives)
+        drives = next((th for th in candidates if th is not None), None)
         summary = {
             "format": _FORMAT_ID,
             "version": _VERSION,
@@ -295,13 +310,18 @@ class TestFolder:
             "gain": _plain(result.gain),
             "strategy": result.strategy,
             "seed": int(result.seed),
-            "drives": {"names": list(result.id_drive.names), "units": list(result.id_drive.units)},
+            "drives": None
+            if drives is None
+            else {"names": list(drives.names), "units": list(drives.units)},
             "responses": {"names": list(result.desired.names), "units": list(result.desired.units)},
             "iterations_run": n_run - 1,
             "best_iteration": best,
             "stopped": result.stopped,
             "stop_reason": result.stopped or f"completed all {n_run - 1} iterations",
-            "best": {
+            "rejected": getattr(result, "rejected_name", "") or None,
+            "best": None
+            if best is None
+            else {
                 "eta0_percent": _plain(errors[best]),
                 "rms_error_percent": _plain(np.asarray(result.rms_errors)[best]),
                 "damage_ratio": _plain(np.asarray(result.damage_ratio)[best]),

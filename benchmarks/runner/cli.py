@@ -10,13 +10,17 @@
     python -m benchmarks list                              # rigs and registered methods
 
 Exit status: 0 done (failed *records* are results, not errors), 1 the thesis report failed,
-2 bad arguments or a results folder made with other settings.
+2 bad arguments, a plugin that does not load, a results folder that cannot be written or was made
+with other settings, 3 an unexpected error (``VRIG_DEBUG=1`` shows the traceback), 130
+interrupted (Ctrl-C, SIGTERM). Every error is one line on stderr.
 """
 
 from __future__ import annotations
 
 import argparse
+import importlib.util
 import json
+import os
 import signal
 import sys
 import threading
@@ -25,8 +29,16 @@ from dataclasses import asdict, replace
 from pathlib import Path
 
 from .execute import BACKENDS, SettingsMismatchError, Store, execute
+from .lifetime import LockHeldError, PidLock, die_with_parent
 from .record import RecordKey, Settings
-from .registry import default_plugin_specs, get_method, load_plugins, method_names, plugin_spec
+from .registry import (
+    PluginError,
+    default_plugin_specs,
+    get_method,
+    load_plugins,
+    method_names,
+    plugin_spec,
+)
 from .report import write_outputs
 
 __all__ = ["FULL", "QUICK", "main"]
@@ -142,11 +154,35 @@ def _thesis_available() -> str | None:
     return None
 
 
-def _thesis_child(out: str, quick: bool, conn) -> None:
-    """Run the thesis reproduction (in its own process; its log goes to a file)."""
+THESIS_LOCK = "thesis_reproduction.lock"
+"""Lock file of the thesis reproduction in a results folder (owner's pid; see lifetime.py)."""
+
+
+def _thesis_child(out: str, quick: bool, conn, parent_pid: int | None = None) -> None:
+    """Run the thesis reproduction (in its own process; its log goes to a file).
+
+    The process dies with the runner (``parent_pid``; :func:`~.lifetime.die_with_parent`) and
+    holds ``thesis_reproduction.lock`` in ``out`` while it writes there: when another run's
+    thesis reproduction holds it, this one is skipped, so two never write the same files."""
+    if parent_pid is not None:
+        die_with_parent(parent_pid)
+    out_dir = Path(out)
+    try:
+        with PidLock(out_dir / THESIS_LOCK):
+            result = _thesis_report(out_dir, quick)
+    except LockHeldError as exc:
+        result = (
+            f"thesis reproduction skipped: another run's (pid {exc.pid}) is writing "
+            f"{out_dir / 'thesis_reproduction.md'}",
+            True,
+        )
+    conn.send(result)
+    conn.close()
+
+
+def _thesis_report(out_dir: Path, quick: bool) -> tuple[str, bool]:
     import contextlib
 
-    out_dir = Path(out)
     t = time.perf_counter()
     with (
         open(out_dir / "thesis_reproduction.log", "w", encoding="utf-8", buffering=1) as fh,
@@ -157,7 +193,7 @@ def _thesis_child(out: str, quick: bool, conn) -> None:
             from benchmarks.thesis_tables import thesis_report
 
             thesis_report(out_dir, quick)
-            result = (
+            return (
                 f"thesis reproduction {out_dir / 'thesis_reproduction.md'} "
                 f"({time.perf_counter() - t:.0f} s; log thesis_reproduction.log)",
                 True,
@@ -166,9 +202,7 @@ def _thesis_child(out: str, quick: bool, conn) -> None:
             import traceback
 
             traceback.print_exc()
-            result = (f"thesis reproduction FAILED: {type(exc).__name__}: {exc}", False)
-    conn.send(result)
-    conn.close()
+            return (f"thesis reproduction FAILED: {type(exc).__name__}: {exc}", False)
 
 
 class _Thesis:
@@ -180,7 +214,9 @@ class _Thesis:
 
         ctx = multiprocessing.get_context("spawn")
         self.recv, send = ctx.Pipe(duplex=False)
-        self.proc = ctx.Process(target=_thesis_child, args=(str(out), quick, send), daemon=False)
+        self.proc = ctx.Process(
+            target=_thesis_child, args=(str(out), quick, send, os.getpid()), daemon=False
+        )
         self.proc.start()
         send.close()
 
@@ -236,6 +272,9 @@ def cmd_run(args) -> int:
     except SettingsMismatchError as exc:
         print(f"benchmarks run: {exc}", file=sys.stderr)
         return 2
+    except OSError as exc:
+        print(f"benchmarks run: --out {out}: cannot write there ({exc})", file=sys.stderr)
+        return 2
     print(
         f"benchmark: {len(rigs)} rigs × {len(methods)} methods ({', '.join(methods)}) × "
         f"{len(desired)} desired × {len(seeds)} seeds -> {out}/"
@@ -273,7 +312,7 @@ def cmd_run(args) -> int:
         )
         return 130
     wanted = {store.path(k).name for k in keys}
-    records = [r for r in store.all_records() if f"{r['id']}.json" in wanted]
+    records = [r for r in store.all_records(settings) if f"{r['id']}.json" in wanted]
     written = write_outputs(out, records, asdict(settings), plots=not args.no_plots)
     if thesis is not None:
         if not args.quiet:
@@ -319,6 +358,8 @@ def cmd_run(args) -> int:
 def cmd_report(args) -> int:
     store = Store(args.out)
     records = store.all_records()
+    for name, why in store.rejected().items():
+        print(f"benchmarks report: left out {name}: {why}", file=sys.stderr)
     if not records:
         print(f"benchmarks report: no records in {args.out}/records", file=sys.stderr)
         return 2
@@ -342,9 +383,48 @@ def cmd_list(args) -> int:
     return 0
 
 
+class _BadInput(Exception):
+    """Bad input found before the run: one line, exit status 2."""
+
+
+def _check_run_args(args) -> None:
+    if args.workers is not None and args.workers < 1:
+        raise _BadInput(f"--workers must be >= 1, got {args.workers}")
+    for flag, values in (("--desired", args.desired), ("--seeds", args.seeds)):
+        if values and min(values) < 0:
+            raise _BadInput(f"{flag} must be integers >= 0, got {values}")
+    if args.backend == "ray" and importlib.util.find_spec("ray") is None:
+        raise _BadInput("--backend ray needs Ray: pip install 'vrig[ray]' (or 'ray>=2.9')")
+    if args.out is not None and args.out.exists() and not args.out.is_dir():
+        raise _BadInput(f"--out {args.out} is a file, not a folder")
+
+
 def main(argv: list[str] | None = None, *, prog: str | None = None) -> int:
+    """``python -m benchmarks`` / ``vrig bench``; returns the exit status (module doc)."""
     parser = _parser()
     if prog:
         parser.prog = prog
     args = parser.parse_args(argv)
-    return {"run": cmd_run, "report": cmd_report, "list": cmd_list}[args.command](args)
+    name = f"{parser.prog} {args.command}".replace("python -m benchmarks", "benchmarks")
+    try:
+        if args.command == "run":
+            _check_run_args(args)
+        return {"run": cmd_run, "report": cmd_report, "list": cmd_list}[args.command](args)
+    except KeyboardInterrupt:
+        print(f"{name}: interrupted", file=sys.stderr)
+        return 130
+    except (_BadInput, PluginError) as exc:
+        print(f"{name}: " + " ".join(str(exc).split()), file=sys.stderr)
+        return 2
+    except OSError as exc:  # e.g. a disk that filled up while the outputs were written
+        print(f"{name}: failed: {exc}", file=sys.stderr)
+        return 1
+    except Exception as exc:
+        if os.environ.get("VRIG_DEBUG"):
+            raise
+        msg = " ".join(f"{type(exc).__name__}: {exc}".split())
+        print(
+            f"{name}: unexpected error {msg} (a bug: VRIG_DEBUG=1 shows the traceback)",
+            file=sys.stderr,
+        )
+        return 3

@@ -4,10 +4,13 @@ The store is a folder: ``settings.json`` (the run settings the records were made
 ``records/<id>.json``, one file per finished record, written atomically (temporary file in the
 same folder, ``fsync``, ``os.replace``). A re-run skips every record whose file exists with the
 same settings, so an interrupted run resumes where it stopped; a half-written temporary file
-left by a kill is ignored and removed.
+left by a kill is ignored and removed, and a record file that is not a finished, well-formed
+record of this run (cut short, tampered with, another record's, another run's, NaN scores:
+:func:`~.record.check_record`) is recomputed.
 
 Backends: ``serial`` (this process), ``process`` (default: a ``ProcessPoolExecutor`` with the
-*spawn* start method, safest with MuJoCo and numba) and ``ray`` (an existing Ray cluster with
+*spawn* start method, safest with MuJoCo and numba; its workers die with the runner, even on a
+``kill -9``: :func:`~.lifetime.die_with_parent`) and ``ray`` (an existing Ray cluster with
 ``--address``, else a local one). Every backend runs the same pure function
 :func:`~.record.compute_record` on the same keys, so the records are identical; only the
 parent process writes files.
@@ -25,7 +28,8 @@ from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import asdict
 from pathlib import Path
 
-from .record import SCHEMA, RecordKey, Settings, compute_record, record_id
+from .lifetime import die_with_parent
+from .record import SCHEMA, RecordKey, Settings, check_record, compute_record, record_id
 
 __all__ = ["BACKENDS", "SettingsMismatchError", "Store", "execute", "write_atomic"]
 
@@ -80,32 +84,42 @@ class Store:
         return self.records_dir / f"{record_id(key)}.json"
 
     def load(self, key: RecordKey) -> dict | None:
+        """The parsed file of ``key``'s record (None if missing or not JSON; not validated)."""
         try:
             return json.loads(self.path(key).read_text())
         except (OSError, ValueError):
             return None
 
     def finished(self, key: RecordKey, settings: Settings) -> bool:
-        rec = self.load(key)
-        return (
-            rec is not None
-            and rec.get("schema") == SCHEMA
-            and rec.get("settings") == asdict(settings)
-        )
+        """Whether the store holds a finished, well-formed record of ``key`` made with
+        ``settings`` (:func:`~.record.check_record`); anything else is recomputed."""
+        return check_record(self.load(key), key, settings) is None
 
     def write(self, record: dict) -> Path:
         path = self.records_dir / f"{record['id']}.json"
         write_atomic(path, json.dumps(record, indent=1, ensure_ascii=False) + "\n")
         return path
 
-    def all_records(self) -> list[dict]:
-        out = []
+    def all_records(self, settings: Settings | None = None) -> list[dict]:
+        """Every well-formed record in the store (made with ``settings``, when given) whose
+        file name is its id; malformed or foreign files are left out (see :meth:`rejected`)."""
+        return [rec for _f, rec, why in self._scan(settings) if why is None]
+
+    def rejected(self, settings: Settings | None = None) -> dict[str, str]:
+        """``{file name: why}`` of the record files :meth:`all_records` leaves out."""
+        return {f.name: why for f, _rec, why in self._scan(settings) if why is not None}
+
+    def _scan(self, settings):
         for f in sorted(self.records_dir.glob("*.json")):
             try:
-                out.append(json.loads(f.read_text()))
-            except ValueError:
+                rec = json.loads(f.read_text())
+            except (OSError, ValueError) as exc:
+                yield f, None, f"unreadable ({type(exc).__name__})"
                 continue
-        return out
+            why = check_record(rec, None, settings)
+            if why is None and f.stem != rec["id"]:
+                why = f"holds the record {rec['id']}"
+            yield f, rec, why
 
 
 # ---------------------------------------------------------------------------------------------
@@ -118,7 +132,12 @@ def _serial(keys, settings, specs, workers, address, on_done):
 
 def _process(keys, settings, specs, workers, address, on_done):
     ctx = multiprocessing.get_context("spawn")
-    pool = ProcessPoolExecutor(max_workers=max(1, min(workers, len(keys))), mp_context=ctx)
+    pool = ProcessPoolExecutor(
+        max_workers=max(1, min(workers, len(keys))),
+        mp_context=ctx,
+        initializer=die_with_parent,  # a kill -9 of the runner ends its workers (lifetime.py)
+        initargs=(os.getpid(),),
+    )
     try:
         futures = [pool.submit(compute_record, k, settings, specs) for k in keys]
         for fut in as_completed(futures):

@@ -38,7 +38,9 @@ reconstruction; ``model_sim_s``: its ``drive`` calls, i.e. the inverse model's f
 between two runs of the same record, so they are left out when records are compared.
 
 A record whose rig, desired response or reconstruction raises is kept with ``status
-"failed"`` and ``error`` (stage, exception type, message): leaderboards show failures.
+"failed"`` and ``error`` (stage, exception type, message): leaderboards show failures. So is a
+record whose scores are not finite (stage ``"scores"``): :func:`check_record` says what a
+finished, well-formed record is, and the store recomputes a record file that is not one.
 """
 
 from __future__ import annotations
@@ -54,7 +56,14 @@ import numpy as np
 
 from .registry import get_method, load_plugins, model_size
 
-__all__ = ["RecordKey", "Settings", "compute_record", "record_id", "strip_timing"]
+__all__ = [
+    "RecordKey",
+    "Settings",
+    "check_record",
+    "compute_record",
+    "record_id",
+    "strip_timing",
+]
 
 SCHEMA = 1
 
@@ -95,6 +104,76 @@ def record_id(key: RecordKey) -> str:
     """File-name-safe id: ``rig--method--dDESIRED--sSEED``."""
     safe = "".join(c if c.isalnum() or c in "-_." else "_" for c in key.rig)
     return f"{safe}--{key.method}--d{key.desired}--s{key.seed}"
+
+
+def _is_int(x) -> bool:
+    return isinstance(x, int) and not isinstance(x, bool)
+
+
+def _is_finite(x) -> bool:
+    return isinstance(x, (int, float)) and not isinstance(x, bool) and math.isfinite(x)
+
+
+def _check_ok(rec: dict) -> str | None:
+    """Why an ``ok`` record's scores are malformed (None if they are well-formed)."""
+    per = rec.get("eta0_per_iteration")
+    if not (isinstance(per, list) and per and all(_is_finite(v) for v in per)):
+        return "eta0_per_iteration is not a non-empty list of finite numbers"
+    for name in ("eta0_it00", "eta0_final", "eta0_best"):
+        if not _is_finite(rec.get(name)):
+            return f"{name} is {rec.get(name)!r}, not a finite number"
+    best, run = rec.get("best_iteration"), rec.get("iterations_run")
+    if not (_is_int(run) and run == len(per) - 1 and _is_int(best) and 0 <= best <= run):
+        return f"iterations_run {run!r} / best_iteration {best!r} do not fit {len(per)} η0 values"
+    if (rec["eta0_it00"], rec["eta0_final"], rec["eta0_best"]) != (per[0], per[-1], per[best]):
+        return "eta0_it00/final/best disagree with eta0_per_iteration"
+    for name in ("rms_error", "damage_ratio", "normal_model_error", "inverse_model_error"):
+        if rec.get(name) is not None and not _is_finite(rec[name]):
+            return f"{name} is {rec[name]!r}, not a finite number or null"
+    if not isinstance(rec.get("stopped"), str):
+        return "stopped is not a string"
+    return None
+
+
+def check_record(rec, key: RecordKey | None = None, settings: Settings | None = None) -> str | None:
+    """Why ``rec`` is not a finished, well-formed record (of ``key`` and ``settings`` when
+    given); None when it is.
+
+    A record is kept by a re-run only when this returns None: a file cut short, edited by hand,
+    copied from another record or another run, or with non-finite scores is recomputed.
+    """
+    if not isinstance(rec, dict):
+        return f"not a JSON object but {type(rec).__name__}"
+    if rec.get("schema") != SCHEMA:
+        return f"schema {rec.get('schema')!r}, not {SCHEMA}"
+    k = rec.get("key")
+    fields = ("rig", "method", "desired", "seed")
+    if not (isinstance(k, dict) and set(k) == set(fields)):
+        return "key is not {rig, method, desired, seed}"
+    if not (isinstance(k["rig"], str) and isinstance(k["method"], str)):
+        return "key rig/method are not strings"
+    if not (_is_int(k["desired"]) and _is_int(k["seed"])):
+        return "key desired/seed are not integers"
+    if rec.get("id") != record_id(RecordKey(**k)):
+        return f"id {rec.get('id')!r} does not match its key {k}"
+    if key is not None and k != asdict(key):
+        return f"a record of {record_id(RecordKey(**k))}, not of {record_id(key)}"
+    if settings is not None and rec.get("settings") != asdict(settings):
+        return "made with other settings"
+    if not isinstance(rec.get("timing"), dict):
+        return "no timing"
+    status = rec.get("status")
+    if status == "failed":
+        err = rec.get("error")
+        ok = isinstance(err, dict) and all(
+            isinstance(err.get(f), str) for f in ("stage", "type", "message")
+        )
+        return None if ok else "a failed record without {stage, type, message}"
+    if status != "ok":
+        return f"status {status!r}, not 'ok' or 'failed'"
+    if rec.get("error") is not None:
+        return "an ok record with an error"
+    return _check_ok(rec)
 
 
 def strip_timing(record: dict) -> dict:
@@ -161,7 +240,11 @@ def _desired(rig_name: str, fidelity: str, seconds: float, desired: int):
 
 
 def _error(stage: str, exc: BaseException) -> dict:
-    return {"stage": stage, "type": type(exc).__name__, "message": str(exc)}
+    """``{stage, type, message}``; a :class:`vrig.ReconstructionError` (nothing could be played)
+    is reported by the type of the error that caused it."""
+    cause = getattr(exc, "cause", None)
+    kind = type(cause if isinstance(cause, BaseException) else exc).__name__
+    return {"stage": stage, "type": kind, "message": str(exc)}
 
 
 def _split(th, holdout: float):
@@ -281,7 +364,18 @@ def compute_record(key: RecordKey, settings: Settings, plugin_specs=()) -> dict:
     timing["host"] = platform.node()
     timing["pid"] = os.getpid()
     rec["timing"] = timing
-    return _clean_record(rec)
+    rec = _clean_record(rec)
+    why = check_record(rec, key, settings)
+    if why is not None and rec["status"] == "ok":  # e.g. a NaN score: a failure, not a result
+        rec["status"], rec["error"] = (
+            "failed",
+            {
+                "stage": "scores",
+                "type": "MalformedRecord",
+                "message": why,
+            },
+        )
+    return rec
 
 
 def _describe(timed) -> str:

@@ -37,6 +37,7 @@ import numpy as np
 
 __all__ = [
     "MethodPlugin",
+    "PluginError",
     "PluginSpec",
     "default_plugin_specs",
     "get_method",
@@ -240,8 +241,31 @@ def default_plugin_specs() -> list[PluginSpec]:
     ]
 
 
+class PluginError(RuntimeError):
+    """A plugin could not be loaded (its module is missing or its code raised)."""
+
+
+def _load(kind: str, name: str, source: str) -> None:
+    if kind == "module":
+        importlib.import_module(name)
+    elif kind == "source":
+        mod_name = "_vrig_bench_plugin_" + hashlib.sha1(source.encode()).hexdigest()[:12]
+        module = types.ModuleType(mod_name)
+        module.__file__ = name
+        sys.modules[mod_name] = module
+        try:
+            exec(compile(source, name, "exec"), module.__dict__)
+        except BaseException:
+            sys.modules.pop(mod_name, None)
+            raise
+    else:
+        raise ValueError(f"unknown plugin spec kind {kind!r}")
+
+
 def load_plugins(specs) -> list[str]:
-    """Load plugin specs (once per process); returns the names of the methods they registered."""
+    """Load plugin specs (once per process); returns the names of the methods they registered.
+
+    Raises :class:`PluginError` (naming the plugin) when one cannot be imported or raises."""
     new = []
     for spec in specs:
         spec = tuple(spec)
@@ -251,16 +275,9 @@ def load_plugins(specs) -> list[str]:
         before = dict(_REGISTRY)
         _LOADING.append(name)
         try:
-            if kind == "module":
-                importlib.import_module(name)
-            elif kind == "source":
-                mod_name = "_vrig_bench_plugin_" + hashlib.sha1(source.encode()).hexdigest()[:12]
-                module = types.ModuleType(mod_name)
-                module.__file__ = name
-                sys.modules[mod_name] = module
-                exec(compile(source, name, "exec"), module.__dict__)
-            else:
-                raise ValueError(f"unknown plugin spec kind {kind!r}")
+            _load(kind, name, source)
+        except Exception as exc:  # the plugin's own code raised: name the plugin
+            raise PluginError(f"plugin {name} failed to load: {type(exc).__name__}: {exc}") from exc
         finally:
             _LOADING.pop()
         _LOADED.add(spec)

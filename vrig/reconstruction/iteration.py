@@ -6,7 +6,13 @@ RIT00RES → GPREPRO → IT00RES → error → ``ITn+1DRV = ITnDRV + gain (inver
 inverse(ITnRES))`` → ...
 
 Every drive is checked against the rig's full scale before it is sent; a diverging iteration
-(η0 grows by ``divergence`` over the best so far) stops, and the best drive is kept.
+(η0 grows by ``divergence`` over the best so far) stops, and the best drive is kept. So does any
+error after IT00 (a drive refused or a rig trip, an unstable simulation, a diverged inverse
+model, a non-finite drive update): :func:`reconstruct` returns every iteration played, says why
+it stopped (``result.stopped``, ``result.error``) and keeps the drive that was refused or tripped
+(``result.rejected_name``, ``result.rejected_drive``). A failure before any iteration was played
+raises :class:`~vrig.ReconstructionError` carrying the same kind of result with zero iterations
+(the identification records and model, when they were made).
 """
 
 from __future__ import annotations
@@ -19,8 +25,9 @@ from scipy import signal
 from tqdm.auto import tqdm
 
 from identification import metrics
+from identification.errors import SimulationDivergedError
 
-from ..errors import RigLimitError
+from ..errors import ReconstructionError, RigLimitError, SimulationInstabilityError
 from ..processing import decimate, gprepro, identification_band
 from ..rigs.spec import check_drive_limits
 from ..signals import random_drive, triangular_psd
@@ -63,11 +70,22 @@ class ReconstructionResult:
         ITxxDRV, ITxxRES (processed) and RITxxRES (raw) per iteration.
     best_iteration : int
         Iteration with the smallest mean η0; ``final_drive``/``final_response`` are its records.
+        ``-1`` when no iteration was played (the result of a :class:`~vrig.ReconstructionError`).
+    id_drive, id_response : TimeHistory or None
+        IDDRV and IDRES (raw); ``None`` when the identification drive could not be played.
+    stopped : str
+        Why the loop stopped before the last iteration ("" when it ran them all).
+    error : Exception or None
+        The exception that stopped the loop (None when it completed or diverged).
+    rejected_name, rejected_drive : str, TimeHistory or None
+        The drive that was refused before it was sent (``"REFUSEDxx"``, ``"REFUSEDID"`` for the
+        identification drive) or that tripped the rig (``"TRIPPEDxx"``, ``"TRIPPEDID"``), when
+        the loop stopped on one; ``""``/``None`` otherwise.
     """
 
     desired: TimeHistory
-    id_drive: TimeHistory
-    id_response: TimeHistory
+    id_drive: TimeHistory | None
+    id_response: TimeHistory | None
     method: object
     bandwidth: tuple[float, float]
     errors: np.ndarray
@@ -82,14 +100,22 @@ class ReconstructionResult:
     gain: np.ndarray | None = None
     strategy: str = "fixed"
     seed: int = 0
+    error: Exception | None = None
+    rejected_name: str = ""
+    rejected_drive: TimeHistory | None = None
 
     @property
     def final_drive(self) -> TimeHistory:
-        return self.drives[self.best_iteration]
+        return self.drives[self._best()]
 
     @property
     def final_response(self) -> TimeHistory:
-        return self.responses[self.best_iteration]
+        return self.responses[self._best()]
+
+    def _best(self) -> int:
+        if not self.drives or not 0 <= self.best_iteration < len(self.drives):
+            raise ValueError(f"no iteration was played ({self.stopped or 'empty result'})")
+        return self.best_iteration
 
     def table(self) -> str:
         """Per-iteration, per-channel η0 table."""
@@ -209,7 +235,10 @@ class DriveIteration:
     >>> drive = it.next_drive(drive, res, gain=0.8)                 # IT01DRV
 
     Parameters are those of :func:`reconstruct`. ``play`` raises :class:`~vrig.RigLimitError`
-    for a drive beyond the rig's limits *before* sending it, or when the rig trips.
+    for a drive beyond the rig's limits *before* sending it, or when the rig trips. A drive that
+    was refused or tripped the rig (in ``play`` or ``identify``) is kept in ``rejected`` as
+    ``("REFUSEDxx" | "TRIPPEDxx", drive)`` (``xx`` the iteration, ``ID`` for the identification
+    drive) until the next drive is played; a drive that is not finite is refused but not kept.
     """
 
     def __init__(
@@ -266,6 +295,7 @@ class DriveIteration:
         self.id_drive: TimeHistory | None = None
         self.id_response: TimeHistory | None = None
         self.target: np.ndarray | None = None
+        self.rejected: tuple[str, TimeHistory] | None = None
 
     # -- resampling between the rig rate and the model rate
     def down(self, th: TimeHistory) -> TimeHistory:
@@ -297,8 +327,7 @@ class DriveIteration:
                 unit=rig.inputs[0].unit,
             )
             try:
-                _check_drive(rig, iddrv.data, "the identification drive")
-                idres = rig.run(iddrv, seed=self.seed)
+                _, idres = self._send(iddrv, "ID", "the identification drive", self.seed)
                 break
             except RigLimitError as exc:  # halve the amplitude and try again
                 rms, last_trip = rms / 2, exc
@@ -315,14 +344,26 @@ class DriveIteration:
         self.method.identify(
             self.down(gprepro(drive, self.id_band)), self.down(gprepro(response, self.id_band))
         )
-        self.target = self.method.drive(self.down(self.desres))
+        self.target = self._inverse(self.desres, "DESRES")
+
+    def _inverse(self, response: TimeHistory, what: str) -> np.ndarray:
+        """The method's drive for ``response`` at the model rate; a non-finite value raises
+        :class:`~identification.SimulationDivergedError` (as a diverging free run does)."""
+        x = np.asarray(self.method.drive(self.down(response)), dtype=float)
+        bad = ~np.isfinite(x)
+        if bad.any():
+            i, j = np.argwhere(bad)[0]
+            raise SimulationDivergedError(
+                j, f"{self.names[j]} (inverse of {what})", i, x[i, j], np.inf
+            )
+        return x
 
     def use_identified(self, method, id_drive: TimeHistory, id_response: TimeHistory) -> None:
         """Take an already identified method (e.g. a cached inverse model, identified by
         :meth:`identify` on the same rig, band and settings) instead of identifying again."""
         self.method = make_method(method)
         self.id_drive, self.id_response = id_drive, id_response
-        self.target = self.method.drive(self.down(self.desres))
+        self.target = self._inverse(self.desres, "DESRES")
 
     def shape(self, x: np.ndarray) -> np.ndarray:
         """A drive (or drive correction) as it may be sent: band-limited to the identification
@@ -358,16 +399,38 @@ class DriveIteration:
 
         Raises RigLimitError (nothing is sent when the drive itself is beyond the limits)."""
         what = f"IT{iteration:02d}DRV"
-        _check_drive(self.rig, drive, what)
-        drv = TimeHistory(drive, self.rig.fs, self.names, self.units)
-        raw = self.rig.run(drv, seed=self.seed + 1 + iteration)
+        drv, raw = self._send(drive, f"{iteration:02d}", what, self.seed + 1 + iteration)
         res = gprepro(raw, self.band)
         return drv, raw, res, _scores(self.desres, res)
+
+    def _send(self, drive, tag: str, what: str, seed: int):
+        """Check ``drive`` (TimeHistory or array) against the limits and play it; returns
+        (drive as TimeHistory, raw response). A refused drive or one that trips the rig (an
+        interlock, an unstable simulation) is kept in ``rejected`` before the error goes on."""
+        self.rejected = None
+        data = drive.data if isinstance(drive, TimeHistory) else np.asarray(drive, dtype=float)
+        drv = None
+        if np.all(np.isfinite(data)):
+            drv = drive if isinstance(drive, TimeHistory) else self._th(data)
+        try:
+            _check_drive(self.rig, data, what)
+        except RigLimitError:
+            self.rejected = None if drv is None else (f"REFUSED{tag}", drv)
+            raise
+        try:
+            raw = self.rig.run(drv, seed=seed)
+        except (RigLimitError, SimulationInstabilityError):
+            self.rejected = (f"TRIPPED{tag}", drv)
+            raise
+        return drv, raw
+
+    def _th(self, data: np.ndarray) -> TimeHistory:
+        return TimeHistory(data, self.rig.fs, self.names, self.units)
 
     def correction(self, response: TimeHistory) -> np.ndarray:
         """``inverse(DESRES) - inverse(ITxxRES)`` at the rig rate (the un-scaled update),
         band-limited and tapered like the drive (:meth:`shape`)."""
-        return self.shape(self.up(self.target - self.method.drive(self.down(response))))
+        return self.shape(self.up(self.target - self._inverse(response, "the response")))
 
     def next_drive(self, drive: np.ndarray, response: TimeHistory, gain, edges=None) -> np.ndarray:
         """``ITn+1DRV = ITnDRV + gain * (inverse(DESRES) - inverse(ITnRES))``.
@@ -462,6 +525,24 @@ def reconstruct(
         zero over its first and last ``taper`` seconds (:meth:`DriveIteration.shape`).
     seed : int
         Seeds the identification drive and every rig run (reproducible).
+
+    Returns
+    -------
+    ReconstructionResult
+        Every iteration played, IT00 first, and the best one. Any error after IT00 (a drive
+        refused or a rig trip, an unstable simulation, a diverged inverse model, a non-finite
+        drive update) stops the loop instead of propagating: ``stopped`` says where and why,
+        ``error`` holds the exception and ``rejected_drive`` the drive refused or tripped.
+
+    Raises
+    ------
+    ValueError
+        Bad arguments (before anything is played).
+    ReconstructionError
+        Nothing could be played: the identification drive tripped the rig even at 1/8 of its
+        amplitude, the inverse model could not be fitted or diverged on DESRES, or IT00DRV was
+        refused or tripped. ``exc.result`` holds what was made (identification records, model,
+        the rejected drive); ``exc.cause`` the original error.
     """
     if strategy not in ("fixed", "adaptive"):
         raise ValueError(f"strategy must be 'fixed' or 'adaptive', got {strategy!r}")
@@ -479,33 +560,71 @@ def reconstruct(
         seed=seed,
         **method_options,
     )
-    engine.check_desired()
-    engine.identify()
-    drive = engine.first_drive()
+    engine.check_desired()  # ValueError before anything is played
     result = ReconstructionResult(
         desired=engine.desres,
-        id_drive=engine.id_drive,
-        id_response=engine.id_response,
+        id_drive=None,
+        id_response=None,
         method=engine.method,
         bandwidth=engine.band,
         errors=np.empty((0, desired.n_channels)),
         rms_errors=np.empty((0, desired.n_channels)),
         damage_ratio=np.empty((0, desired.n_channels)),
+        best_iteration=-1,
         decimation=engine.decimation,
         gain=gain,
         strategy=strategy,
         seed=int(seed),
     )
-    errs, rmss, dmgs = [], [], []
-    failure: Exception | None = None
+    drive = _first_drive(engine, result)
     bar = tqdm(
         total=iterations + 1, desc=f"{rig.name}: iterations", disable=not progress, leave=False
     )
+    try:
+        _iterate(engine, result, drive, iterations, gain, strategy, (divergence, min_increase), bar)
+    finally:
+        bar.close()
+    return result
+
+
+def _fail(result: ReconstructionResult, engine: DriveIteration, where: str, exc: Exception) -> None:
+    """Record in ``result`` why the loop stopped (and the drive refused or tripped, if any)."""
+    what = str(exc) if isinstance(exc, RigLimitError) else f"{type(exc).__name__}: {exc}"
+    result.stopped, result.error = f"{where}: {what}", exc
+    if engine.rejected is not None:
+        result.rejected_name, result.rejected_drive = engine.rejected
+
+
+def _first_drive(engine: DriveIteration, result: ReconstructionResult) -> np.ndarray:
+    """Identify and compute IT00DRV; any failure raises ReconstructionError with ``result``."""
+    try:
+        engine.identify()
+        drive = engine.first_drive()
+    except Exception as exc:
+        stage = "identification" if engine.id_response is None else "model"
+        result.id_drive, result.id_response = engine.id_drive, engine.id_response
+        _fail(result, engine, stage, exc)
+        raise ReconstructionError(
+            f"no iteration played: {result.stopped}", result=result, cause=exc, stage=stage
+        ) from exc
+    result.id_drive, result.id_response = engine.id_drive, engine.id_response
+    return drive
+
+
+def _iterate(engine, result, drive, iterations, gain, strategy, guard, bar) -> None:
+    """The loop of :func:`reconstruct` from IT00 on: fills ``result`` until the last iteration,
+    divergence (``guard`` = (divergence, min_increase)) or the first error after IT00."""
+    divergence, min_increase = guard
+    errs, rmss, dmgs = [], [], []
     for it in range(iterations + 1):
         try:
             drv, raw, res, (e, r, d) = engine.play(drive, it)
-        except RigLimitError as exc:
-            result.stopped, failure = f"IT{it:02d}: {exc}", exc
+        except Exception as exc:
+            _fail(result, engine, f"IT{it:02d}", exc)
+            if it == 0:
+                raise ReconstructionError(
+                    f"no iteration played: {result.stopped}", result=result, cause=exc, stage="IT00"
+                ) from exc
             break
         result.drives.append(drv)
         result.raw_responses.append(raw)
@@ -513,25 +632,32 @@ def reconstruct(
         errs.append(e)
         rmss.append(r)
         dmgs.append(d)
+        result.errors, result.rms_errors, result.damage_ratio = (
+            np.array(errs),
+            np.array(rmss),
+            np.array(dmgs),
+        )
+        means = result.errors.mean(axis=1)
+        result.best_iteration = int(np.argmin(np.where(np.isnan(means), np.inf, means)))
         bar.update(1)
-        means = [x.mean() for x in errs]
-        if means[-1] > divergence * min(means) and means[-1] - min(means) > min_increase:
+        best = means[result.best_iteration]
+        if means[-1] > divergence * best and means[-1] - best > min_increase:
             result.stopped = (
                 f"IT{it:02d}: diverging (mean η0 {means[-1]:.1f} % > {divergence} x best)"
             )
             break
         if it == iterations:
             break
-        if strategy == "adaptive":
-            engine.reidentify(drv, raw)
-        drive = engine.next_drive(drive, res, gain)
-    bar.close()
-    if not errs:  # IT00 itself could not be played: report why
-        raise failure
-    result.errors, result.rms_errors, result.damage_ratio = (
-        np.array(errs),
-        np.array(rmss),
-        np.array(dmgs),
-    )
-    result.best_iteration = int(np.argmin(result.errors.mean(axis=1)))
-    return result
+        try:
+            if strategy == "adaptive":
+                engine.reidentify(drv, raw)
+            drive = engine.next_drive(drive, res, gain)
+        except Exception as exc:
+            _fail(result, engine, f"IT{it + 1:02d}DRV", exc)
+            break
+        if not np.all(np.isfinite(drive)):
+            result.stopped = (
+                f"IT{it + 1:02d}DRV: the drive update is not finite (the inverse model diverged "
+                f"on IT{it:02d}RES): not sent"
+            )
+            break
