@@ -15,6 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ._files import atomic_write
 from ._transforms import FUNCTIONS
 from ._validation import as_signal, check_same_length, per_channel_int
 from .errors import (
@@ -559,9 +560,7 @@ class Narx:
 
     def _bounded(self, u, y) -> bool:
         """Bounded free run on the identification input and at the stability margin."""
-        return all(
-            self._free_run_divergence(u, y, s) is None for s in {1.0, self.stability_margin}
-        )
+        return all(self._free_run_divergence(u, y, s) is None for s in {1.0, self.stability_margin})
 
     def _remedy(self, u, y) -> str | None:
         """Simulation focus, free run not bounded at 1x or at the margin: drop the terms that
@@ -819,7 +818,11 @@ class Narx:
         }
 
     def save(self, path) -> Path:
-        """Save the fitted model to a single ``.npz`` file (exact round trip); returns the path."""
+        """Save the fitted model to a single ``.npz`` file (exact round trip); returns the path.
+
+        The file is replaced atomically (temporary ``.NAME.tmp-XXXXXXXX`` in the same folder,
+        ``fsync``, rename): a kill during the save leaves the previous file or the new one.
+        """
         self._check_fitted()
         path = Path(path)
         if path.suffix != ".npz":
@@ -849,7 +852,8 @@ class Narx:
                 arrays[f"err_{k}"] = self.err_[k]
             if getattr(self, "coef_std_", None) is not None:
                 arrays[f"coef_std_{k}"] = self.coef_std_[k]
-        np.savez(path, **arrays)
+        with atomic_write(path) as f:  # a kill leaves the old file or the new one
+            np.savez(f, **arrays)
         return path
 
     @classmethod

@@ -5,7 +5,7 @@ signals, processing, reconstruction workflow, gymnasium environments and CLI liv
 """
 
 from . import envs as _envs  # noqa: F401  (registers the vrig/ gymnasium environments)
-from .errors import RigLimitError, RigModelError, SimulationInstabilityError
+from .errors import FileFormatError, RigLimitError, RigModelError, SimulationInstabilityError
 from .field import pseudo_field
 from .reconstruction import ReconstructionResult, reconstruct
 from .rigs import ChannelSpec, FileRig, MujocoRig, list_rigs, load_rig, rig_path
@@ -16,6 +16,7 @@ __version__ = "0.1.0"
 
 __all__ = [
     "ChannelSpec",
+    "FileFormatError",
     "FileRig",
     "MujocoRig",
     "ReconstructionResult",

@@ -45,7 +45,6 @@ from __future__ import annotations
 
 import csv
 import datetime
-import io as _stdio
 import math
 import re
 from collections.abc import Mapping, Sequence
@@ -53,6 +52,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .files import atomic_write
 from .timehistory import TimeHistory
 
 __all__ = [
@@ -632,7 +632,10 @@ def write_rpc3(
     out[:, :n] = values.T
     out[:, n:n_points] = values[-1][:, None]  # hold the last value to the end of the frame
     body = out.reshape(n_chan, n_groups, per_group).transpose(1, 0, 2).tobytes()
-    path.write_bytes(head + body.ljust(_padded(len(body)), b"\0"))  # whole 512-byte blocks
+    with atomic_write(path) as f:
+        f.write(head)
+        f.write(body)
+        f.write(bytes(_padded(len(body)) - len(body)))  # whole 512-byte blocks
     return path
 
 
@@ -664,14 +667,13 @@ def write_csv(path, history: TimeHistory) -> Path:
             raise ValueError(f"channel {name!r} [{unit!r}]: line breaks cannot be stored in CSV")
         if "[" in unit or "]" in unit:
             raise ValueError(f"unit {unit!r} of channel {name!r} must not contain [ or ]")
-    text = _stdio.StringIO()
-    csv.writer(text, lineterminator="\n").writerow(
-        ["time"] + [f"{n} [{u}]" for n, u in zip(history.names, history.units, strict=True)]
-    )
     table = np.column_stack([history.time, history.data])
     fmt = ["%.12g"] + ["%.17g"] * history.n_channels
-    np.savetxt(text, table, fmt=fmt, delimiter=",")
-    path.write_text(text.getvalue(), encoding="utf-8")
+    with atomic_write(path, "w", encoding="utf-8") as f:
+        csv.writer(f, lineterminator="\n").writerow(
+            ["time"] + [f"{n} [{u}]" for n, u in zip(history.names, history.units, strict=True)]
+        )
+        np.savetxt(f, table, fmt=fmt, delimiter=",")
     return path
 
 
@@ -770,7 +772,7 @@ def write_mat(path, history: TimeHistory) -> Path:
         "names": np.array(history.names, dtype=object),
         "units": np.array(history.units, dtype=object),
     }
-    with path.open("wb") as f:
+    with atomic_write(path) as f:
         savemat(f, content)
     return path
 

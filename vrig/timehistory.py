@@ -13,6 +13,8 @@ from pathlib import Path
 
 import numpy as np
 
+from .files import atomic_write
+
 __all__ = ["TimeHistory"]
 
 
@@ -160,7 +162,8 @@ class TimeHistory:
 
     # ------------------------------------------------------------------ persistence
     def save(self, path) -> Path:
-        """Write an ``.npz`` with the data, ``fs``, names and units."""
+        """Write an ``.npz`` with the data, ``fs``, names and units (atomically: see
+        :func:`vrig.files.atomic_write`); a missing or other suffix becomes ``.npz``."""
         path = Path(path)
         if path.suffix != ".npz":
             path = path.with_suffix(".npz")
@@ -171,7 +174,8 @@ class TimeHistory:
             "units": list(self.units),
             "fs": self.fs,
         }
-        np.savez(path, data=self.data, meta=np.array(json.dumps(meta)))
+        with atomic_write(path) as f:  # a kill leaves the old file or the new one
+            np.savez(f, data=self.data, meta=np.array(json.dumps(meta)))
         return path
 
     @classmethod
