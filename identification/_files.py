@@ -15,10 +15,12 @@ The package never imports vrig, so it keeps its own copy of vrig's file safety
 from __future__ import annotations
 
 import contextlib
+import errno
 import math
 import os
 import secrets
 import stat
+import tokenize
 import zipfile
 import zlib
 from collections.abc import Callable, Iterator
@@ -29,7 +31,7 @@ import numpy as np
 
 __all__ = ["atomic_write", "read_npz"]
 
-_BROKEN = (
+_BROKEN = (  # what zipfile and numpy raise on corrupt input (found by fuzzing)
     zipfile.BadZipFile,
     zlib.error,
     EOFError,
@@ -38,6 +40,9 @@ _BROKEN = (
     KeyError,
     OverflowError,
     UnicodeDecodeError,
+    SyntaxError,
+    tokenize.TokenError,  # a .npy header numpy parses with tokenize
+    OSError,  # a seek to an offset from a corrupt directory (EINVAL); other errnos re-raised
 )
 
 
@@ -154,4 +159,6 @@ def read_npz(path, *, limit: int, error: Callable[[str], Exception]) -> dict[str
         except _Invalid as exc:
             raise error(str(exc)) from None
         except _BROKEN as exc:
+            if isinstance(exc, OSError) and exc.errno != errno.EINVAL:
+                raise  # a real I/O error, not a corrupt file
             raise error(f"corrupt or not an .npz archive ({type(exc).__name__}: {exc})") from None

@@ -489,3 +489,46 @@ def test_predict_never_returns_inf_or_nan(two_models):
     err = info.value
     assert err.kind == "one-step prediction" and 200 <= err.sample <= 203
     assert not np.isfinite(err.value) and "one-step prediction" in str(err)
+
+
+def _directory_offset_too_large(raw: bytes) -> bytes:
+    """End-of-central-directory record claims the directory starts 1000 bytes later than it
+    does: zipfile then seeks to a negative member offset (EINVAL)."""
+    end = raw.rindex(b"PK\x05\x06")
+    offset = int.from_bytes(raw[end + 16 : end + 20], "little")
+    return raw[: end + 16] + (offset + 1000).to_bytes(4, "little") + raw[end + 20 :]
+
+
+def _unclosed_npy_header(raw: bytes) -> bytes:
+    """A member's .npy header dict loses its closing bracket (numpy's tokenize fallback raises
+    TokenError, which is not a ValueError)."""
+    import io
+    import zipfile
+
+    out = io.BytesIO()
+    with zipfile.ZipFile(io.BytesIO(raw)) as src, zipfile.ZipFile(out, "w") as dst:
+        for name in src.namelist():
+            data = src.read(name)
+            if name == src.namelist()[-1]:
+                data = data.replace(b"), }", b"   }", 1)
+            dst.writestr(name, data)
+    return out.getvalue()
+
+
+@pytest.mark.parametrize("corrupt", [_directory_offset_too_large, _unclosed_npy_header])
+@pytest.mark.parametrize("kind", ["timehistory", "model"])
+def test_corrupt_zip_structures_are_file_errors(tmp_path, two_models, corrupt, kind):
+    from identification import ModelFileError
+    from vrig.errors import FileFormatError
+
+    if kind == "timehistory":
+        path = TimeHistory(np.ones((50, 2)), 10.0).save(tmp_path / "z.npz")
+        load, error = TimeHistory.load, FileFormatError
+    else:
+        path = two_models[0].save(tmp_path / "z.npz")
+        load, error = Narx.load, ModelFileError
+    raw = corrupt(path.read_bytes())
+    assert raw != path.read_bytes()
+    path.write_bytes(raw)
+    with pytest.raises(error, match=r"z\.npz"):
+        load(path)

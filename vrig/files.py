@@ -39,12 +39,14 @@ since it never imports vrig.)
 from __future__ import annotations
 
 import contextlib
+import errno
 import math
 import os
 import re
 import secrets
 import shutil
 import stat
+import tokenize
 import zipfile
 import zlib
 from collections.abc import Callable, Iterator
@@ -410,7 +412,7 @@ def read_bytes(path, fmt: str, *, limit: int | None = None) -> bytes:
     return parts[0] if len(parts) == 1 else b"".join(parts)
 
 
-_NPZ_BROKEN = (
+_NPZ_BROKEN = (  # what zipfile and numpy raise on corrupt input (found by fuzzing)
     zipfile.BadZipFile,
     zlib.error,
     EOFError,
@@ -419,6 +421,9 @@ _NPZ_BROKEN = (
     KeyError,
     OverflowError,
     UnicodeDecodeError,
+    SyntaxError,
+    tokenize.TokenError,  # a .npy header numpy parses with tokenize
+    OSError,  # a seek to an offset from a corrupt directory (EINVAL); other errnos re-raised
 )
 
 
@@ -487,6 +492,8 @@ def read_npz(path, fmt: str, *, limit: int | None = None) -> dict[str, np.ndarra
         except _Invalid as exc:
             raise FileFormatError(path, fmt, str(exc)) from None
         except _NPZ_BROKEN as exc:
+            if isinstance(exc, OSError) and exc.errno != errno.EINVAL:
+                raise  # a real I/O error, not a corrupt file
             raise FileFormatError(
                 path, fmt, f"corrupt or not an .npz archive ({type(exc).__name__}: {exc})"
             ) from None
