@@ -317,6 +317,15 @@ def test_a_latin1_csv_is_refused_naming_the_file_and_the_byte(tmp_path):
     assert str(path) in text and "not UTF-8" in text and "0xb0" in text and "line 1" in text
 
 
+def test_a_csv_header_beyond_the_csv_field_limit_is_a_file_format_error(tmp_path):
+    from vrig.errors import FileFormatError
+
+    path = tmp_path / "wide.csv"
+    path.write_text('time,"' + "x" * 140_000 + '"\n0,1\n1,2\n')  # csv module limit: 131072
+    with pytest.raises(FileFormatError, match=r"wide\.csv.*header row"):
+        read_csv(path)
+
+
 @pytest.mark.parametrize("encoding", ["utf-16", "utf-16-be", "utf-32"])
 def test_a_utf16_or_utf32_csv_is_refused_naming_the_encoding(tmp_path, encoding):
     from vrig.errors import FileFormatError

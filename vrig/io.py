@@ -808,7 +808,10 @@ def read_csv(path, *, fs: float | None = None) -> TimeHistory:
         raise FileFormatError(
             src, _CSV, "empty CSV file (expected a header row time,<name> [<unit>],...)"
         )
-    columns = next(csv.reader([lines[0]]))
+    try:
+        columns = next(csv.reader([lines[0]]))
+    except csv.Error as exc:  # e.g. a field beyond the csv module's 131072-character limit
+        raise FileFormatError(src, _CSV, f"unreadable header row: {exc}") from None
     first = _COLUMN.match(columns[0])
     first_name = (first.group(1) if first else columns[0]).strip().lower()
     if first_name != "time" or len(columns) < 2:
