@@ -767,6 +767,30 @@ def _csv_text(path: Path) -> str:
         ) from None
 
 
+def _csv_header(lines: list[str], src: str) -> tuple[list[str], list[str], list[str]]:
+    """The header row's columns and the channel names and units (``"-"`` without ``[unit]``)."""
+    if not lines or not lines[0].strip():
+        raise FileFormatError(
+            src, _CSV, "empty CSV file (expected a header row time,<name> [<unit>],...)"
+        )
+    try:
+        columns = next(csv.reader([lines[0]]))
+    except csv.Error as exc:  # e.g. a field beyond the csv module's 131072-character limit
+        raise FileFormatError(src, _CSV, f"unreadable header row: {exc}") from None
+    first = _COLUMN.match(columns[0])
+    first_name = (first.group(1) if first else columns[0]).strip().lower()
+    if first_name != "time" or len(columns) < 2:
+        raise FileFormatError(
+            src, _CSV, f"the header row must be time,<name> [<unit>],..., got {lines[0][:80]!r}"
+        )
+    names, units = [], []
+    for col in columns[1:]:
+        m = _COLUMN.match(col)
+        names.append((m.group(1) if m else col).strip())
+        units.append(m.group(2).strip() if m else "-")
+    return columns, names, units
+
+
 def read_csv(path, *, fs: float | None = None) -> TimeHistory:
     """Read a CSV written by :func:`write_csv` (or any ``time,<name> [<unit>],...`` table).
 
@@ -804,25 +828,7 @@ def read_csv(path, *, fs: float | None = None) -> TimeHistory:
     path = Path(path)
     src = str(path)
     lines = _csv_text(path).splitlines()
-    if not lines or not lines[0].strip():
-        raise FileFormatError(
-            src, _CSV, "empty CSV file (expected a header row time,<name> [<unit>],...)"
-        )
-    try:
-        columns = next(csv.reader([lines[0]]))
-    except csv.Error as exc:  # e.g. a field beyond the csv module's 131072-character limit
-        raise FileFormatError(src, _CSV, f"unreadable header row: {exc}") from None
-    first = _COLUMN.match(columns[0])
-    first_name = (first.group(1) if first else columns[0]).strip().lower()
-    if first_name != "time" or len(columns) < 2:
-        raise FileFormatError(
-            src, _CSV, f"the header row must be time,<name> [<unit>],..., got {lines[0][:80]!r}"
-        )
-    names, units = [], []
-    for col in columns[1:]:
-        m = _COLUMN.match(col)
-        names.append((m.group(1) if m else col).strip())
-        units.append(m.group(2).strip() if m else "-")
+    columns, names, units = _csv_header(lines, src)
     rows = [line for line in lines[1:] if line.strip()]
     if not rows:
         raise FileFormatError(src, _CSV, "no data rows after the header")
