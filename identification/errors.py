@@ -6,6 +6,7 @@ __all__ = [
     "IdentificationError",
     "IllConditionedWarning",
     "InsufficientDataError",
+    "ModelFileError",
     "RankDeficiencyWarning",
     "SimulationDivergedError",
     "StabilityWarning",
@@ -19,6 +20,26 @@ class IdentificationError(ValueError):
 
 class InsufficientDataError(IdentificationError):
     """Fewer usable samples than model terms."""
+
+
+class ModelFileError(IdentificationError):
+    """A model file is not one :meth:`Narx.save <identification.Narx.save>` wrote: truncated,
+    corrupt, foreign, tampered, of a newer format version, not a regular file or too large.
+
+    Attributes
+    ----------
+    path : str
+        The file.
+    detail : str
+        What is wrong.
+    """
+
+    def __init__(self, path, detail: str):
+        self.path, self.detail = str(path), str(detail)
+        super().__init__(f"{self.path}: not a valid identification model file: {self.detail}")
+
+    def __reduce__(self):  # picklable (worker processes)
+        return type(self), (self.path, self.detail)
 
 
 class UnstableModelError(IdentificationError):
@@ -48,7 +69,8 @@ class IllConditionedWarning(UserWarning):
 
 
 class SimulationDivergedError(ArithmeticError):
-    """A free-run simulation left the bounded region or produced a non-finite value.
+    """A free-run simulation left the bounded region or produced a non-finite value, or a
+    one-step prediction was not finite.
 
     Attributes
     ----------
@@ -61,23 +83,53 @@ class SimulationDivergedError(ArithmeticError):
     value : float
         The offending value (may be inf or nan).
     bound : float
-        The magnitude bound that was in force.
+        The magnitude bound that was in force (inf for a prediction).
+    kind : str
+        ``"free-run simulation"`` (:meth:`Narx.simulate`) or ``"one-step prediction"``
+        (:meth:`Narx.predict`).
     """
 
-    def __init__(self, channel: int, channel_name: str, sample: int, value: float, bound: float):
+    def __init__(
+        self,
+        channel: int,
+        channel_name: str,
+        sample: int,
+        value: float,
+        bound: float,
+        kind: str = "free-run simulation",
+    ):
         self.channel = int(channel)
         self.channel_name = str(channel_name)
         self.sample = int(sample)
         self.value = float(value)
         self.bound = float(bound)
+        self.kind = str(kind)
         what = "not finite" if not _isfinite(self.value) else f"beyond the bound {self.bound:.6g}"
+        if self.kind == "one-step prediction":
+            hint = (
+                "The model's terms overflow for data of this magnitude: check the data's units "
+                "and amplitude against the identification data."
+            )
+        else:
+            hint = (
+                "The model is unstable for this input: check the input amplitude against the "
+                "identification data, lower the model order/degree, or raise `bound` if the "
+                "growth is genuine."
+            )
         super().__init__(
-            f"free-run simulation diverged on output channel {self.channel} "
+            f"{self.kind} diverged on output channel {self.channel} "
             f"({self.channel_name!r}) at sample {self.sample}: value {self.value:.6g} "
-            f"is {what}. "
-            "The model is unstable for this input: check the input amplitude against the "
-            "identification data, lower the model order/degree, or raise `bound` if the growth "
-            "is genuine."
+            f"is {what}. {hint}"
+        )
+
+    def __reduce__(self):  # picklable (worker processes)
+        return type(self), (
+            self.channel,
+            self.channel_name,
+            self.sample,
+            self.value,
+            self.bound,
+            self.kind,
         )
 
 

@@ -15,12 +15,14 @@ from pathlib import Path
 
 import numpy as np
 
+from ._files import atomic_write, read_npz
 from ._transforms import FUNCTIONS
 from ._validation import as_signal, check_same_length, per_channel_int
 from .budget import check_allocation, product
 from .errors import (
     IdentificationError,
     InsufficientDataError,
+    ModelFileError,
     SimulationDivergedError,
     StabilityWarning,
     UnstableModelError,
@@ -614,9 +616,7 @@ class Narx:
 
     def _bounded(self, u, y) -> bool:
         """Bounded free run on the identification input and at the stability margin."""
-        return all(
-            self._free_run_divergence(u, y, s) is None for s in {1.0, self.stability_margin}
-        )
+        return all(self._free_run_divergence(u, y, s) is None for s in {1.0, self.stability_margin})
 
     def _remedy(self, u, y) -> str | None:
         """Simulation focus, free run not bounded at 1x or at the margin: drop the terms that
@@ -783,6 +783,12 @@ class Narx:
         """One-step-ahead prediction from measured inputs and outputs, shape (N, ny).
 
         The first ``max_lag_`` samples cannot be predicted and are copies of ``y``.
+
+        Raises
+        ------
+        SimulationDivergedError
+            (``kind = "one-step prediction"``) when a prediction is not finite: the data are
+            so large that the model's terms overflow. The result never holds NaN or inf.
         """
         self._check_fitted()
         u = as_signal(u, "u", n_channels=self.n_inputs_)
@@ -793,10 +799,17 @@ class Narx:
             raise IdentificationError(f"need more than max_lag_ = {p} samples to predict")
         out = y.copy()
         X, shared_with = None, None
-        for k, ch in enumerate(self.channels_):
-            if shared_with is None or not ch.same_as(shared_with):
-                X, shared_with = regression_matrix(u, y, ch, p), ch  # reuse for equal structures
-            out[p:, k] = X @ self.coef_[k]
+        with np.errstate(over="ignore", invalid="ignore"):  # overflow is reported below
+            for k, ch in enumerate(self.channels_):
+                if shared_with is None or not ch.same_as(shared_with):
+                    X, shared_with = regression_matrix(u, y, ch, p), ch  # reuse equal structures
+                out[p:, k] = X @ self.coef_[k]
+        bad = ~np.isfinite(out[p:])
+        if bad.any():
+            t, k = np.argwhere(bad)[0]
+            raise SimulationDivergedError(
+                k, self.output_names_[k], p + t, out[p + t, k], np.inf, "one-step prediction"
+            )
         return out
 
     def term_names(self) -> list[list[str]]:
@@ -874,7 +887,11 @@ class Narx:
         }
 
     def save(self, path) -> Path:
-        """Save the fitted model to a single ``.npz`` file (exact round trip); returns the path."""
+        """Save the fitted model to a single ``.npz`` file (exact round trip); returns the path.
+
+        The file is replaced atomically (temporary ``.NAME.tmp-XXXXXXXX`` in the same folder,
+        ``fsync``, rename): a kill during the save leaves the previous file or the new one.
+        """
         self._check_fitted()
         path = Path(path)
         if path.suffix != ".npz":
@@ -904,53 +921,47 @@ class Narx:
                 arrays[f"err_{k}"] = self.err_[k]
             if getattr(self, "coef_std_", None) is not None:
                 arrays[f"coef_std_{k}"] = self.coef_std_[k]
-        np.savez(path, **arrays)
+        with atomic_write(path) as f:  # a kill leaves the old file or the new one
+            np.savez(f, **arrays)
         return path
 
     @classmethod
     def load(cls, path):
-        """Load a model written by :meth:`save`."""
+        """Load a model written by :meth:`save`.
+
+        The file is checked before it is used: a regular file of at most
+        ``MAX_MODEL_FILE_BYTES`` (1 GiB), a valid ``.npz`` whose arrays are as large as their
+        headers claim, the model description (format, version, class, parameters, channel
+        counts and names) and every channel's structure against it (regressor sources and lags
+        in range, term indices, coefficient count, finite coefficients, positive bounds).
+
+        Raises
+        ------
+        FileNotFoundError
+            If there is no such file.
+        ModelFileError
+            If the file is not such a model: truncated, corrupt, foreign, tampered, of a newer
+            format version, not a regular file (FIFO, device) or too large.
+        """
         path = Path(path)
         if not path.exists():
             raise FileNotFoundError(f"no model file at {path}")
-        with np.load(path, allow_pickle=False) as f:
-            try:
-                meta = json.loads(str(f["meta"]))
-            except KeyError:
-                raise IdentificationError(f"{path} is not a vrig identification model") from None
-            if meta.get("format") != "vrig-identification-model":
-                raise IdentificationError(f"{path} is not a vrig identification model")
-            if meta.get("version", 1) > _FORMAT_VERSION:
-                raise IdentificationError(
-                    f"{path} has model format version {meta['version']}, newer than this "
-                    f"package reads ({_FORMAT_VERSION}); update the identification package"
-                )
-            target = {"Narx": Narx, "Arx": Arx}.get(meta["class"])
-            if target is None:
-                raise IdentificationError(f"unknown model class {meta['class']!r} in {path}")
-            params = dict(meta["params"])
-            if target is Arx:
-                params.pop("degree", None)
-                params.pop("kind", None)
+        arrays = read_npz(
+            path, limit=MAX_MODEL_FILE_BYTES, error=lambda detail: ModelFileError(path, detail)
+        )
+        meta = _model_meta(arrays, path)
+        target = {"Narx": Narx, "Arx": Arx}[meta["class"]]
+        params = dict(meta["params"])
+        if target is Arx:
+            params.pop("degree", None)
+            params.pop("kind", None)
+        try:
             model = target(**params)
-            ny = meta["ny"]
-            model.channels_ = tuple(_load_channel(f, k, meta["orders"][k]) for k in range(ny))
-            model.coef_ = tuple(np.array(f[f"coef_{k}"]) for k in range(ny))
-            has_err = "err_0" in f.files
-            model.err_ = tuple(np.array(f[f"err_{k}"]) for k in range(ny)) if has_err else None
-            model.bound_ = np.array(f["bound"])
-            has_std = "coef_std_0" in f.files
-            model.coef_std_ = (
-                tuple(np.array(f[f"coef_std_{k}"]) for k in range(ny)) if has_std else None
-            )
-        model.n_terms_ = np.array([ch.n_terms for ch in model.channels_])
-        model.max_lag_ = meta["max_lag"]
-        model.n_inputs_, model.n_outputs_ = meta["nu"], ny
-        model.input_names_ = tuple(meta["input_names"])
-        model.output_names_ = tuple(meta["output_names"])
-        model._plan = None
-        model.refinement_ = None
-        model.fit_time_ = float("nan")
+            _install_loaded(model, arrays, meta)
+        except (IdentificationError, TypeError, ValueError) as exc:
+            if isinstance(exc, ModelFileError):
+                raise
+            raise ModelFileError(path, f"{type(exc).__name__}: {exc}") from None
         return model
 
     def __repr__(self) -> str:
@@ -959,16 +970,117 @@ class Narx:
         return f"{type(self).__name__}({', '.join(f'{k}={v!r}' for k, v in shown.items())})"
 
 
-def _load_channel(f, k: int, order) -> ChannelStructure:
-    """Channel k of an open model file; files of format 1 have no functions (identity)."""
-    has_functions = f"functions_{k}" in f.files
-    return ChannelStructure(
-        f[f"regressors_{k}"],
-        f[f"terms_{k}"],
-        order,
-        f[f"functions_{k}"] if has_functions else None,
-        f[f"breakpoints_{k}"] if has_functions else None,
-    )
+MAX_MODEL_FILE_BYTES = 2**30
+"""Largest model file :meth:`Narx.load` reads (1 GiB)."""
+
+
+def _model_meta(arrays: dict, path: Path) -> dict:
+    """The checked ``meta`` description of a model file (see :meth:`Narx.load`)."""
+
+    def bad(detail: str) -> ModelFileError:
+        return ModelFileError(path, detail)
+
+    raw = arrays.get("meta")
+    if raw is None or raw.dtype.kind != "U" or raw.shape != ():
+        raise bad(f"not a vrig identification model (no meta; arrays {sorted(arrays)[:8]})")
+    try:
+        meta = json.loads(str(raw))
+    except ValueError as exc:
+        raise bad(f"meta is not JSON ({exc})") from None
+    if not isinstance(meta, dict) or meta.get("format") != "vrig-identification-model":
+        raise bad("not a vrig identification model")
+    version = meta.get("version", 1)
+    if not isinstance(version, int) or version > _FORMAT_VERSION:
+        raise bad(
+            f"model format version {version!r}, newer than this package reads "
+            f"({_FORMAT_VERSION}); update the identification package"
+        )
+    if meta.get("class") not in ("Narx", "Arx"):
+        raise bad(f"unknown model class {meta.get('class')!r}")
+    counts = [meta.get(k) for k in ("ny", "nu", "max_lag")]
+    if not all(isinstance(c, int) and not isinstance(c, bool) and c >= 0 for c in counts):
+        raise bad(f"ny, nu, max_lag must be integers >= 0, got {counts}")
+    ny, nu, _ = counts
+    if not 1 <= ny <= len(arrays) or nu < 1:  # each output channel has its own arrays
+        raise bad(f"ny = {ny}, nu = {nu} do not match the {len(arrays)} arrays of the file")
+    for key, n in (("output_names", ny), ("input_names", nu)):
+        names = meta.get(key)
+        if not (
+            isinstance(names, list) and len(names) == n and all(isinstance(x, str) for x in names)
+        ):
+            raise bad(f"{key} must list {n} names")
+    orders = meta.get("orders")
+    if not (
+        isinstance(orders, list)
+        and len(orders) == ny
+        and all(o is None or (type(o) is int and o >= 0) for o in orders)
+    ):
+        raise bad(f"orders must hold one order (integer >= 0 or null) per output ({ny})")
+    if not isinstance(meta.get("params"), dict):
+        raise bad("params must be a mapping of the model's parameters")
+    return meta
+
+
+def _int_table(arrays: dict, key: str, ncols: int | None) -> np.ndarray:
+    a = arrays[key]
+    if a.dtype.kind not in "iu" or a.ndim != 2 or (ncols is not None and a.shape[1] != ncols):
+        raise IdentificationError(f"{key} must be an integer table, got {a.dtype} {a.shape}")
+    return a
+
+
+def _install_loaded(model, arrays: dict, meta: dict) -> None:
+    """Give ``model`` the fitted state stored in a model file, checking it on the way."""
+    ny, nu, max_lag = meta["ny"], meta["nu"], meta["max_lag"]
+    need = ["bound"] + [f"{n}_{k}" for k in range(ny) for n in ("regressors", "terms", "coef")]
+    missing = [key for key in need if key not in arrays]
+    if missing:
+        raise IdentificationError(f"array(s) {', '.join(missing[:6])} missing")
+    channels, coefs = [], []
+    for k in range(ny):
+        regs = _int_table(arrays, f"regressors_{k}", 2)
+        src, lag = regs[:, 0], regs[:, 1]
+        if regs.size and (src.min() < 0 or src.max() >= ny + nu or lag.min() < 0):
+            raise IdentificationError(f"regressors_{k}: source or lag out of range")
+        if np.any((src < ny) & (lag < 1)) or (lag.size and lag.max() > max_lag):
+            raise IdentificationError(f"regressors_{k}: output lag < 1 or lag > max_lag")
+        has_f = f"functions_{k}" in arrays  # format 1 files have no functions (identity)
+        ch = ChannelStructure(
+            regs,
+            _int_table(arrays, f"terms_{k}", None),
+            meta["orders"][k],
+            arrays[f"functions_{k}"] if has_f else None,
+            arrays.get(f"breakpoints_{k}") if has_f else None,
+        )
+        coef = arrays[f"coef_{k}"]
+        if coef.dtype.kind != "f" or coef.shape != (ch.n_terms,) or not np.all(np.isfinite(coef)):
+            raise IdentificationError(f"coef_{k} must hold {ch.n_terms} finite coefficients")
+        for extra in ("err", "coef_std"):
+            a = arrays.get(f"{extra}_{k}")
+            if a is not None and a.shape != (ch.n_terms,):
+                raise IdentificationError(f"{extra}_{k} must hold {ch.n_terms} values")
+        channels.append(ch)
+        coefs.append(np.array(coef, dtype=np.float64))
+    bound = arrays["bound"]
+    if bound.dtype.kind != "f" or bound.shape != (ny,) or not np.all(bound > 0):
+        raise IdentificationError(f"bound must hold {ny} positive numbers")
+    model.channels_, model.coef_ = tuple(channels), tuple(coefs)
+    model.err_ = _optional(arrays, "err", ny)
+    model.coef_std_ = _optional(arrays, "coef_std", ny)
+    model.bound_ = np.array(bound, dtype=np.float64)
+    model.n_terms_ = np.array([ch.n_terms for ch in channels])
+    model.max_lag_ = max_lag
+    model.n_inputs_, model.n_outputs_ = nu, ny
+    model.input_names_ = tuple(meta["input_names"])
+    model.output_names_ = tuple(meta["output_names"])
+    model._plan = None
+    model.refinement_ = None
+    model.fit_time_ = float("nan")
+
+
+def _optional(arrays: dict, name: str, ny: int):
+    if f"{name}_0" not in arrays:
+        return None
+    return tuple(np.array(arrays[f"{name}_{k}"]) for k in range(ny))
 
 
 class Arx(Narx):

@@ -3,11 +3,19 @@
 from __future__ import annotations
 
 import json
+import multiprocessing
+import os
+import random
+import signal
+import sys
+import time
+from pathlib import Path
 
 import numpy as np
 import pytest
 
 import vrig
+import vrig.io
 from identification import Narx
 from vrig.io import read_rpc3_header
 from vrig.reconstruction import reconstruct
@@ -157,3 +165,94 @@ def test_bad_arguments(case, tmp_path):
         folder.load_iteration(7)
     with pytest.raises(KeyError, match="no record"):
         folder.read("FIELD01")
+
+
+# ------------------------------------------------------------------ interrupted overwrite
+def _snapshot(folder: Path) -> dict[str, bytes]:
+    """Every file of a folder, byte for byte."""
+    return {p.name: p.read_bytes() for p in sorted(folder.iterdir())}
+
+
+def _assert_complete(folder: TestFolder, fmt: str) -> None:
+    """The folder holds a whole save in ``fmt``: the summary and every record it lists."""
+    summary = folder.summary()
+    assert summary["record_format"] == fmt
+    assert set(folder.files()) == set(summary["files"])
+    for name in summary["files"]:
+        folder.read(name)
+    assert (folder.path / "notes.txt").read_text() == "mine"
+
+
+@pytest.mark.parametrize("interrupt", [KeyboardInterrupt, OSError])
+def test_an_overwrite_interrupted_by_an_exception_leaves_the_old_folder_byte_identical(
+    case, tmp_path, monkeypatch, interrupt
+):
+    _, _, _, result = case
+    target = tmp_path / "run"
+    TestFolder(target).save(result, fmt="rsp")
+    (target / "notes.txt").write_text("mine")
+    before = _snapshot(target)
+    real, calls = vrig.io.write_rpc3, []
+
+    def write_then_fail(*args, **kwargs):  # Ctrl-C (or a full disk) at the fourth record
+        calls.append(args[0])
+        if len(calls) == 4:
+            raise interrupt("interrupted while writing")
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(vrig.io, "write_rpc3", write_then_fail)
+    with pytest.raises(interrupt):
+        TestFolder(target).save(result, fmt="rsp", overwrite=True)
+    assert len(calls) == 4
+    assert _snapshot(target) == before
+    assert [p.name for p in tmp_path.iterdir()] == ["run"]  # the staging folder is gone too
+
+
+def _save_in_child(target: Path, result, fmt: str, ready) -> None:
+    ready.set()
+    TestFolder(target).save(result, fmt=fmt, overwrite=True)
+    time.sleep(60)  # done: wait to be killed
+
+
+@pytest.mark.skipif(sys.platform != "linux", reason="forks a child process (Linux)")
+def test_a_save_killed_midway_leaves_the_old_folder_or_the_new_one(case, tmp_path):
+    _, _, _, result = case
+    target = tmp_path / "run"
+    folder = TestFolder(target)
+    t_save = {}
+    for fmt in ("csv", "rsp"):
+        t0 = time.perf_counter()
+        folder.save(result, fmt=fmt, overwrite=True)
+        t_save[fmt] = time.perf_counter() - t0
+    (target / "notes.txt").write_text("mine")
+    ctx = multiprocessing.get_context("fork")
+    rng = random.Random(0)
+    for i in range(6):
+        fmt = ("csv", "rsp")[i % 2]
+        before = _snapshot(target)
+        ready = ctx.Event()
+        child = ctx.Process(target=_save_in_child, args=(target, result, fmt, ready), daemon=True)
+        child.start()
+        try:
+            assert ready.wait(60)
+            time.sleep(rng.uniform(0.05, 1.0) * t_save[fmt])
+        finally:
+            os.kill(child.pid, signal.SIGKILL)
+            child.join()
+        folder.files()  # puts back a folder a kill set aside mid-swap
+        if _snapshot(target) != before:
+            _assert_complete(folder, fmt)
+    assert any(p.name.startswith(".run.tmp-") for p in tmp_path.iterdir())  # kills mid-save
+
+
+def test_a_folder_set_aside_by_a_kill_mid_swap_is_put_back(case, tmp_path):
+    _, _, _, result = case
+    target = tmp_path / "run"
+    TestFolder(target).save(result, fmt="npz")
+    before = _snapshot(target)
+    target.rename(tmp_path / ".run.old-0123abcd")  # killed between the two renames of the swap
+    (tmp_path / ".run.tmp-89abcdef").mkdir()  # the new folder beside it
+    folder = TestFolder(target)
+    assert list(folder.files())
+    assert _snapshot(target) == before
+    assert folder.summary()["record_format"] == "npz"

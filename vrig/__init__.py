@@ -6,6 +6,7 @@ signals, processing, reconstruction workflow, gymnasium environments and CLI liv
 
 from . import envs as _envs  # noqa: F401  (registers the vrig/ gymnasium environments)
 from .errors import (
+    FileFormatError,
     ReconstructionError,
     RigLimitError,
     RigModelError,
@@ -22,6 +23,7 @@ __version__ = "0.1.0"
 
 __all__ = [
     "ChannelSpec",
+    "FileFormatError",
     "FileRig",
     "MujocoRig",
     "ReconstructionError",

@@ -549,7 +549,7 @@ def _advice(exc) -> str:
 def _cmd_repeatability(args) -> int:
     from tqdm.auto import tqdm
 
-    from .plots import repeatability_plot
+    from .plots import repeatability_plot, save_figure
     from .repeatability import repeatability_function, repeatability_number, signal_to_noise
 
     if not 2 <= args.runs <= 50:
@@ -596,8 +596,7 @@ def _cmd_repeatability(args) -> int:
         band=band,
         title=f"{rig.name}: repeatability of {args.runs} runs of one drive",
     )
-    path = out / "repeatability.png"
-    fig.savefig(path, dpi=110)
+    path = save_figure(fig, out / "repeatability.png", dpi=110)
     print(f"\nplot   {path}")
     return 0
 

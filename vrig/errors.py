@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 __all__ = [
+    "FileFormatError",
     "ReconstructionError",
     "RigLimitError",
     "RigModelError",
@@ -105,3 +106,31 @@ class ReconstructionError(RuntimeError):
         self.result = result
         self.cause = cause
         self.stage = stage
+
+
+class FileFormatError(ValueError):
+    """A file is not what its name or reader expects: truncated, corrupt, foreign, of another
+    encoding or version, not a regular file, or too large.
+
+    Parameters
+    ----------
+    path : str or Path
+        The file.
+    fmt : str
+        The format it was read as (``"RPC III"``, ``"CSV"``, ``"MATLAB .mat"``, ...).
+    detail : str
+        What is wrong.
+
+    Attributes
+    ----------
+    path : str
+    format : str
+    detail : str
+    """
+
+    def __init__(self, path, fmt: str, detail: str):
+        self.path, self.format, self.detail = str(path), str(fmt), str(detail)
+        super().__init__(f"{self.path}: not a readable {self.format} file: {self.detail}")
+
+    def __reduce__(self):  # picklable (worker processes)
+        return type(self), (self.path, self.format, self.detail)

@@ -38,11 +38,21 @@ mean and rms agree with the 2048-sample record to 1e-6 relative but differ by up
 
 Data sections that hold exactly the whole groups (the standard), or whose last group holds only
 the points of its frames (as some writers produce), are accepted, each optionally followed by
-padding up to the next 512-byte block; any other size raises :class:`ValueError`.
+padding up to the next 512-byte block; any other size raises :class:`~vrig.FileFormatError`.
+
+Safety
+------
+Writers replace their file atomically (:func:`vrig.files.atomic_write`): a kill or Ctrl-C
+during a write leaves the previous file, never a partial one. Readers accept only regular files
+of at most :data:`vrig.files.MAX_FILE_BYTES` (no FIFO, device or endless file) and raise
+:class:`~vrig.FileFormatError` (a ValueError naming the file and the format) for anything that
+is not a valid file of the format: truncated, corrupt, foreign, CSV not in UTF-8 (a UTF-8
+byte-order mark is fine), MATLAB v7.3, or holding values a :class:`TimeHistory` refuses.
 """
 
 from __future__ import annotations
 
+import codecs
 import csv
 import datetime
 import io as _stdio
@@ -53,6 +63,9 @@ from pathlib import Path
 
 import numpy as np
 
+from . import _mat5, files
+from .errors import FileFormatError
+from .files import atomic_write, read_bytes
 from .timehistory import TimeHistory
 
 __all__ = [
@@ -71,6 +84,7 @@ __all__ = [
 RPC3_SUFFIXES = (".rsp", ".drv", ".tim")
 """File suffixes handled as RPC III time histories by :func:`read` and :func:`write`."""
 
+_RPC3, _CSV, _MAT = "RPC III", "CSV", "MATLAB .mat"  # format names in error messages
 _BLOCK = 512
 _RECORD = 128
 _KEY_LEN = 32
@@ -107,6 +121,15 @@ _LAYOUT_KEYWORDS = (
 )
 
 
+def _history(src, fmt: str, data, fs: float, names, units) -> TimeHistory:
+    """A TimeHistory of what a file holds; what TimeHistory refuses (NaN, repeated names...)
+    is a FileFormatError naming the file."""
+    try:
+        return TimeHistory(data, fs, names, units)
+    except ValueError as exc:
+        raise FileFormatError(src, fmt, str(exc)) from None
+
+
 # ---------------------------------------------------------------------------------------------
 # RPC III: header
 # ---------------------------------------------------------------------------------------------
@@ -130,7 +153,7 @@ def _parse_int(text: str, key: str, src: str) -> int:
     except ValueError:
         value = math.nan
     if not value.is_integer():
-        raise ValueError(f"{src}: header keyword {key} must be an integer, got {text!r}")
+        raise FileFormatError(src, _RPC3, f"header keyword {key} must be an integer, got {text!r}")
     return int(value)
 
 
@@ -140,40 +163,50 @@ def _parse_float(text: str, key: str, src: str) -> float:
     except ValueError:
         value = math.nan
     if not math.isfinite(value):
-        raise ValueError(f"{src}: header keyword {key} must be a finite number, got {text!r}")
+        raise FileFormatError(
+            src, _RPC3, f"header keyword {key} must be a finite number, got {text!r}"
+        )
     return value
 
 
 def _parse_header(buf: bytes, src: str) -> tuple[dict[str, str], int]:
     """Keyword -> value (stripped strings) and the number of header blocks."""
     if len(buf) < _BLOCK:
-        raise ValueError(
-            f"{src}: {len(buf)} bytes is too short for an RPC III file (the header alone is at "
-            f"least one {_BLOCK}-byte block)"
+        raise FileFormatError(
+            src,
+            _RPC3,
+            f"its {len(buf)} bytes are too short (the header alone is at least one "
+            f"{_BLOCK}-byte block)",
         )
     expected = ("FORMAT", "NUM_HEADER_BLOCKS", "NUM_PARAMS")
     first = [_record(buf, i) for i in range(3)]
     for pos, (want, (key, _)) in enumerate(zip(expected, first, strict=True)):
         if key != want:
-            raise ValueError(
-                f"{src}: not a valid RPC III header: record {pos + 1} must be {want} (the first "
+            raise FileFormatError(
+                src,
+                _RPC3,
+                f"header record {pos + 1} must be {want} (the first "
                 f"three records are FORMAT, NUM_HEADER_BLOCKS, NUM_PARAMS in that order), found "
-                f"{key!r}"
+                f"{key!r}",
             )
     n_blocks = _parse_int(first[1][1], "NUM_HEADER_BLOCKS", src)
     if n_blocks < 1:
-        raise ValueError(f"{src}: NUM_HEADER_BLOCKS must be >= 1, got {n_blocks}")
+        raise FileFormatError(src, _RPC3, f"NUM_HEADER_BLOCKS must be >= 1, got {n_blocks}")
     if n_blocks * _BLOCK > len(buf):
-        raise ValueError(
-            f"{src}: NUM_HEADER_BLOCKS = {n_blocks} ({n_blocks * _BLOCK} bytes) but the file "
-            f"holds only {len(buf)} bytes (truncated file or corrupt header)"
+        raise FileFormatError(
+            src,
+            _RPC3,
+            f"NUM_HEADER_BLOCKS = {n_blocks} ({n_blocks * _BLOCK} bytes) but the file "
+            f"holds only {len(buf)} bytes (truncated file or corrupt header)",
         )
     n_params = _parse_int(first[2][1], "NUM_PARAMS", src)
     n_slots = 4 * n_blocks
     if not 3 <= n_params <= n_slots:
-        raise ValueError(
-            f"{src}: NUM_PARAMS = {n_params} must lie between 3 and the {n_slots} records of "
-            f"{n_blocks} header blocks"
+        raise FileFormatError(
+            src,
+            _RPC3,
+            f"NUM_PARAMS = {n_params} must lie between 3 and the {n_slots} records of "
+            f"{n_blocks} header blocks",
         )
     header = {key: value for key, value in first}
     found = 3
@@ -185,15 +218,19 @@ def _parse_header(buf: bytes, src: str) -> tuple[dict[str, str], int]:
             continue
         found += 1
         if key in header and header[key] != value:
-            raise ValueError(
-                f"{src}: header keyword {key} appears twice with different values "
-                f"({header[key]!r} and {value!r})"
+            raise FileFormatError(
+                src,
+                _RPC3,
+                f"header keyword {key} appears twice with different values "
+                f"({header[key]!r} and {value!r})",
             )
         header[key] = value
     if found < n_params:
-        raise ValueError(
-            f"{src}: NUM_PARAMS = {n_params} but the {n_blocks} header blocks hold only {found} "
-            "keyword records"
+        raise FileFormatError(
+            src,
+            _RPC3,
+            f"NUM_PARAMS = {n_params} but the {n_blocks} header blocks hold only {found} "
+            "keyword records",
         )
     return header, n_blocks
 
@@ -213,11 +250,11 @@ def read_rpc3_header(path) -> dict[str, str]:
 
     Raises
     ------
-    ValueError
+    FileFormatError
         If the header is malformed (see :func:`read_rpc3`).
     """
     path = Path(path)
-    header, _ = _parse_header(path.read_bytes(), str(path))
+    header, _ = _parse_header(read_bytes(path, _RPC3), str(path))
     return header
 
 
@@ -226,10 +263,10 @@ def read_rpc3_header(path) -> dict[str, str]:
 # ---------------------------------------------------------------------------------------------
 def _required_int(header, key, src, minimum):
     if key not in header:
-        raise ValueError(f"{src}: header keyword {key} is missing")
+        raise FileFormatError(src, _RPC3, f"header keyword {key} is missing")
     value = _parse_int(header[key], key, src)
     if value < minimum:
-        raise ValueError(f"{src}: header keyword {key} must be >= {minimum}, got {value}")
+        raise FileFormatError(src, _RPC3, f"header keyword {key} must be >= {minimum}, got {value}")
     return value
 
 
@@ -283,12 +320,13 @@ def read_rpc3(path) -> TimeHistory:
 
     Raises
     ------
-    ValueError
-        If the file is not a readable RPC III time history: first three records not ``FORMAT``,
-        ``NUM_HEADER_BLOCKS``, ``NUM_PARAMS``; ``ASCII`` or unknown ``FORMAT``; a missing or
-        non-numeric ``CHANNELS``, ``DELTA_T``, ``PTS_PER_FRAME``, ``PTS_PER_GROUP``, ``FRAMES``
-        or (integer data) ``SCALE.CHAN_n``; a data section whose size does not match the header
-        (truncated file, wrong ``CHANNELS``...); non-finite samples.
+    FileFormatError
+        (a ValueError) If the file is not a readable RPC III time history: first three records
+        not ``FORMAT``, ``NUM_HEADER_BLOCKS``, ``NUM_PARAMS``; ``ASCII`` or unknown ``FORMAT``; a
+        missing or non-numeric ``CHANNELS``, ``DELTA_T``, ``PTS_PER_FRAME``, ``PTS_PER_GROUP``,
+        ``FRAMES`` or (integer data) ``SCALE.CHAN_n``; a data section whose size does not match
+        the header (truncated file, wrong ``CHANNELS``...); non-finite samples; not a regular
+        file (FIFO, device...) or larger than :data:`vrig.files.MAX_FILE_BYTES`.
     FileNotFoundError
         If the file does not exist.
 
@@ -300,35 +338,42 @@ def read_rpc3(path) -> TimeHistory:
     """
     path = Path(path)
     src = str(path)
-    buf = path.read_bytes()
+    buf = read_bytes(path, _RPC3)
     header, n_blocks = _parse_header(buf, src)
 
     fmt = header["FORMAT"].upper()
     if fmt == "ASCII":
-        raise ValueError(
-            f"{src}: FORMAT = ASCII RPC III files are not supported; only binary files "
-            f"({', '.join(_FORMATS)}) can be read"
+        raise FileFormatError(
+            src,
+            _RPC3,
+            f"FORMAT = ASCII RPC III files are not supported; only binary files "
+            f"({', '.join(_FORMATS)}) can be read",
         )
     if fmt not in _FORMATS:
-        raise ValueError(
-            f"{src}: unknown FORMAT {header['FORMAT']!r}; expected one of {', '.join(_FORMATS)}"
+        raise FileFormatError(
+            src,
+            _RPC3,
+            f"unknown FORMAT {header['FORMAT']!r}; expected one of {', '.join(_FORMATS)}",
         )
     file_type = header.get("FILE_TYPE", "TIME_HISTORY").upper()
     if file_type != "TIME_HISTORY":
-        raise ValueError(
-            f"{src}: FILE_TYPE = {header['FILE_TYPE']!r}; only TIME_HISTORY files can be read"
+        raise FileFormatError(
+            src, _RPC3, f"FILE_TYPE = {header['FILE_TYPE']!r}; only TIME_HISTORY files can be read"
         )
     data_type = header.get("DATA_TYPE", "SHORT_INTEGER").upper()
     if data_type not in _DATA_TYPES:
-        raise ValueError(
-            f"{src}: unknown DATA_TYPE {header['DATA_TYPE']!r}; expected SHORT_INTEGER or "
-            "FLOATING_POINT"
+        raise FileFormatError(
+            src,
+            _RPC3,
+            f"unknown DATA_TYPE {header['DATA_TYPE']!r}; expected SHORT_INTEGER or FLOATING_POINT",
         )
     if "DELTA_T" not in header:
-        raise ValueError(f"{src}: header keyword DELTA_T is missing")
+        raise FileFormatError(src, _RPC3, "header keyword DELTA_T is missing")
     dt = _parse_float(header["DELTA_T"], "DELTA_T", src)
     if dt <= 0 or not math.isfinite(1.0 / dt):
-        raise ValueError(f"{src}: DELTA_T must be a positive time step, got {header['DELTA_T']!r}")
+        raise FileFormatError(
+            src, _RPC3, f"DELTA_T must be a positive time step, got {header['DELTA_T']!r}"
+        )
     n_chan = _required_int(header, "CHANNELS", src, 1)
     per_frame = _required_int(header, "PTS_PER_FRAME", src, 1)
     per_group = _required_int(header, "PTS_PER_GROUP", src, 1)
@@ -338,9 +383,10 @@ def read_rpc3(path) -> TimeHistory:
     if "SAMPLES" in header:
         n_samples = _parse_int(header["SAMPLES"], "SAMPLES", src)
         if not 1 <= n_samples <= n_points:
-            raise ValueError(
-                f"{src}: SAMPLES = {n_samples} must lie between 1 and FRAMES * PTS_PER_FRAME = "
-                f"{n_points}"
+            raise FileFormatError(
+                src,
+                _RPC3,
+                f"SAMPLES = {n_samples} must lie between 1 and FRAMES * PTS_PER_FRAME = {n_points}",
             )
 
     # ---- data-section size: whole groups (standard) or a last group cut after its frames
@@ -355,11 +401,13 @@ def read_rpc3(path) -> TimeHistory:
         full_groups, rest = n_groups, 0
     elif not (rest and compact <= available <= _padded(compact)):
         what = "truncated: it" if available < compact else "inconsistent with the header: it"
-        raise ValueError(
-            f"{src}: data section is {what} holds {available} bytes but CHANNELS = {n_chan}, "
+        raise FileFormatError(
+            src,
+            _RPC3,
+            f"data section is {what} holds {available} bytes but CHANNELS = {n_chan}, "
             f"FRAMES = {frames}, PTS_PER_FRAME = {per_frame}, PTS_PER_GROUP = {per_group} and "
             f"DATA_TYPE = {data_type} need {whole} bytes ({n_groups} groups of "
-            f"{per_group} points x {n_chan} channels x {dtype.itemsize} bytes)"
+            f"{per_group} points x {n_chan} channels x {dtype.itemsize} bytes)",
         )
 
     scales = np.ones(n_chan)
@@ -367,7 +415,9 @@ def read_rpc3(path) -> TimeHistory:
         for n in range(1, n_chan + 1):
             key = f"SCALE.CHAN_{n}"
             if key not in header:
-                raise ValueError(f"{src}: {key} is missing (needed to scale SHORT_INTEGER data)")
+                raise FileFormatError(
+                    src, _RPC3, f"{key} is missing (needed to scale SHORT_INTEGER data)"
+                )
             scales[n - 1] = _parse_float(header[key], key, src)
 
     # ---- demultiplex: (groups, channels, points) -> (channels, time)
@@ -388,8 +438,8 @@ def read_rpc3(path) -> TimeHistory:
     bad = ~np.isfinite(data)
     if bad.any():
         i, c = np.argwhere(bad)[0]
-        raise ValueError(
-            f"{src}: non-finite value in channel {c + 1} at sample {i} (corrupt data or SCALE)"
+        raise FileFormatError(
+            src, _RPC3, f"non-finite value in channel {c + 1} at sample {i} (corrupt data or SCALE)"
         )
 
     names = []
@@ -397,7 +447,7 @@ def read_rpc3(path) -> TimeHistory:
     for n in range(1, n_chan + 1):
         names.append(_unquote(header.get(f"DESC.CHAN_{n}", "")) or f"ch{n}")
         units.append(_unquote(header.get(f"UNITS.CHAN_{n}", "-")))
-    return TimeHistory(data, _snap_rate(1.0 / dt), _unique_names(names), units)
+    return _history(src, _RPC3, data, _snap_rate(1.0 / dt), _unique_names(names), units)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -632,7 +682,10 @@ def write_rpc3(
     out[:, :n] = values.T
     out[:, n:n_points] = values[-1][:, None]  # hold the last value to the end of the frame
     body = out.reshape(n_chan, n_groups, per_group).transpose(1, 0, 2).tobytes()
-    path.write_bytes(head + body.ljust(_padded(len(body)), b"\0"))  # whole 512-byte blocks
+    with atomic_write(path) as f:
+        f.write(head)
+        f.write(body)
+        f.write(bytes(_padded(len(body)) - len(body)))  # whole 512-byte blocks
     return path
 
 
@@ -664,15 +717,78 @@ def write_csv(path, history: TimeHistory) -> Path:
             raise ValueError(f"channel {name!r} [{unit!r}]: line breaks cannot be stored in CSV")
         if "[" in unit or "]" in unit:
             raise ValueError(f"unit {unit!r} of channel {name!r} must not contain [ or ]")
-    text = _stdio.StringIO()
-    csv.writer(text, lineterminator="\n").writerow(
-        ["time"] + [f"{n} [{u}]" for n, u in zip(history.names, history.units, strict=True)]
-    )
     table = np.column_stack([history.time, history.data])
     fmt = ["%.12g"] + ["%.17g"] * history.n_channels
-    np.savetxt(text, table, fmt=fmt, delimiter=",")
-    path.write_text(text.getvalue(), encoding="utf-8")
+    with atomic_write(path, "w", encoding="utf-8") as f:
+        csv.writer(f, lineterminator="\n").writerow(
+            ["time"] + [f"{n} [{u}]" for n, u in zip(history.names, history.units, strict=True)]
+        )
+        np.savetxt(f, table, fmt=fmt, delimiter=",")
     return path
+
+
+_UNICODE_BOMS = (  # UTF-32 first: its little-endian mark starts with UTF-16's
+    (codecs.BOM_UTF32_LE, "UTF-32"),
+    (codecs.BOM_UTF32_BE, "UTF-32"),
+    (codecs.BOM_UTF16_LE, "UTF-16"),
+    (codecs.BOM_UTF16_BE, "UTF-16"),
+)
+
+
+def _csv_text(path: Path) -> str:
+    """The text of a UTF-8 CSV file (a leading byte-order mark removed); other encodings are
+    refused with a FileFormatError naming the file and the offending byte."""
+    raw = read_bytes(path, _CSV)
+    for bom, name in _UNICODE_BOMS:
+        if raw.startswith(bom):
+            raise FileFormatError(
+                path,
+                _CSV,
+                f"it is {name} text (byte-order mark {bom.hex(' ')}); vrig reads "
+                "UTF-8 CSV files: save it as UTF-8",
+            )
+    if b"\0" in raw:
+        at = raw.index(b"\0")
+        raise FileFormatError(
+            path,
+            _CSV,
+            f"it holds a NUL byte at offset {at}: binary data, or UTF-16/32 text "
+            "without a byte-order mark; save it as UTF-8 text",
+        )
+    try:
+        return raw.decode("utf-8-sig")
+    except UnicodeDecodeError as exc:
+        line = raw.count(b"\n", 0, exc.start) + 1
+        raise FileFormatError(
+            path,
+            _CSV,
+            f"it is not UTF-8 text: byte 0x{raw[exc.start]:02x} at offset "
+            f"{exc.start} (line {line}) (latin-1 or Windows-1252?); save it as UTF-8",
+        ) from None
+
+
+def _csv_header(lines: list[str], src: str) -> tuple[list[str], list[str], list[str]]:
+    """The header row's columns and the channel names and units (``"-"`` without ``[unit]``)."""
+    if not lines or not lines[0].strip():
+        raise FileFormatError(
+            src, _CSV, "empty CSV file (expected a header row time,<name> [<unit>],...)"
+        )
+    try:
+        columns = next(csv.reader([lines[0]]))
+    except csv.Error as exc:  # e.g. a field beyond the csv module's 131072-character limit
+        raise FileFormatError(src, _CSV, f"unreadable header row: {exc}") from None
+    first = _COLUMN.match(columns[0])
+    first_name = (first.group(1) if first else columns[0]).strip().lower()
+    if first_name != "time" or len(columns) < 2:
+        raise FileFormatError(
+            src, _CSV, f"the header row must be time,<name> [<unit>],..., got {lines[0][:80]!r}"
+        )
+    names, units = [], []
+    for col in columns[1:]:
+        m = _COLUMN.match(col)
+        names.append((m.group(1) if m else col).strip())
+        units.append(m.group(2).strip() if m else "-")
+    return columns, names, units
 
 
 def read_csv(path, *, fs: float | None = None) -> TimeHistory:
@@ -693,59 +809,58 @@ def read_csv(path, *, fs: float | None = None) -> TimeHistory:
 
     Raises
     ------
-    ValueError
-        On a missing header, a first column not called ``time``, non-numeric or ragged rows, no
-        data rows, or (``fs`` omitted) a non-uniform or non-increasing time column or a single
-        row.
+    FileFormatError
+        (a ValueError) On text that is not UTF-8 (UTF-16/32, latin-1...; a UTF-8 byte-order
+        mark is fine), a missing header, a first column not called ``time``, non-numeric or
+        ragged rows, no data rows, or (``fs`` omitted) a non-uniform or non-increasing time
+        column or a single row; on a file that is not a regular file or is larger than
+        :data:`vrig.files.MAX_FILE_BYTES`.
+    FileNotFoundError
+        If the file does not exist.
     """
+    if fs is not None:
+        try:
+            ok = math.isfinite(float(fs)) and float(fs) > 0
+        except (TypeError, ValueError):
+            ok = False
+        if not ok:
+            raise ValueError(f"fs must be a positive sample rate in Hz, got {fs!r}")
     path = Path(path)
     src = str(path)
-    text = path.read_text(encoding="utf-8")
-    lines = text.splitlines()
-    if not lines or not lines[0].strip():
-        raise ValueError(f"{src}: empty CSV file (expected a header row time,<name> [<unit>],...)")
-    columns = next(csv.reader([lines[0]]))
-    first = _COLUMN.match(columns[0])
-    first_name = (first.group(1) if first else columns[0]).strip().lower()
-    if first_name != "time" or len(columns) < 2:
-        raise ValueError(
-            f"{src}: the header row must be time,<name> [<unit>],..., got {lines[0][:80]!r}"
-        )
-    names, units = [], []
-    for col in columns[1:]:
-        m = _COLUMN.match(col)
-        names.append((m.group(1) if m else col).strip())
-        units.append(m.group(2).strip() if m else "-")
+    lines = _csv_text(path).splitlines()
+    columns, names, units = _csv_header(lines, src)
     rows = [line for line in lines[1:] if line.strip()]
     if not rows:
-        raise ValueError(f"{src}: no data rows after the header")
+        raise FileFormatError(src, _CSV, "no data rows after the header")
     try:
         table = np.loadtxt(rows, delimiter=",", ndmin=2, dtype=np.float64)
     except ValueError as exc:
-        raise ValueError(f"{src}: unreadable data rows: {exc}") from None
+        raise FileFormatError(src, _CSV, f"unreadable data rows: {exc}") from None
     if table.shape[1] != len(columns):
-        raise ValueError(
-            f"{src}: {len(columns)} header columns but {table.shape[1]} columns of data"
+        raise FileFormatError(
+            src, _CSV, f"{len(columns)} header columns but {table.shape[1]} columns of data"
         )
     if fs is None:
         t = table[:, 0]
         if t.size < 2:
-            raise ValueError(f"{src}: one row cannot give a sample rate; pass fs")
+            raise FileFormatError(src, _CSV, "one row cannot give a sample rate; pass fs")
         span = t[-1] - t[0]
         if not (np.all(np.isfinite(t)) and span > 0):
-            raise ValueError(f"{src}: the time column must increase; pass fs")
+            raise FileFormatError(src, _CSV, "the time column must increase; pass fs")
         step = span / (t.size - 1)
         err = np.max(np.abs(np.diff(t) - step))
         if err > 1e-6 * step + 1e-12 * np.max(np.abs(t)):
-            raise ValueError(
-                f"{src}: the time column is not uniformly sampled (step {step:.6g} s, deviation "
-                f"up to {err:.3g} s); pass fs"
+            raise FileFormatError(
+                src,
+                _CSV,
+                f"the time column is not uniformly sampled (step {step:.6g} s, deviation "
+                f"up to {err:.3g} s); pass fs",
             )
         fs = 1.0 / step
         nice = float(f"{fs:.10g}")
         if abs(nice - fs) <= 1e-9 * fs:
             fs = nice
-    return TimeHistory(table[:, 1:], fs, names, units)
+    return _history(src, _CSV, table[:, 1:], fs, names, units)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -770,7 +885,7 @@ def write_mat(path, history: TimeHistory) -> Path:
         "names": np.array(history.names, dtype=object),
         "units": np.array(history.units, dtype=object),
     }
-    with path.open("wb") as f:
+    with atomic_write(path) as f:
         savemat(f, content)
     return path
 
@@ -785,42 +900,51 @@ def _strings(value, key: str, src: str) -> list[str]:
         for item in arr.reshape(-1):
             item = np.asarray(item)
             if item.dtype.kind != "U":
-                raise ValueError(f"{src}: variable {key} must hold strings")
+                raise FileFormatError(src, _MAT, f"variable {key} must hold strings")
             out.append("".join(str(s) for s in item.reshape(-1)))
         return out
-    raise ValueError(f"{src}: variable {key} must be a cell array of strings")
+    raise FileFormatError(src, _MAT, f"variable {key} must be a cell array of strings")
 
 
 def read_mat(path) -> TimeHistory:
     """Read a ``.mat`` file with ``data`` (N x channels) and ``fs`` and optional ``names`` and
     ``units`` (cell arrays of char or char matrices), as written by :func:`write_mat`.
 
+    MATLAB level-5 files (``save -v6``/``-v7``, the default) and level-4 files are read with
+    :func:`scipy.io.loadmat`, after a structural check of every data element that keeps a
+    corrupt file from crashing SciPy's reader (see :mod:`vrig._mat5`).
+
     Raises
     ------
-    ValueError
-        If the file is not a MATLAB file scipy can read, or a variable is missing or malformed.
+    FileFormatError
+        (a ValueError) If the file is not a MATLAB file SciPy can read (corrupt, truncated, a
+        v7.3 HDF5 file, not a regular file, larger than :data:`vrig.files.MAX_FILE_BYTES`), or
+        a variable is missing or malformed.
+    FileNotFoundError
+        If the file does not exist.
     """
     from scipy.io import loadmat
-    from scipy.io.matlab import MatReadError
 
     path = Path(path)
     src = str(path)
+    buf = read_bytes(path, _MAT)
+    _mat5.check(buf, src, files.MAX_FILE_BYTES)
     try:
-        content = loadmat(path)
-    except (MatReadError, ValueError, TypeError, KeyError, IndexError, OverflowError) as exc:
-        raise ValueError(f"{src}: not a readable MATLAB file: {exc}") from None
+        content = loadmat(_stdio.BytesIO(buf), variable_names=["data", "fs", "names", "units"])
+    except Exception as exc:  # anything SciPy raises on a file that passed the check
+        raise FileFormatError(src, _MAT, f"{type(exc).__name__}: {exc}") from None
     missing = [k for k in ("data", "fs") if k not in content]
     if missing:
-        raise ValueError(f"{src}: missing variable(s) {', '.join(missing)}")
+        raise FileFormatError(src, _MAT, f"missing variable(s) {', '.join(missing)}")
     data = np.asarray(content["data"])
     if data.dtype.kind not in "iuf":
-        raise ValueError(f"{src}: data must be a real numeric matrix, got {data.dtype}")
+        raise FileFormatError(src, _MAT, f"data must be a real numeric matrix, got {data.dtype}")
     fs_arr = np.asarray(content["fs"])
     if fs_arr.size != 1 or fs_arr.dtype.kind not in "iuf":
-        raise ValueError(f"{src}: fs must be a numeric scalar")
+        raise FileFormatError(src, _MAT, "fs must be a numeric scalar")
     names = _strings(content["names"], "names", src) if "names" in content else ()
     units = _strings(content["units"], "units", src) if "units" in content else ()
-    return TimeHistory(data, float(fs_arr.reshape(())), names, units)
+    return _history(src, _MAT, data, float(fs_arr.reshape(())), names, units)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -852,7 +976,12 @@ def read(path, **kwargs) -> TimeHistory:
     Raises
     ------
     ValueError
-        For an unknown suffix or a malformed file.
+        For an unknown suffix.
+    FileFormatError
+        (a ValueError) For a file that is not a valid file of its suffix's format; its message
+        and its ``path`` and ``format`` attributes name the file and the format.
+    FileNotFoundError
+        If the file does not exist.
     """
     path = Path(path)
     suffix = _suffix(path)

@@ -11,7 +11,8 @@ Agg canvas): show one in a notebook by leaving it as the cell's value, or save i
 * :func:`error_vs_iteration` — η0 per channel against the iteration, best iteration marked;
 * :func:`drive_vs_limits` — a drive with the ± full-scale lines of the rig's drive channels;
 * :func:`repeatability_plot` — ``R_f(f)`` and the signal-to-noise ratio against frequency;
-* :func:`save_reconstruction_plots` — the PNGs of a :class:`~vrig.reconstruction.ReconstructionResult`.
+* :func:`save_reconstruction_plots` — the PNGs of a :class:`~vrig.reconstruction.ReconstructionResult`;
+* :func:`save_figure` — ``fig.savefig`` that replaces the file atomically (:mod:`vrig.files`).
 """
 
 from __future__ import annotations
@@ -23,6 +24,7 @@ import numpy as np
 from matplotlib.figure import Figure
 from scipy import signal
 
+from .files import atomic_write
 from .timehistory import TimeHistory
 
 __all__ = [
@@ -33,6 +35,7 @@ __all__ = [
     "overlay",
     "psd_compare",
     "repeatability_plot",
+    "save_figure",
     "save_reconstruction_plots",
 ]
 
@@ -361,12 +364,7 @@ def save_reconstruction_plots(result, folder, rig=None, *, dpi: int = 110) -> li
     figures = _rejected_figure(result, rig)
     if len(np.asarray(result.errors)):  # at least one iteration played
         figures.update(_result_figures(result, rig))
-    written = []
-    for name, fig in figures.items():
-        path = folder / name
-        fig.savefig(path, dpi=dpi)
-        written.append(path)
-    return written
+    return [save_figure(fig, folder / name, dpi=dpi) for name, fig in figures.items()]
 
 
 def _rejected_figure(result, rig) -> dict:
@@ -421,3 +419,25 @@ def _result_figures(result, rig) -> dict:
             title=f"final drive FINDRV (IT{best:02d}DRV) and the rig's limits",
         )
     return figures
+
+
+def save_figure(fig: Figure, path, *, dpi: int = 110) -> Path:
+    """Save ``fig`` to ``path`` atomically: an interrupted save leaves the previous file.
+
+    Parameters
+    ----------
+    fig : Figure
+    path : str or Path
+        The image file; its suffix gives the format (``.png``, ``.pdf``, ``.svg``...).
+    dpi : int
+
+    Returns
+    -------
+    Path
+        The written file.
+    """
+    path = Path(path)
+    fmt = path.suffix[1:].lower() or None
+    with atomic_write(path) as f:
+        fig.savefig(f, format=fmt, dpi=dpi)
+    return path

@@ -27,7 +27,13 @@ per-iteration errors, best iteration, stop reason, rig, files).
 
 Records are RPC III by default (drives ``.drv`` with ``TIME_TYPE = DRIVE``, responses ``.rsp``,
 ``FLOATING_POINT``: float32, so they read back to float32 precision), or ``.csv``, ``.mat`` or
-``.npz`` (exact). An existing non-empty folder is never overwritten unless ``overwrite=True``.
+``.npz`` (exact). An existing non-empty folder is never overwritten unless ``overwrite=True``,
+and then it is replaced in one swap: the new folder is written beside it (``.NAME.tmp-XXXXXXXX``)
+and renamed into place only when complete, so an interrupted save (exception, Ctrl-C, kill -9)
+leaves the previous folder whole (see :func:`vrig.files.staged_directory`; a kill between the two
+renames of the swap leaves it as ``.NAME.old-XXXXXXXX``, which the next :class:`TestFolder`
+access renames back). Hidden ``.NAME.tmp-XXXXXXXX`` folders and files are debris of a killed
+save and never read as data.
 
 >>> folder = TestFolder("results/shock-absorber-arx")          # doctest: +SKIP
 >>> folder.save(result, field=field, rig=rig)                  # doctest: +SKIP
@@ -46,6 +52,8 @@ from pathlib import Path
 import numpy as np
 
 from . import io
+from .errors import FileFormatError
+from .files import atomic_write, is_temporary, read_bytes, recover_directory, staged_directory
 from .timehistory import TimeHistory
 
 __all__ = ["FORMATS", "IterationRecord", "TestFolder"]
@@ -140,6 +148,124 @@ def _method_summary(method) -> dict:
     return out
 
 
+def _not_ours(name: str) -> bool:
+    """Files of a folder that :meth:`TestFolder.save` keeps when it replaces the folder."""
+    return not (_RECORD.match(name) or _MODEL.match(name) or name == SUMMARY or is_temporary(name))
+
+
+def _records(result, field, extra: dict) -> dict[str, TimeHistory]:
+    """The QanTiM records of a reconstruction, ``{name: TimeHistory}``."""
+    todo: dict[str, TimeHistory] = {
+        name: th
+        for name, th in (("IDDRV", result.id_drive), ("IDRES", result.id_response))
+        if th is not None
+    }
+    if field is not None:
+        todo["FIELD01"] = field
+    todo["DESRES01"] = result.desired
+    for it, (drv, raw, res) in enumerate(
+        zip(result.drives, result.raw_responses, result.responses, strict=True)
+    ):
+        todo[f"IT{it:02d}DRV"] = drv
+        todo[f"RIT{it:02d}RES"] = raw
+        todo[f"IT{it:02d}RES"] = res
+    if result.drives:
+        todo["FINDRV01"] = result.final_drive
+        todo["FINRES01"] = result.final_response
+    if getattr(result, "rejected_drive", None) is not None:
+        todo[result.rejected_name] = result.rejected_drive
+    for name, th in extra.items():
+        todo[name.upper()] = th
+    return todo
+
+
+def _write(folder: Path, name: str, th: TimeHistory, fmt: str) -> Path:
+    if fmt == "rsp":
+        drive = _is_drive(name)
+        return io.write_rpc3(
+            folder / f"{name}.{'drv' if drive else 'rsp'}",
+            th,
+            data_type="FLOATING_POINT",
+            time_type="DRIVE" if drive else "RESPONSE",
+            extra_header={"OPERATION": f"vrig {name}"},
+        )
+    return io.write(folder / f"{name}.{fmt}", th)
+
+
+def _save_models(folder: Path, method) -> tuple[dict, str]:
+    """Save the method's inverse model(s) into ``folder``: ``({stem: info}, note)``."""
+    inverses = _inverse_models(method)
+    if not inverses:
+        return {}, (
+            f"the method {type(method).__name__} has no time-domain inverse model "
+            "to save (frequency-domain or user method): not saved"
+        )
+    models = {}
+    for stem, inverse in inverses.items():
+        path = inverse.model.save(folder / f"{stem}.npz")
+        models[stem] = {"file": path.name, "lead": int(getattr(inverse, "lead_", 0))}
+    return models, (
+        "inverse model(s) from responses to drives: identification.Arx/Narx.load(file); "
+        "the drive at t is modelled from responses up to t + lead samples, at the "
+        "model sample rate"
+    )
+
+
+def _summary(result, rig, fmt: str, files: dict, models: dict, model_note: str, settings) -> dict:
+    """The contents of ``summary.json`` (see :meth:`TestFolder.summary`)."""
+    decimation = int(result.decimation)
+    decimation_note = "recorded by reconstruct"
+    errors = np.asarray(result.errors)
+    n_run = errors.shape[0]
+    best = int(result.best_iteration) if n_run else None
+    candidates = (result.id_drive, getattr(result, "rejected_drive", None), *result.drives)
+    drives = next((th for th in candidates if th is not None), None)
+    return {
+        "format": _FORMAT_ID,
+        "version": _VERSION,
+        "created": datetime.datetime.now().isoformat(timespec="seconds"),
+        "rig": None if rig is None else (rig if isinstance(rig, str) else rig.name),
+        "method": _method_summary(result.method),
+        "bandwidth_hz": _plain(result.bandwidth),
+        "fs": result.desired.fs,
+        "n_samples": result.desired.n_samples,
+        "duration_s": result.desired.duration,
+        "model_decimation": int(decimation),
+        "model_fs": result.desired.fs / int(decimation),
+        "model_decimation_note": decimation_note,
+        "gain": _plain(result.gain),
+        "strategy": result.strategy,
+        "seed": int(result.seed),
+        "drives": None
+        if drives is None
+        else {"names": list(drives.names), "units": list(drives.units)},
+        "responses": {"names": list(result.desired.names), "units": list(result.desired.units)},
+        "iterations_run": n_run - 1,
+        "best_iteration": best,
+        "stopped": result.stopped,
+        "stop_reason": result.stopped or f"completed all {n_run - 1} iterations",
+        "rejected": getattr(result, "rejected_name", "") or None,
+        "best": None
+        if best is None
+        else {
+            "eta0_percent": _plain(errors[best]),
+            "rms_error_percent": _plain(np.asarray(result.rms_errors)[best]),
+            "damage_ratio": _plain(np.asarray(result.damage_ratio)[best]),
+        },
+        "errors": {
+            "eta0_percent": _plain(errors),
+            "rms_error_percent": _plain(result.rms_errors),
+            "damage_ratio": _plain(result.damage_ratio),
+        },
+        "table": result.table().splitlines(),
+        "record_format": fmt,
+        "files": files,
+        "models": models,
+        "model_note": model_note,
+        "settings": _plain(dict(settings or {})),
+    }
+
+
 @dataclass(frozen=True)
 class IterationRecord:
     """The records and scores of one iteration read back from a test folder.
@@ -195,6 +321,10 @@ class TestFolder:
     ) -> list[Path]:
         """Write a reconstruction as QanTiM files and ``summary.json``.
 
+        The whole folder is written beside the target (``.NAME.tmp-XXXXXXXX``) and swapped in
+        at the end (:func:`vrig.files.staged_directory`): an exception, Ctrl-C or kill during
+        the save leaves an existing folder as it was, byte for byte.
+
         Parameters
         ----------
         result : ReconstructionResult
@@ -211,8 +341,8 @@ class TestFolder:
         settings : mapping, optional
             Run settings to keep in the summary (gain, seed, command line...).
         overwrite : bool
-            Allow writing into a non-empty folder: the QanTiM records, models and summary of
-            a previous save are removed first (other files are left alone).
+            Allow replacing a non-empty folder: the QanTiM records, models and summary of a
+            previous save are replaced by the new ones; other files (plots, notes...) are kept.
 
         Returns
         -------
@@ -237,145 +367,41 @@ class TestFolder:
                 )
             if not isinstance(th, TimeHistory):
                 raise TypeError(f"record {name!r} must be a TimeHistory")
-        self._prepare(overwrite)
+        if field is not None and not isinstance(field, TimeHistory):
+            raise TypeError("field must be a TimeHistory")
+        self._check_target(overwrite)
+        with staged_directory(self.path, keep=_not_ours) as staging:
+            files = self._write_records(staging, _records(result, field, extra), fmt)
+            models, model_note = _save_models(staging, result.method)
+            summary = _summary(result, rig, fmt, files, models, model_note, settings)
+            with atomic_write(staging / SUMMARY, "w", encoding="utf-8") as f:
+                f.write(json.dumps(summary, indent=2, ensure_ascii=False) + "\n")
+        names = [*files.values(), *(m["file"] for m in models.values()), SUMMARY]
+        return [self.path / n for n in names]
 
-        todo: dict[str, TimeHistory] = {
-            name: th
-            for name, th in (("IDDRV", result.id_drive), ("IDRES", result.id_response))
-            if th is not None
-        }
-        if field is not None:
-            if not isinstance(field, TimeHistory):
-                raise TypeError("field must be a TimeHistory")
-            todo["FIELD01"] = field
-        todo["DESRES01"] = result.desired
-        for it, (drv, raw, res) in enumerate(
-            zip(result.drives, result.raw_responses, result.responses, strict=True)
-        ):
-            todo[f"IT{it:02d}DRV"] = drv
-            todo[f"RIT{it:02d}RES"] = raw
-            todo[f"IT{it:02d}RES"] = res
-        if result.drives:
-            todo["FINDRV01"] = result.final_drive
-            todo["FINRES01"] = result.final_response
-        if getattr(result, "rejected_drive", None) is not None:
-            todo[result.rejected_name] = result.rejected_drive
-        for name, th in extra.items():
-            todo[name.upper()] = th
-
-        written, files = [], {}
-        for name in sorted(todo, key=_order_key):
-            path = self._write(name, todo[name], fmt)
-            files[name] = path.name
-            written.append(path)
-
-        models, model_note = {}, ""
-        inverses = _inverse_models(result.method)
-        if inverses:
-            for stem, inverse in inverses.items():
-                path = inverse.model.save(self.path / f"{stem}.npz")
-                models[stem] = {"file": path.name, "lead": int(getattr(inverse, "lead_", 0))}
-                written.append(path)
-            model_note = (
-                "inverse model(s) from responses to drives: identification.Arx/Narx.load(file); "
-                "the drive at t is modelled from responses up to t + lead samples, at the "
-                "model sample rate"
-            )
-        else:
-            model_note = (
-                f"the method {type(result.method).__name__} has no time-domain inverse model "
-                "to save (frequency-domain or user method): not saved"
-            )
-
-        decimation = int(result.decimation)
-        decimation_note = "recorded by reconstruct"
-        errors = np.asarray(result.errors)
-        n_run = errors.shape[0]
-        best = int(result.best_iteration) if n_run else None
-        candidates = (result.id_drive, getattr(result, "rejected_drive", None), *result.drives)
-        drives = next((th for th in candidates if th is not None), None)
-        summary = {
-            "format": _FORMAT_ID,
-            "version": _VERSION,
-            "created": datetime.datetime.now().isoformat(timespec="seconds"),
-            "rig": None if rig is None else (rig if isinstance(rig, str) else rig.name),
-            "method": _method_summary(result.method),
-            "bandwidth_hz": _plain(result.bandwidth),
-            "fs": result.desired.fs,
-            "n_samples": result.desired.n_samples,
-            "duration_s": result.desired.duration,
-            "model_decimation": int(decimation),
-            "model_fs": result.desired.fs / int(decimation),
-            "model_decimation_note": decimation_note,
-            "gain": _plain(result.gain),
-            "strategy": result.strategy,
-            "seed": int(result.seed),
-            "drives": None
-            if drives is None
-            else {"names": list(drives.names), "units": list(drives.units)},
-            "responses": {"names": list(result.desired.names), "units": list(result.desired.units)},
-            "iterations_run": n_run - 1,
-            "best_iteration": best,
-            "stopped": result.stopped,
-            "stop_reason": result.stopped or f"completed all {n_run - 1} iterations",
-            "rejected": getattr(result, "rejected_name", "") or None,
-            "best": None
-            if best is None
-            else {
-                "eta0_percent": _plain(errors[best]),
-                "rms_error_percent": _plain(np.asarray(result.rms_errors)[best]),
-                "damage_ratio": _plain(np.asarray(result.damage_ratio)[best]),
-            },
-            "errors": {
-                "eta0_percent": _plain(errors),
-                "rms_error_percent": _plain(result.rms_errors),
-                "damage_ratio": _plain(result.damage_ratio),
-            },
-            "table": result.table().splitlines(),
-            "record_format": fmt,
-            "files": files,
-            "models": models,
-            "model_note": model_note,
-            "settings": _plain(dict(settings or {})),
-        }
-        path = self.path / SUMMARY
-        path.write_text(json.dumps(summary, indent=2, ensure_ascii=False) + "\n", encoding="utf-8")
-        written.append(path)
-        return written
-
-    def _prepare(self, overwrite: bool) -> None:
+    def _check_target(self, overwrite: bool) -> None:
         p = self.path
+        recover_directory(p)
         if p.exists() and not p.is_dir():
             raise FileExistsError(f"{p} exists and is not a folder")
-        if p.is_dir() and any(p.iterdir()):
-            if not overwrite:
-                raise FileExistsError(
-                    f"test folder {p} is not empty; pass overwrite=True to replace its records, "
-                    "or choose another folder"
-                )
-            for f in p.iterdir():
-                if f.is_file() and (
-                    _RECORD.match(f.name) or _MODEL.match(f.name) or f.name == SUMMARY
-                ):
-                    f.unlink()
-        p.mkdir(parents=True, exist_ok=True)
-
-    def _write(self, name: str, th: TimeHistory, fmt: str) -> Path:
-        if fmt == "rsp":
-            drive = _is_drive(name)
-            return io.write_rpc3(
-                self.path / f"{name}.{'drv' if drive else 'rsp'}",
-                th,
-                data_type="FLOATING_POINT",
-                time_type="DRIVE" if drive else "RESPONSE",
-                extra_header={"OPERATION": f"vrig {name}"},
+        if p.is_dir() and any(p.iterdir()) and not overwrite:
+            raise FileExistsError(
+                f"test folder {p} is not empty; pass overwrite=True to replace its records, "
+                "or choose another folder"
             )
-        return io.write(self.path / f"{name}.{fmt}", th)
+
+    def _write_records(self, folder: Path, todo: dict, fmt: str) -> dict[str, str]:
+        """Write the records into ``folder`` in process order; ``{name: file name}``."""
+        files = {}
+        for name in sorted(todo, key=_order_key):
+            files[name] = _write(folder, name, todo[name], fmt).name
+        return files
 
     # ------------------------------------------------------------------ reading
     def files(self) -> dict[str, Path]:
         """QanTiM records in the folder, ``{name: path}`` in process order (IDDRV, IDRES,
         FIELD01, DESRES01, IT00DRV, RIT00RES, IT00RES, ..., FINDRV01, FINRES01)."""
+        recover_directory(self.path)
         if not self.path.is_dir():
             raise FileNotFoundError(f"no test folder at {self.path}")
         found = {}
@@ -399,13 +425,28 @@ class TestFolder:
         return io.read(files[key])
 
     def summary(self) -> dict:
-        """The contents of ``summary.json``."""
+        """The contents of ``summary.json``.
+
+        Raises
+        ------
+        FileNotFoundError
+            If the folder has no summary.
+        FileFormatError
+            If the summary is not a vrig test-folder summary (not JSON, truncated, foreign).
+        """
+        recover_directory(self.path)
         path = self.path / SUMMARY
         if not path.exists():
             raise FileNotFoundError(f"{self.path} has no {SUMMARY} (not a vrig test folder?)")
-        data = json.loads(path.read_text(encoding="utf-8"))
-        if data.get("format") != _FORMAT_ID:
-            raise ValueError(f"{path} is not a vrig test-folder summary")
+        fmt = "vrig test-folder summary"
+        try:
+            data = json.loads(read_bytes(path, fmt).decode("utf-8"))
+        except ValueError as exc:  # JSONDecodeError and UnicodeDecodeError are ValueErrors
+            if isinstance(exc, FileFormatError):
+                raise
+            raise FileFormatError(path, fmt, f"not UTF-8 JSON ({exc})") from None
+        if not isinstance(data, dict) or data.get("format") != _FORMAT_ID:
+            raise FileFormatError(path, fmt, f'no "format": "{_FORMAT_ID}" entry')
         return data
 
     @property

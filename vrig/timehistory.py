@@ -13,6 +13,9 @@ from pathlib import Path
 
 import numpy as np
 
+from .errors import FileFormatError
+from .files import atomic_write, read_npz
+
 __all__ = ["TimeHistory"]
 
 
@@ -160,7 +163,8 @@ class TimeHistory:
 
     # ------------------------------------------------------------------ persistence
     def save(self, path) -> Path:
-        """Write an ``.npz`` with the data, ``fs``, names and units."""
+        """Write an ``.npz`` with the data, ``fs``, names and units (atomically: see
+        :func:`vrig.files.atomic_write`); a missing or other suffix becomes ``.npz``."""
         path = Path(path)
         if path.suffix != ".npz":
             path = path.with_suffix(".npz")
@@ -171,15 +175,73 @@ class TimeHistory:
             "units": list(self.units),
             "fs": self.fs,
         }
-        np.savez(path, data=self.data, meta=np.array(json.dumps(meta)))
+        with atomic_write(path) as f:  # a kill leaves the old file or the new one
+            np.savez(f, data=self.data, meta=np.array(json.dumps(meta)))
         return path
 
     @classmethod
     def load(cls, path) -> TimeHistory:
-        """Read a file written by :meth:`save`."""
+        """Read a file written by :meth:`save`.
+
+        Raises
+        ------
+        FileNotFoundError
+            If there is no such file.
+        FileFormatError
+            If the file is not a TimeHistory ``.npz``: not a regular file, larger than
+            :data:`vrig.files.MAX_FILE_BYTES`, truncated or corrupt, without the ``data`` and
+            ``meta`` arrays or the ``fs``, ``names``, ``units`` entries, or holding values a
+            TimeHistory refuses (NaN, ``fs <= 0``...).
+        """
         path = Path(path)
-        with np.load(path, allow_pickle=False) as f:
-            if "meta" not in f.files or "data" not in f.files:
-                raise ValueError(f"{path} is not a vrig TimeHistory .npz file")
-            meta = json.loads(str(f["meta"]))
-            return cls(np.array(f["data"]), meta["fs"], meta["names"], meta["units"])
+        arrays = read_npz(path, _NPZ)
+        meta = _npz_meta(arrays, path)
+        data = arrays["data"]
+        if data.dtype.kind not in "iuf" or data.ndim not in (1, 2):
+            raise FileFormatError(
+                path,
+                _NPZ,
+                f"data must be a real (N,) or (N, channels) array, got {data.dtype} "
+                f"of shape {data.shape}",
+            )
+        try:
+            return cls(data, meta["fs"], meta["names"], meta["units"])
+        except (TypeError, ValueError) as exc:
+            raise FileFormatError(path, _NPZ, str(exc)) from None
+
+
+_NPZ = "vrig TimeHistory .npz"
+
+
+def _npz_meta(arrays: dict, path: Path) -> dict:
+    """The checked ``meta`` entry of a TimeHistory ``.npz`` (see :meth:`TimeHistory.load`)."""
+    missing = [k for k in ("data", "meta") if k not in arrays]
+    if missing:
+        raise FileFormatError(
+            path,
+            _NPZ,
+            f"no {' or '.join(missing)} array (it holds {sorted(arrays) or 'none'}); "
+            "TimeHistory.save writes data and meta",
+        )
+    raw = arrays["meta"]
+    try:
+        if raw.dtype.kind != "U" or raw.shape != ():
+            raise ValueError("not a text scalar")
+        meta = json.loads(str(raw))
+    except ValueError as exc:
+        raise FileFormatError(path, _NPZ, f"meta is not JSON text ({exc})") from None
+    if not isinstance(meta, dict) or meta.get("format", "vrig-timehistory") != "vrig-timehistory":
+        raise FileFormatError(path, _NPZ, "meta does not describe a vrig time history")
+    if not isinstance(meta.get("version", 1), int) or meta.get("version", 1) > 1:
+        raise FileFormatError(
+            path, _NPZ, f"format version {meta.get('version')!r}; this vrig reads version 1"
+        )
+    missing = [k for k in ("fs", "names", "units") if k not in meta]
+    if missing:
+        raise FileFormatError(path, _NPZ, f"meta has no {', '.join(missing)}")
+    for key in ("names", "units"):
+        if not (isinstance(meta[key], list) and all(isinstance(v, str) for v in meta[key])):
+            raise FileFormatError(path, _NPZ, f"meta {key} must be a list of strings")
+    if isinstance(meta["fs"], bool) or not isinstance(meta["fs"], (int, float)):
+        raise FileFormatError(path, _NPZ, f"meta fs must be a number, got {meta['fs']!r}")
+    return meta

@@ -28,7 +28,7 @@ import time
 from dataclasses import asdict, replace
 from pathlib import Path
 
-from .execute import BACKENDS, SettingsMismatchError, Store, execute
+from .execute import BACKENDS, SettingsMismatchError, Store, execute, write_atomic
 from .lifetime import LockHeldError, PidLock, die_with_parent
 from .record import RecordKey, Settings
 from .registry import (
@@ -339,7 +339,7 @@ def cmd_run(args) -> int:
         "wall_s": wall,
         "code": _code_version(),
     }
-    (out / "run.json").write_text(json.dumps(run_info, indent=1) + "\n")
+    write_atomic(out / "run.json", json.dumps(run_info, indent=1) + "\n")
     n_ok = sum(r["status"] == "ok" for r in records)
     print(
         f"\n{len(records)} records ({n_ok} ok, {len(records) - n_ok} failed; "

@@ -1,0 +1,499 @@
+"""Safe files: atomic writes, a folder replaced in one swap, and guarded reads.
+
+Every vrig writer goes through this module, so a kill (``kill -9``, power loss after the
+``fsync``) or a Ctrl-C never leaves a half-written file where a good one was:
+
+* :func:`atomic_write` writes into a temporary file in the target's directory, flushes and
+  ``fsync``-s it, then renames it over the target with :func:`os.replace` (atomic on POSIX and
+  Windows) and ``fsync``-s the directory. Readers see the old content or the new one, never a
+  mixture. An exception (including :class:`KeyboardInterrupt`) inside the ``with`` block
+  removes the temporary file and leaves the target as it was.
+* :func:`staged_directory` builds a whole folder beside the old one and swaps it in (old folder
+  renamed aside, new folder renamed in, old folder deleted); :func:`recover_directory` puts the
+  old folder back when a kill struck between the two renames.
+
+Temporary names
+---------------
+A temporary file or folder is named ``.NAME.tmp-XXXXXXXX`` (a dot, the target's name, ``.tmp-``
+and eight random hex digits), a folder set aside during a swap ``.NAME.old-XXXXXXXX`` (always
+whole: the old folder) and one being deleted after the swap ``.NAME.del-XXXXXXXX``, all in the
+target's directory. Only a kill can leave one behind (a Python exception removes it). The leading
+dot hides them from ``ls``, and no vrig reader takes them for data: their names match no QanTiM
+record, model or summary name and end in no time-history suffix (:func:`is_temporary` recognises
+them). The next swap of the same target deletes its ``.del-`` folders, and its ``.old-`` folders
+when the target exists (the swap that set them aside was completed; when the target is missing,
+the ``.old-`` folder is put back instead); ``.tmp-`` files and folders, possibly being written by
+another process, are left alone: delete them by hand when no vrig process writes to the folder.
+
+Reading
+-------
+:func:`open_regular`, :func:`read_bytes` and :func:`read_npz` refuse what is not a regular file (a
+FIFO would block the reader forever, ``/dev/zero`` never ends; symlinks are followed first) and
+files larger than :data:`MAX_FILE_BYTES`, with a :class:`~vrig.errors.FileFormatError` naming the
+file. :func:`read_npz` also checks each array's header against the bytes stored before reading
+it, so a truncated or tampered ``.npz`` cannot make it allocate more than the file holds.
+(The identification package keeps its own copy of this scheme, :mod:`identification._files`,
+since it never imports vrig.)
+"""
+
+from __future__ import annotations
+
+import contextlib
+import errno
+import math
+import os
+import re
+import secrets
+import shutil
+import stat
+import tokenize
+import zipfile
+import zlib
+from collections.abc import Callable, Iterator
+from pathlib import Path
+from typing import IO
+
+import numpy as np
+
+from .errors import FileFormatError
+
+__all__ = [
+    "MAX_FILE_BYTES",
+    "atomic_write",
+    "is_temporary",
+    "open_regular",
+    "read_bytes",
+    "read_npz",
+    "recover_directory",
+    "staged_directory",
+]
+
+MAX_FILE_BYTES = 2 * 1024**3
+"""Largest file (bytes) vrig readers accept: 2 GiB, e.g. 250 million float64 samples in ``.npz``
+(a 70-hour, 1 kHz, 1-channel record) or 500 million RPC III float32 samples. Larger (or
+ever-growing) files raise :class:`~vrig.errors.FileFormatError` instead of exhausting memory."""
+
+_TEMP = re.compile(r"^\..+\.(tmp|old|del)-[0-9a-f]{8}$")
+
+
+def is_temporary(path) -> bool:
+    """True for a name made by :func:`atomic_write` or :func:`staged_directory`
+    (``.NAME.tmp-XXXXXXXX``, ``.NAME.old-XXXXXXXX``, ``.NAME.del-XXXXXXXX``)."""
+    return bool(_TEMP.match(Path(path).name))
+
+
+def _prefix(path: Path, kind: str) -> str:
+    """``.NAME.kind-`` (NAME cut to 200 characters: the whole name stays under NAME_MAX)."""
+    return f".{path.name[:200]}.{kind}-"
+
+
+def _sibling(path: Path, kind: str) -> Path:
+    return path.with_name(_prefix(path, kind) + secrets.token_hex(4))
+
+
+def _fsync_dir(folder: Path) -> None:
+    """Make a rename in ``folder`` durable (no-op where directories cannot be opened)."""
+    try:
+        fd = os.open(folder, os.O_RDONLY)
+    except OSError:
+        return
+    try:
+        os.fsync(fd)
+    except OSError:
+        pass
+    finally:
+        os.close(fd)
+
+
+def _create_temporary(path: Path) -> tuple[Path, int]:
+    """A new temporary sibling of ``path`` (mode: the target's, else 0o666 less the umask)."""
+    flags = os.O_WRONLY | os.O_CREAT | os.O_EXCL | getattr(os, "O_BINARY", 0)
+    flags |= getattr(os, "O_CLOEXEC", 0)
+    while True:
+        tmp = _sibling(path, "tmp")
+        try:
+            fd = os.open(tmp, flags, 0o666)
+            break
+        except FileExistsError:  # 1 in 4 billion: draw another name
+            continue
+    try:
+        os.chmod(tmp, stat.S_IMODE(os.stat(path).st_mode))  # keep an existing file's mode
+    except OSError:
+        pass
+    return tmp, fd
+
+
+@contextlib.contextmanager
+def atomic_write(path, mode: str = "wb", *, encoding: str | None = None) -> Iterator[IO]:
+    """Open a temporary file that replaces ``path`` when the ``with`` block ends without error.
+
+    Parameters
+    ----------
+    path : str or Path
+        The target file. Its directory must exist.
+    mode : {"wb", "w"}
+        Binary or text.
+    encoding : str, optional
+        Text mode only (default UTF-8). Lines are written as given (no newline translation).
+
+    Yields
+    ------
+    file object
+        The temporary file ``.NAME.tmp-XXXXXXXX`` beside the target (see the module docstring).
+
+    Examples
+    --------
+    >>> with atomic_write("summary.json", "w") as f:  # doctest: +SKIP
+    ...     f.write(text)
+    """
+    if mode not in ("wb", "w"):
+        raise ValueError(f"atomic_write mode must be 'wb' or 'w', got {mode!r}")
+    path = Path(path)
+    tmp, fd = _create_temporary(path)
+    try:
+        try:
+            if mode == "w":
+                f = os.fdopen(fd, "w", encoding=encoding or "utf-8", newline="")
+            else:
+                f = os.fdopen(fd, "wb")
+        except BaseException:
+            os.close(fd)
+            raise
+        with f:
+            yield f
+            f.flush()
+            os.fsync(f.fileno())
+        os.replace(tmp, path)
+    except BaseException:
+        with contextlib.suppress(OSError):
+            tmp.unlink()
+        raise
+    _fsync_dir(path.parent)
+
+
+# ---------------------------------------------------------------------------------- folders
+def _link_or_copy(src, dst) -> None:
+    """Hard link ``src`` as ``dst`` (no data copied), or copy it where links are impossible."""
+    try:
+        os.link(src, dst, follow_symlinks=False)
+    except OSError:
+        shutil.copy2(src, dst, follow_symlinks=False)
+
+
+def _carry(old: Path, new: Path, keep: Callable[[str], bool]) -> None:
+    """Link the entries of ``old`` for which ``keep(name)`` is true into ``new``."""
+    for entry in os.scandir(old):
+        if not keep(entry.name) or os.path.lexists(new / entry.name):
+            continue
+        if entry.is_dir(follow_symlinks=False):
+            shutil.copytree(
+                entry.path, new / entry.name, symlinks=True, copy_function=_link_or_copy
+            )
+        else:
+            _link_or_copy(entry.path, new / entry.name)
+
+
+def recover_directory(path) -> bool:
+    """Put back a folder that a kill left set aside in the middle of a swap.
+
+    When ``path`` does not exist but ``.NAME.old-XXXXXXXX`` (exactly one) does, the kill came
+    between the two renames of :func:`staged_directory`: the set-aside folder is the old folder,
+    whole, and is renamed back to ``path``.
+
+    Returns
+    -------
+    bool
+        Whether a folder was put back.
+    """
+    path = Path(os.path.realpath(path))  # a symlink's folder, as staged_directory swaps it
+    if os.path.lexists(path):
+        return False
+    prefix = _prefix(path, "old")
+    try:
+        aside = [
+            Path(e.path)
+            for e in os.scandir(path.parent)
+            if e.name.startswith(prefix) and is_temporary(e.name) and e.is_dir()
+        ]
+    except OSError:  # no parent folder
+        return False
+    if len(aside) != 1:
+        return False
+    os.rename(aside[0], path)
+    _fsync_dir(path.parent)
+    return True
+
+
+@contextlib.contextmanager
+def staged_directory(path, *, keep: Callable[[str], bool] | None = None) -> Iterator[Path]:
+    """Build a folder beside ``path`` and swap it in when the ``with`` block ends without error.
+
+    Parameters
+    ----------
+    path : str or Path
+        The folder to create or replace (a symlink to a folder: the folder it points to).
+    keep : callable, optional
+        ``keep(name)`` is true for the entries of an existing folder that must survive the
+        replacement (files the new content does not own); they are hard-linked (or copied) into
+        the new folder before the swap. Default: keep nothing.
+
+    Yields
+    ------
+    Path
+        The new, empty folder ``.NAME.tmp-XXXXXXXX`` to write into.
+
+    Notes
+    -----
+    The swap renames the old folder to ``.NAME.old-XXXXXXXX``, the new one to ``path``, then the
+    old one to ``.NAME.del-XXXXXXXX`` and deletes it (so a half-deleted folder never carries the
+    ``.old-`` name that :func:`recover_directory` restores). An exception in the block deletes
+    the new folder and leaves ``path`` untouched; a kill leaves the old folder whole: still at
+    ``path``, or (between the two renames) set aside, where :func:`recover_directory` finds it.
+    """
+    path = Path(os.path.realpath(path))
+    recover_directory(path)
+    _remove_debris(path)
+    if os.path.lexists(path) and not path.is_dir():
+        raise FileExistsError(f"{path} exists and is not a folder")
+    path.parent.mkdir(parents=True, exist_ok=True)
+    while True:
+        new = _sibling(path, "tmp")
+        try:
+            new.mkdir()
+            break
+        except FileExistsError:
+            continue
+    try:
+        if path.is_dir():
+            new.chmod(stat.S_IMODE(path.stat().st_mode))
+        yield new
+        if path.is_dir() and keep is not None:
+            _carry(path, new, keep)
+        _fsync_dir(new)
+    except BaseException:
+        shutil.rmtree(new, ignore_errors=True)
+        raise
+    _swap(new, path)
+
+
+def _cwd_inside(path: Path) -> Path | None:
+    """The working directory relative to ``path`` when it lies inside ``path``, else None."""
+    try:
+        return Path(os.getcwd()).relative_to(path)
+    except (OSError, ValueError):
+        return None
+
+
+def _swap(new: Path, path: Path) -> None:
+    """Rename ``new`` to ``path``, setting an existing ``path`` aside first and deleting it.
+
+    A process working inside ``path`` (``vrig reconstruct --out .``) moves to the same place in
+    the new folder (or its top), not into the deleted old one."""
+    aside, cwd = None, _cwd_inside(path)
+    try:
+        if path.is_dir():
+            aside = _sibling(path, "old")
+            os.rename(path, aside)
+        try:
+            os.rename(new, path)
+        except BaseException:
+            if aside is not None:
+                os.rename(aside, path)
+            raise
+    except BaseException:
+        shutil.rmtree(new, ignore_errors=True)
+        raise
+    _fsync_dir(path.parent)
+    if cwd is not None:
+        os.chdir(path / cwd if (path / cwd).is_dir() else path)
+    if aside is not None:
+        trash = _sibling(path, "del")
+        os.rename(aside, trash)
+        shutil.rmtree(trash, ignore_errors=True)
+
+
+def _remove_debris(path: Path) -> None:
+    """Delete the ``.NAME.del-`` folders of ``path`` (old folders whose deletion a kill cut
+    short) and, when ``path`` exists, its ``.NAME.old-`` folders (left by a kill after a
+    completed swap)."""
+    kinds = ("del", "old") if path.is_dir() else ("del",)
+    prefixes = tuple(_prefix(path, kind) for kind in kinds)
+    with contextlib.suppress(OSError):
+        for entry in os.scandir(path.parent):
+            if entry.name.startswith(prefixes) and is_temporary(entry.name) and entry.is_dir():
+                shutil.rmtree(entry.path, ignore_errors=True)
+
+
+# ---------------------------------------------------------------------------------- reading
+def _kind(mode: int) -> str:
+    for test, name in (
+        (stat.S_ISDIR, "a folder"),
+        (stat.S_ISFIFO, "a FIFO (named pipe)"),
+        (stat.S_ISCHR, "a character device"),
+        (stat.S_ISBLK, "a block device"),
+        (stat.S_ISSOCK, "a socket"),
+    ):
+        if test(mode):
+            return name
+    return "a special file"
+
+
+def open_regular(path, fmt: str, *, limit: int | None = None) -> IO[bytes]:
+    """Open a file for binary reading after checking it is a regular file of sane size.
+
+    Parameters
+    ----------
+    path : str or Path
+        The file; symlinks are followed.
+    fmt : str
+        The format expected (``"RPC III"``, ``"CSV"``...), for the error message.
+    limit : int, optional
+        Size limit in bytes; default :data:`MAX_FILE_BYTES`.
+
+    Returns
+    -------
+    file object
+        Open in binary mode, positioned at the start.
+
+    Raises
+    ------
+    FileNotFoundError
+        If there is no such file.
+    FileFormatError
+        If it is a folder, FIFO, device or socket, or larger than ``limit``.
+    """
+    limit = MAX_FILE_BYTES if limit is None else int(limit)
+    flags = os.O_RDONLY | getattr(os, "O_NONBLOCK", 0) | getattr(os, "O_BINARY", 0)
+    try:
+        fd = os.open(path, flags | getattr(os, "O_CLOEXEC", 0))  # O_NONBLOCK: a FIFO can't block
+    except IsADirectoryError:  # Windows
+        raise FileFormatError(path, fmt, "it is a folder, not a file") from None
+    try:
+        info = os.fstat(fd)
+        if not stat.S_ISREG(info.st_mode):
+            raise FileFormatError(
+                path,
+                fmt,
+                f"it is {_kind(info.st_mode)}, not a regular file (vrig reads only regular files)",
+            )
+        if info.st_size > limit:
+            raise FileFormatError(
+                path,
+                fmt,
+                f"it holds {info.st_size} bytes, more than the {limit}-byte limit "
+                "(vrig.files.MAX_FILE_BYTES)",
+            )
+        if hasattr(os, "set_blocking"):
+            os.set_blocking(fd, True)
+        return os.fdopen(fd, "rb")
+    except BaseException:
+        os.close(fd)
+        raise
+
+
+def read_bytes(path, fmt: str, *, limit: int | None = None) -> bytes:
+    """The content of a regular file of at most ``limit`` bytes (see :func:`open_regular`).
+
+    Memory is allocated for the bytes the file holds, not for ``limit``. A file that grows
+    beyond the limit while it is read raises :class:`~vrig.errors.FileFormatError` too.
+    """
+    limit = MAX_FILE_BYTES if limit is None else int(limit)
+    with open_regular(path, fmt, limit=limit) as f:
+        parts = [f.read(os.fstat(f.fileno()).st_size + 1)]
+        total = len(parts[0])
+        while total <= limit:  # grown since fstat, or a size-0 pseudo file: read on, capped
+            chunk = f.read(min(1 << 20, limit + 1 - total))
+            if not chunk:
+                break
+            parts.append(chunk)
+            total += len(chunk)
+    if total > limit:
+        raise FileFormatError(path, fmt, f"it grew beyond the {limit}-byte limit while being read")
+    return parts[0] if len(parts) == 1 else b"".join(parts)
+
+
+_NPZ_BROKEN = (  # what zipfile and numpy raise on corrupt input (found by fuzzing)
+    zipfile.BadZipFile,
+    zlib.error,
+    EOFError,
+    ValueError,
+    NotImplementedError,
+    KeyError,
+    OverflowError,
+    UnicodeDecodeError,
+    SyntaxError,
+    tokenize.TokenError,  # a .npy header numpy parses with tokenize
+    OSError,  # a seek to an offset from a corrupt directory (EINVAL); other errnos re-raised
+)
+
+
+class _Invalid(Exception):
+    """A problem found inside an ``.npz`` (becomes a FileFormatError in :func:`read_npz`)."""
+
+
+def _npz_member(zf: zipfile.ZipFile, info: zipfile.ZipInfo) -> np.ndarray:
+    """One ``.npy`` member, its header checked against its stored size before reading."""
+    with zf.open(info) as m:
+        version = np.lib.format.read_magic(m)
+        if version == (1, 0):
+            shape, _, dtype = np.lib.format.read_array_header_1_0(m)
+        elif version == (2, 0):
+            shape, _, dtype = np.lib.format.read_array_header_2_0(m)
+        else:
+            raise _Invalid(f"array {info.filename!r} has unsupported .npy version {version}")
+        if dtype.hasobject:
+            raise _Invalid(f"array {info.filename!r} holds Python objects (refused)")
+        nbytes = math.prod(shape) * dtype.itemsize
+        if nbytes > info.file_size:
+            raise _Invalid(
+                f"array {info.filename!r} declares shape {shape} ({nbytes} bytes) but stores "
+                f"only {info.file_size} bytes (truncated or tampered)"
+            )
+    with zf.open(info) as m:
+        return np.lib.format.read_array(m, allow_pickle=False)
+
+
+def read_npz(path, fmt: str, *, limit: int | None = None) -> dict[str, np.ndarray]:
+    """All arrays of an ``.npz`` file, ``{name: array}``, read defensively.
+
+    Parameters
+    ----------
+    path : str or Path
+    fmt : str
+        The format expected, for the error message (``"vrig .npz"``).
+    limit : int, optional
+        Largest file and largest total of uncompressed arrays in bytes; default
+        :data:`MAX_FILE_BYTES`.
+
+    Raises
+    ------
+    FileNotFoundError
+        If there is no such file.
+    FileFormatError
+        Not a regular file, too large, not a zip archive, a member that is not a ``.npy``
+        array, a truncated or corrupt member, object arrays.
+    """
+    limit = MAX_FILE_BYTES if limit is None else int(limit)
+    with open_regular(path, fmt, limit=limit) as f:
+        try:
+            with zipfile.ZipFile(f) as zf:
+                infos = zf.infolist()
+                total = sum(i.file_size for i in infos)
+                if total > limit:
+                    raise _Invalid(
+                        f"its arrays hold {total} bytes, more than the {limit}-byte limit"
+                    )
+                out = {}
+                for info in infos:
+                    if not info.filename.endswith(".npy"):
+                        raise _Invalid(f"member {info.filename!r} is not a .npy array")
+                    out[info.filename[:-4]] = _npz_member(zf, info)
+                return out
+        except _Invalid as exc:
+            raise FileFormatError(path, fmt, str(exc)) from None
+        except _NPZ_BROKEN as exc:
+            if isinstance(exc, OSError) and exc.errno != errno.EINVAL:
+                raise  # a real I/O error, not a corrupt file
+            raise FileFormatError(
+                path, fmt, f"corrupt or not an .npz archive ({type(exc).__name__}: {exc})"
+            ) from None
