@@ -10,6 +10,8 @@ warnings or non-finite states raise :class:`~vrig.errors.SimulationInstabilityEr
 from __future__ import annotations
 
 import dataclasses
+import math
+import warnings
 from pathlib import Path
 
 import mujoco
@@ -18,7 +20,7 @@ from mujoco import rollout
 
 from ..errors import RigLimitError, RigModelError, SimulationInstabilityError
 from ..timehistory import TimeHistory
-from . import hydraulics
+from . import hydraulics, stability
 from .daq import acquire
 from .spec import (
     ChannelSpec,
@@ -29,9 +31,15 @@ from .spec import (
     read_description,
 )
 
-__all__ = ["MujocoRig"]
+__all__ = ["FAST_MARGIN", "MujocoRig"]
 
 _STATE = mujoco.mjtState.mjSTATE_FULLPHYSICS
+
+FAST_MARGIN = 0.8
+"""``fidelity="fast"`` runs at most at this fraction of the model's explicit-integration
+stability limit (:mod:`vrig.rigs.stability`): the stiffest mode then decays by a clear factor per
+step instead of hovering at the edge, and a parameter override that stiffens the model by up to
+~50 % (the limit scales with 1/ω) still leaves it stable."""
 
 
 class MujocoRig:
@@ -46,10 +54,28 @@ class MujocoRig:
         without their own seed draw successive streams from it, like repeated runs of a real
         rig; ``run(drive, seed=s)`` is reproducible bit for bit.
     fidelity : {"full", "fast"}
-        ``"fast"`` doubles the physics timestep (for short exploratory runs and learning);
-        ``"full"`` (default) uses the documented timestep.
+        ``"full"`` (default) uses the documented timestep. ``"fast"`` (for short exploratory
+        runs and learning) uses the side-car's ``fast_physics_rate``, else the largest timestep
+        up to twice the documented one that the DAQ rate divides and that stays within
+        :data:`FAST_MARGIN` of the model's explicit-integration stability limit
+        (:attr:`stability_limit`).
     **overrides
         Documented parameters (see :meth:`describe`).
+
+    Attributes
+    ----------
+    timestep : float
+        Physics timestep of this fidelity [s]; ``decimation`` physics steps per DAQ sample.
+    stability_limit : float
+        Largest timestep [s] at which the linearised model (its springs, dampers and oil
+        columns, :mod:`vrig.rigs.stability`) does not grow; a documented timestep beyond it
+        gives a ``RuntimeWarning`` at load.
+
+    Raises
+    ------
+    RigModelError
+        The model does not compile, its physics rate is not a multiple of fs, or the side-car's
+        ``fast_physics_rate`` is not a multiple of fs or lies beyond the stability margin.
     """
 
     def __init__(self, description, *, seed: int = 0, fidelity: str = "full", **overrides):
@@ -75,8 +101,6 @@ class MujocoRig:
         self._inputs, self._outputs = list(desc.inputs), list(desc.outputs)
         for name, value in self.parameters.items():
             self._apply(spec, desc.parameters[name], value)
-        if fidelity == "fast":
-            spec.option.timestep *= 2
         n_hyd = sum(1 for c in self._inputs if c.hydraulic is not None)
         spec.nuserdata = max(spec.nuserdata, 8 + 8 * n_hyd)
         try:
@@ -84,21 +108,18 @@ class MujocoRig:
         except ValueError as exc:
             raise RigModelError(f"{desc.mjcf}: MuJoCo could not compile the model: {exc}") from exc
         self.data = mujoco.MjData(self.model)
-        self.timestep = float(self.model.opt.timestep)
-        ratio = 1.0 / (desc.fs * self.timestep)
-        self.decimation = round(ratio)
-        if abs(ratio - self.decimation) > 1e-6 or self.decimation < 1:
-            hint = (
-                " (fidelity='fast' halves the physics rate: it needs fs to divide half the "
-                "documented physics rate)"
-                if fidelity == "fast"
-                else ""
-            )
+        documented = float(self.model.opt.timestep)
+        ratio = 1.0 / (desc.fs * documented)
+        if abs(ratio - round(ratio)) > 1e-6 or round(ratio) < 1:
             raise RigModelError(
-                f"{desc.name}: the physics rate {1 / self.timestep:g} Hz must be an integer multiple "
-                f"of fs = {desc.fs:g} Hz{hint}"
+                f"{desc.name}: the physics rate {1 / documented:g} Hz must be an integer multiple "
+                f"of fs = {desc.fs:g} Hz"
             )
         self._bind()
+        self.stability_limit, self._stiffest = self._stability()
+        self.timestep = self._choose_timestep(documented, round(ratio))
+        self.model.opt.timestep = self.timestep
+        self.decimation = round(1.0 / (desc.fs * self.timestep))
         self._presettle()
         self._rng = np.random.default_rng(seed)
         self.seed = seed
@@ -220,6 +241,57 @@ class MujocoRig:
         self._state0 = np.empty(mujoco.mj_stateSize(m, _STATE))
         mujoco.mj_getState(m, self.data, self._state0, _STATE)
 
+    def _stability(self) -> tuple[float, list]:
+        """The linearised model's explicit-integration stability limit [s] at the home pose and
+        its three stiffest elements (:mod:`vrig.rigs.stability`)."""
+        hyd_inputs = [c for c in self._inputs if c.hydraulic is not None]
+        oil = [
+            (c.spec.name, c.hydraulic.oil_stiffness, h[5])
+            for c, h in zip(hyd_inputs, self._hyd, strict=True)
+        ]
+        elements = stability.stiff_elements(self.model, self.data, oil)
+        limit = stability.max_stable_timestep(self.model, self.data, elements)
+        integrator = int(self.model.opt.integrator)
+        return limit, sorted(elements, key=lambda e: e.limit(integrator))[:3]
+
+    def _stiffest_text(self) -> str:
+        return ", ".join(f"{e.name} {e.frequency:.0f} Hz" for e in self._stiffest)
+
+    def _choose_timestep(self, documented: float, full_decimation: int) -> float:
+        """The physics timestep of the fidelity (see :data:`FAST_MARGIN`)."""
+        limit, fs = self.stability_limit, self.fs
+        if documented > limit:
+            warnings.warn(
+                f"{self.name}: the physics timestep {documented * 1e3:g} ms exceeds the "
+                f"explicit-integration stability limit {limit * 1e3:.4g} ms of the model "
+                f"(stiffest: {self._stiffest_text()}): runs will blow up or carry numerical "
+                "noise; reduce the timestep, or soften or damp that element",
+                RuntimeWarning,
+                stacklevel=4,
+            )
+        if self.fidelity == "full":
+            return documented
+        rate = self._desc.fast_physics_rate
+        if rate is None:  # the largest timestep up to twice the documented one that is safe
+            for k in range(math.ceil(full_decimation / 2), full_decimation):
+                if 1.0 / (fs * k) <= FAST_MARGIN * limit:
+                    return 1.0 / (fs * k)
+            return documented
+        k = round(rate / fs)
+        if abs(rate / fs - k) > 1e-9 * k or not 1 <= k <= full_decimation:
+            raise RigModelError(
+                f"{self._desc.path}: fast_physics_rate {rate:g} Hz must be an integer multiple of "
+                f"fs = {fs:g} Hz and at most the documented physics rate {1 / documented:g} Hz"
+            )
+        if 1.0 / rate > max(documented, FAST_MARGIN * limit):
+            raise RigModelError(
+                f"{self._desc.path}: fast_physics_rate {rate:g} Hz (timestep {1e3 / rate:.4g} ms) "
+                f"is beyond {FAST_MARGIN:g} x the stability limit {limit * 1e3:.4g} ms of the "
+                f"model (stiffest: {self._stiffest_text()}); use at least "
+                f"{1 / (FAST_MARGIN * limit):.0f} Hz"
+            )
+        return 1.0 / rate
+
     def _presettle(self) -> None:
         """Start every run from static equilibrium: play ``settle_time`` of zero drive once
         (no noise) and keep the final mechanical state and servo-loop states, so no run begins
@@ -288,6 +360,8 @@ class MujocoRig:
             f"DAQ rate fs = {self.fs:g} Hz, physics timestep {self.timestep * 1e3:g} ms "
             f"({self.decimation} steps per sample, fidelity {self.fidelity!r}), "
             f"test band {d.bandwidth[0]:g}-{d.bandwidth[1]:g} Hz",
+            f"explicit-integration stability limit {self.stability_limit * 1e3:.4g} ms "
+            f"(stiffest: {self._stiffest_text()})",
             "",
             "drives:",
         ]

@@ -98,6 +98,7 @@ class RigDescription:
     outputs: tuple[OutputDef, ...]
     parameters: dict
     notes: tuple[str, ...] = ()
+    fast_physics_rate: float | None = None  # Hz; None: derived (see MujocoRig)
 
 
 def _need(d: dict, key: str, where: str):
@@ -192,6 +193,15 @@ def read_description(path) -> RigDescription:
             apply=tuple(_need(p, "apply", w)),
         )
     aa = AntiAliasFilter(**raw.get("anti_alias", {}))
+    fast_rate = raw.get("fast_physics_rate")
+    if fast_rate is not None:
+        ok = isinstance(fast_rate, (int, float)) and not isinstance(fast_rate, bool)
+        if not ok or not np.isfinite(fast_rate) or fast_rate <= 0:
+            raise RigModelError(
+                f"{where}: fast_physics_rate must be a positive number of Hz (an integer "
+                f"multiple of fs = {fs:g} Hz), got {fast_rate!r}"
+            )
+        fast_rate = float(fast_rate)
     band = tuple(float(b) for b in raw.get("bandwidth_hz", (0.0, fs / 4)))
     return RigDescription(
         name=_need(raw, "name", where),
@@ -207,6 +217,7 @@ def read_description(path) -> RigDescription:
         outputs=tuple(outputs),
         parameters=params,
         notes=tuple(raw.get("notes", ())),
+        fast_physics_rate=fast_rate,
     )
 
 
