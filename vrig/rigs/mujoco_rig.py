@@ -584,11 +584,13 @@ class MujocoRig:
         up: a MuJoCo warning (``mujoco.rollout`` stops stepping at the first one; the rig's
         auto-reset is off, so the time says where) or a non-finite sensor value."""
         d = self.data
-        warned = [
-            (mujoco.mjtWarning(i).name, w.number) for i, w in enumerate(d.warning) if w.number
-        ]
+        counts = d.warning.number
+        finite = np.isfinite(raw.sum())  # one pass: NaN and inf propagate into the sum
+        if finite and not counts.any():
+            return
+        warned = [(mujoco.mjtWarning(i).name, int(c)) for i, c in enumerate(counts) if c]
         bad = ~np.all(np.isfinite(raw), axis=1)
-        if not warned and not bad.any():
+        if not warned and not bad.any():  # the sum overflowed, the values did not
             return
         step = round(d.time / self.timestep) - 1 if warned else sys.maxsize
         if bad.any():
