@@ -14,12 +14,13 @@ from ..errors import RigModelError
 from .daq import AntiAliasFilter, Transducer
 from .file_rig import FileRig
 from .hydraulics import HydraulicActuator
-from .mujoco_rig import MujocoRig, _models_dir
+from .mujoco_rig import FAST_MARGIN, MujocoRig, _models_dir
 from .spec import ChannelSpec, read_description
 from .subset import OutputSubset
 
 __all__ = [
     "COMMON_DIR",
+    "FAST_MARGIN",
     "AntiAliasFilter",
     "ChannelSpec",
     "FileRig",
@@ -62,7 +63,8 @@ def load_rig(name_or_path, *, seed: int = 0, fidelity: str = "full", **overrides
     seed : int
         Noise seed of the rig.
     fidelity : {"full", "fast"}
-        ``"fast"`` doubles the physics timestep for cheap exploratory runs.
+        ``"fast"``: a larger physics timestep for cheap exploratory runs (up to twice the
+        documented one, within the model's stability margin; see :class:`MujocoRig`).
     **overrides
         Documented rig parameters (``rig.describe()`` lists them).
     """

@@ -1,6 +1,7 @@
 """Transducers and data acquisition: from physics-rate sensor signals to sampled channels.
 
-Every step is vectorised over the whole record (no loop per sample):
+Every step is vectorised over the record, or over each chunk of it (:class:`Acquisition` carries
+the filter states, the noise stream and the sampling phase across chunks; no loop per sample):
 
 1. transducer dynamics: an accelerometer's high-pass (AC coupling, ``highpass_hz``), first order;
    the filters start in their steady state for the first value, as on a rig whose conditioning
@@ -9,7 +10,7 @@ Every step is vectorised over the whole record (no loop per sample):
    spring deflection);
 3. additive noise (white at the physics rate, ``noise_rms`` in channel units after the
    anti-alias filter's band) and optional mains pickup (``mains_amplitude`` at ``mains_hz`` with
-   a random phase per run) from the run's seeded generator;
+   a random phase per run, drawn before the noise) from the run's seeded DAQ generator;
 4. anti-alias filter: causal Butterworth low-pass (``order`` at ``cutoff`` x fs) at the physics
    rate, as the analogue filter in front of an ADC;
 5. sampling at the rig's fs (every ``decimation``-th physics sample, aligned with the drive);
@@ -26,7 +27,7 @@ from scipy import signal
 from ..errors import RigParameterError
 from ._checks import check_number
 
-__all__ = ["AntiAliasFilter", "Transducer", "acquire"]
+__all__ = ["Acquisition", "AntiAliasFilter", "Transducer", "acquire"]
 
 
 @dataclass(frozen=True)
@@ -110,6 +111,87 @@ def transducer_response(t: Transducer, f, physics_rate: float) -> np.ndarray:
     return h
 
 
+class Acquisition:
+    """The conditioning and sampling chain of one run, fed physics-rate sensor values chunk by
+    chunk (:meth:`process`).
+
+    Everything that carries from one physics step to the next carries across chunks: the
+    high-pass and anti-alias filter states (``scipy.signal.sosfilt`` ``zi``), the noise stream
+    (drawn row by row from ``rng``), the mains phase (drawn once, first) and time, and the
+    sampling phase. Any split of a record therefore gives the same samples, bit for bit, as one
+    call with the whole record.
+
+    Parameters
+    ----------
+    transducers : list of Transducer
+        One per channel.
+    full_scale : array (n_channels,)
+        ± range of each channel (the quantisation range).
+    fs : float
+        DAQ sample rate [Hz].
+    decimation : int
+        Physics steps per sample.
+    aa : AntiAliasFilter
+    rng : numpy.random.Generator
+        The run's DAQ noise generator.
+    """
+
+    def __init__(self, transducers, full_scale, *, fs, decimation, aa, rng):
+        self.transducers = list(transducers)
+        self.full_scale = np.asarray(full_scale, dtype=float)
+        self.decimation = int(decimation)
+        self.physics_rate = fs * decimation
+        self._rng = rng
+        self._hp = [
+            _highpass_sos(t.highpass_hz, self.physics_rate)
+            if _highpass_active(t, self.physics_rate)
+            else None
+            for t in self.transducers
+        ]
+        self._hp_zi = [None] * len(self.transducers)
+        self._aa = aa.sos(fs, self.physics_rate)
+        self._aa_zi = None
+        rms = np.array([t.noise_rms for t in self.transducers])
+        self._noise_gain = rms * np.sqrt(self.physics_rate / (2.0 * aa.cutoff * fs))
+        self._phase = [
+            rng.uniform(0, 2 * np.pi) if t.mains_amplitude > 0 else 0.0 for t in self.transducers
+        ]
+        self.steps = 0  # physics steps processed so far
+
+    def process(self, raw: np.ndarray) -> np.ndarray:
+        """Condition the next ``raw`` (n_steps, n_channels) physics-rate values; returns the
+        samples that fall in them (every ``decimation``-th step of the whole record)."""
+        n_steps, n = raw.shape
+        x = np.empty_like(raw, dtype=float)
+        for j, t in enumerate(self.transducers):
+            col = raw[:, j] * t.gain
+            if self._hp[j] is not None:
+                if self._hp_zi[j] is None:  # steady state for the first value (powered before)
+                    self._hp_zi[j] = signal.sosfilt_zi(self._hp[j]) * col[0]
+                col, self._hp_zi[j] = signal.sosfilt(self._hp[j], col, zi=self._hp_zi[j])
+            x[:, j] = col
+        # noise: white at the physics rate, scaled so its RMS after the anti-alias filter is
+        # noise_rms
+        x += self._rng.standard_normal((n_steps, n)) * self._noise_gain
+        time = np.arange(self.steps, self.steps + n_steps) / self.physics_rate
+        for j, t in enumerate(self.transducers):
+            if t.mains_amplitude > 0:
+                x[:, j] += t.mains_amplitude * np.sin(
+                    2 * np.pi * t.mains_hz * time + self._phase[j]
+                )
+        if self._aa_zi is None:
+            self._aa_zi = signal.sosfilt_zi(self._aa)[:, :, None] * x[0][None, None, :]
+        x, self._aa_zi = signal.sosfilt(self._aa, x, axis=0, zi=self._aa_zi)
+        first = -self.steps % self.decimation
+        self.steps += n_steps
+        sampled = x[first :: self.decimation].copy()
+        for j, t in enumerate(self.transducers):
+            if t.bits:
+                lsb = 2.0 * self.full_scale[j] / 2**t.bits
+                sampled[:, j] = np.round(sampled[:, j] / lsb) * lsb
+        return sampled
+
+
 def acquire(
     raw: np.ndarray,
     transducers: list[Transducer],
@@ -120,37 +202,12 @@ def acquire(
     aa: AntiAliasFilter,
     rng: np.random.Generator,
 ) -> tuple[np.ndarray, np.ndarray]:
-    """Condition and sample physics-rate sensor signals ``raw`` (n_steps, n_channels).
+    """Condition and sample a whole record of physics-rate sensor signals ``raw`` (n_steps,
+    n_channels) at once (``Acquisition(...).process(raw)``).
 
-    Returns ``(sampled, peak)``: the sampled channels (n_steps // decimation, n_channels) and
-    each channel's peak magnitude before quantisation (for the transducer-range interlock).
+    Returns ``(sampled, peak)``: the sampled channels (ceil(n_steps / decimation), n_channels)
+    and each channel's peak magnitude among them (for the transducer-range interlock).
     """
-    physics_rate = fs * decimation
-    n_steps, n = raw.shape
-    x = np.empty_like(raw)
-    for j, t in enumerate(transducers):
-        col = raw[:, j] * t.gain
-        if _highpass_active(t, physics_rate):  # started in its steady state (powered before)
-            sos = _highpass_sos(t.highpass_hz, physics_rate)
-            col, _ = signal.sosfilt(sos, col, zi=signal.sosfilt_zi(sos) * col[0])
-        x[:, j] = col
-    # noise: white at the physics rate, scaled so its RMS after the anti-alias filter is noise_rms
-    rms = np.array([t.noise_rms for t in transducers])
-    noise_gain = rms * np.sqrt(physics_rate / (2.0 * aa.cutoff * fs))
-    x += rng.standard_normal((n_steps, n)) * noise_gain
-    time = np.arange(n_steps) / physics_rate
-    for j, t in enumerate(transducers):
-        if t.mains_amplitude > 0:
-            x[:, j] += t.mains_amplitude * np.sin(
-                2 * np.pi * t.mains_hz * time + rng.uniform(0, 2 * np.pi)
-            )
-    sos = aa.sos(fs, physics_rate)
-    zi = signal.sosfilt_zi(sos)[:, :, None] * x[0][None, None, :]
-    x, _ = signal.sosfilt(sos, x, axis=0, zi=zi)
-    sampled = x[::decimation].copy()
-    peak = np.abs(sampled).max(axis=0)
-    for j, t in enumerate(transducers):
-        if t.bits:
-            lsb = 2.0 * full_scale[j] / 2**t.bits
-            sampled[:, j] = np.round(sampled[:, j] / lsb) * lsb
-    return sampled, peak
+    chain = Acquisition(transducers, full_scale, fs=fs, decimation=decimation, aa=aa, rng=rng)
+    sampled = chain.process(raw)
+    return sampled, np.abs(sampled).max(axis=0)

@@ -3,13 +3,20 @@
 ``run(drive)``: the drive (at the DAQ rate fs) is checked against the rig's limits, linearly
 interpolated to the physics rate, and played through ``mujoco.rollout`` with the servo-hydraulic
 control callback; the physics-rate sensor signals then pass through the transducer/DAQ chain
-(:mod:`vrig.rigs.daq`). Interlock trips raise :class:`~vrig.errors.RigLimitError`; MuJoCo
-warnings or non-finite states raise :class:`~vrig.errors.SimulationInstabilityError`.
+(:mod:`vrig.rigs.daq`). Long drives are played in chunks (``chunk_seconds``) that carry the whole
+state across — MuJoCo's full physics state and solver warm start, the callback's states and
+interlock record in ``mjData.userdata``, the DAQ filter states, the noise streams — so a run is
+bit for bit the same in any chunking and only the sensors the DAQ samples are kept: memory does
+not grow with the record length. Interlock trips raise :class:`~vrig.errors.RigLimitError`;
+MuJoCo warnings or non-finite states raise :class:`~vrig.errors.SimulationInstabilityError`.
 """
 
 from __future__ import annotations
 
 import dataclasses
+import math
+import sys
+import warnings
 from pathlib import Path
 
 import mujoco
@@ -18,8 +25,8 @@ from mujoco import rollout
 
 from ..errors import RigLimitError, RigModelError, RigParameterError, SimulationInstabilityError
 from ..timehistory import TimeHistory
-from . import hydraulics
-from .daq import acquire
+from . import hydraulics, stability
+from .daq import Acquisition
 from .spec import (
     ChannelSpec,
     InputDef,
@@ -30,11 +37,17 @@ from .spec import (
     read_description,
 )
 
-__all__ = ["MujocoRig"]
+__all__ = ["FAST_MARGIN", "MujocoRig"]
 
 _STATE = mujoco.mjtState.mjSTATE_FULLPHYSICS
 _MAX_DECIMATION = 10_000  # physics steps per DAQ sample
 _ELEMENTS = ("joint", "body", "geom", "site", "actuator", "tendon", "equality", "sensor")
+
+FAST_MARGIN = 0.8
+"""``fidelity="fast"`` runs at most at this fraction of the model's explicit-integration
+stability limit (:mod:`vrig.rigs.stability`): the stiffest mode then decays by a clear factor per
+step instead of hovering at the edge, and a parameter override that stiffens the model by up to
+~50 % (the limit scales with 1/ω) still leaves it stable."""
 
 
 class MujocoRig:
@@ -49,11 +62,33 @@ class MujocoRig:
         without their own seed draw successive streams from it, like repeated runs of a real
         rig; ``run(drive, seed=s)`` is reproducible bit for bit.
     fidelity : {"full", "fast"}
-        ``"fast"`` doubles the physics timestep (for short exploratory runs and learning);
-        ``"full"`` (default) uses the documented timestep.
+        ``"full"`` (default) uses the documented timestep. ``"fast"`` (for short exploratory
+        runs and learning) uses the side-car's ``fast_physics_rate``, else the largest timestep
+        up to twice the documented one that the DAQ rate divides and that stays within
+        :data:`FAST_MARGIN` of the model's explicit-integration stability limit
+        (:attr:`stability_limit`).
     **overrides
         Documented parameters (see :meth:`describe`).
+
+    Attributes
+    ----------
+    timestep : float
+        Physics timestep of this fidelity [s]; ``decimation`` physics steps per DAQ sample.
+    stability_limit : float
+        Largest timestep [s] at which the linearised model (its springs, dampers and oil
+        columns, :mod:`vrig.rigs.stability`) does not grow; a documented timestep beyond it
+        gives a ``RuntimeWarning`` at load.
+
+    Raises
+    ------
+    RigModelError
+        The model does not compile, its physics rate is not a multiple of fs, or the side-car's
+        ``fast_physics_rate`` is not a multiple of fs or lies beyond the stability margin.
     """
+
+    chunk_seconds = 1.0
+    """Default simulated seconds per chunk of :meth:`run` (memory: about 1 kB per physics step
+    of a chunk on the 7-channel rig)."""
 
     def __init__(self, description, *, seed: int = 0, fidelity: str = "full", **overrides):
         desc = (
@@ -86,8 +121,6 @@ class MujocoRig:
         self._inputs, self._outputs = list(desc.inputs), list(desc.outputs)
         for name, value in self.parameters.items():
             self._apply(spec, desc.parameters[name], value)
-        if fidelity == "fast":
-            spec.option.timestep *= 2
         n_hyd = sum(1 for c in self._inputs if c.hydraulic is not None)
         spec.nuserdata = max(spec.nuserdata, 8 + 8 * n_hyd)
         try:
@@ -95,21 +128,20 @@ class MujocoRig:
         except ValueError as exc:
             raise RigModelError(f"{desc.mjcf}: MuJoCo could not compile the model: {exc}") from exc
         self.data = mujoco.MjData(self.model)
-        self.timestep = float(self.model.opt.timestep)
-        ratio = 1.0 / (desc.fs * self.timestep)
-        self.decimation = round(ratio)
-        if abs(ratio - self.decimation) > 1e-6 or not 1 <= self.decimation <= _MAX_DECIMATION:
-            hint = (
-                " (fidelity='fast' halves the physics rate: it needs fs to divide half the "
-                "documented physics rate)"
-                if fidelity == "fast"
-                else ""
-            )
+        documented = float(self.model.opt.timestep)
+        ratio = 1.0 / (desc.fs * documented)
+        if abs(ratio - round(ratio)) > 1e-6 or not 1 <= round(ratio) <= _MAX_DECIMATION:
             raise RigModelError(
-                f"{desc.name}: the physics rate {1 / self.timestep:g} Hz must be an integer multiple "
-                f"(1..{_MAX_DECIMATION}) of fs = {desc.fs:g} Hz{hint}"
+                f"{desc.name}: the physics rate {1 / documented:g} Hz must be an integer multiple "
+                f"(1..{_MAX_DECIMATION}) of fs = {desc.fs:g} Hz"
             )
         self._bind()
+        self.stability_limit, self._stiffest = self._stability()
+        self.timestep = self._choose_timestep(documented, round(ratio))
+        self.model.opt.timestep = self.timestep
+        # a blow-up must not reset the data: the interlock record and the time stay (see run)
+        self.model.opt.disableflags |= int(mujoco.mjtDisableBit.mjDSBL_AUTORESET)
+        self.decimation = round(1.0 / (desc.fs * self.timestep))
         self._presettle()
         self._rng = np.random.default_rng(seed)
         self.seed = seed
@@ -233,6 +265,57 @@ class MujocoRig:
         self._state0 = np.empty(mujoco.mj_stateSize(m, _STATE))
         mujoco.mj_getState(m, self.data, self._state0, _STATE)
 
+    def _stability(self) -> tuple[float, list]:
+        """The linearised model's explicit-integration stability limit [s] at the home pose and
+        its three stiffest elements (:mod:`vrig.rigs.stability`)."""
+        hyd_inputs = [c for c in self._inputs if c.hydraulic is not None]
+        oil = [
+            (c.spec.name, c.hydraulic.oil_stiffness, h[5])
+            for c, h in zip(hyd_inputs, self._hyd, strict=True)
+        ]
+        elements = stability.stiff_elements(self.model, self.data, oil)
+        limit = stability.max_stable_timestep(self.model, self.data, elements)
+        integrator = int(self.model.opt.integrator)
+        return limit, sorted(elements, key=lambda e: e.limit(integrator))[:3]
+
+    def _stiffest_text(self) -> str:
+        return ", ".join(f"{e.name} {e.frequency:.0f} Hz" for e in self._stiffest)
+
+    def _choose_timestep(self, documented: float, full_decimation: int) -> float:
+        """The physics timestep of the fidelity (see :data:`FAST_MARGIN`)."""
+        limit, fs = self.stability_limit, self.fs
+        if documented > limit:
+            warnings.warn(
+                f"{self.name}: the physics timestep {documented * 1e3:g} ms exceeds the "
+                f"explicit-integration stability limit {limit * 1e3:.4g} ms of the model "
+                f"(stiffest: {self._stiffest_text()}): runs will blow up or carry numerical "
+                "noise; reduce the timestep, or soften or damp that element",
+                RuntimeWarning,
+                stacklevel=4,
+            )
+        if self.fidelity == "full":
+            return documented
+        rate = self._desc.fast_physics_rate
+        if rate is None:  # the largest timestep up to twice the documented one that is safe
+            for k in range(math.ceil(full_decimation / 2), full_decimation):
+                if 1.0 / (fs * k) <= FAST_MARGIN * limit:
+                    return 1.0 / (fs * k)
+            return documented
+        k = round(rate / fs)
+        if abs(rate / fs - k) > 1e-9 * k or not 1 <= k <= full_decimation:
+            raise RigModelError(
+                f"{self._desc.path}: fast_physics_rate {rate:g} Hz must be an integer multiple of "
+                f"fs = {fs:g} Hz and at most the documented physics rate {1 / documented:g} Hz"
+            )
+        if 1.0 / rate > max(documented, FAST_MARGIN * limit):
+            raise RigModelError(
+                f"{self._desc.path}: fast_physics_rate {rate:g} Hz (timestep {1e3 / rate:.4g} ms) "
+                f"is beyond {FAST_MARGIN:g} x the stability limit {limit * 1e3:.4g} ms of the "
+                f"model (stiffest: {self._stiffest_text()}); use at least "
+                f"{1 / (FAST_MARGIN * limit):.0f} Hz"
+            )
+        return 1.0 / rate
+
     def _presettle(self) -> None:
         """Start every run from static equilibrium: play ``settle_time`` of zero drive once
         (no noise) and keep the final mechanical state and servo-loop states, so no run begins
@@ -301,6 +384,8 @@ class MujocoRig:
             f"DAQ rate fs = {self.fs:g} Hz, physics timestep {self.timestep * 1e3:g} ms "
             f"({self.decimation} steps per sample, fidelity {self.fidelity!r}), "
             f"test band {d.bandwidth[0]:g}-{d.bandwidth[1]:g} Hz",
+            f"explicit-integration stability limit {self.stability_limit * 1e3:.4g} ms "
+            f"(stiffest: {self._stiffest_text()})",
             "",
             "drives:",
         ]
@@ -367,8 +452,19 @@ class MujocoRig:
         check_drive_limits(self.inputs, x, fs=self.fs)
         return x
 
-    def run(self, drive, *, seed: int | None = None) -> TimeHistory:
+    def run(
+        self, drive, *, seed: int | None = None, chunk_seconds: float | None = None
+    ) -> TimeHistory:
         """Play a drive on the rig and return the sampled responses.
+
+        The drive is simulated in chunks of ``chunk_seconds``: each chunk starts from the full
+        physics state (including the constraint solver's warm start), the servo callback's
+        states and the DAQ filter states and noise streams where the previous one ended, so the
+        result is bit for bit the same for any chunk length and memory does not grow with the
+        record length (only the drive and the sampled response do). Errors are those of one
+        piece: an instability stops the run and takes precedence over an earlier interlock trip
+        (which is usually its symptom); otherwise the first trip is raised, then the first
+        response channel beyond its transducer range, at its first sample beyond it.
 
         Parameters
         ----------
@@ -376,110 +472,180 @@ class MujocoRig:
             Drive signals at the rig's fs, in the drive channels' units.
         seed : int, optional
             Noise seed for this run; default: the next stream of the rig's generator.
+        chunk_seconds : float, optional
+            Simulated seconds per chunk (rounded to whole DAQ samples, at least one); default
+            :attr:`chunk_seconds`; ``math.inf``: the whole record in one piece.
 
         Raises
         ------
         ValueError
-            wrong shape, sample rate or channel names; NaN.
+            wrong shape, sample rate or channel names; NaN; a chunk length that is not a
+            positive number.
         RigLimitError
             a drive beyond full scale (not sent), or an interlock trip during the run.
         SimulationInstabilityError
             a MuJoCo warning or a non-finite state.
         """
         x = self._check_drive(drive)
+        chunk = self._chunk_samples(chunk_seconds)
         rng = (
             np.random.default_rng(seed)
             if seed is not None
             else np.random.default_rng(self._rng.integers(2**63))
         )
-        m, d = self.model, self.data
-        dec = self.decimation
-        n = x.shape[0]
-        settle = round(self._desc.settle_time * self.fs) * dec  # whole DAQ samples
-        n_steps = settle + n * dec
-        t_drive = np.arange(n) * dec
-        steps = np.arange(n * dec)
-        ctrl = np.zeros((1, n_steps, m.nu))
-        for j, (c, (i_cmd, i_noise)) in enumerate(zip(self._inputs, self._slots, strict=True)):
-            ctrl[0, settle:, i_cmd] = np.interp(steps, t_drive, x[:, j])  # linear interpolation
-            if c.noise_rms > 0:  # valve-command noise (hydraulic) or amplifier noise (direct)
-                ctrl[0, :, i_noise] += c.noise_rms * rng.standard_normal(n_steps)
-        for w in d.warning:
-            w.number = 0
-        installed = hydraulics.install(m, d, self._hyd, self.timestep, states=self._hyd_states)
-        try:
-            _, sensordata = rollout.rollout(m, d, self._state0[None, :], ctrl)
-        finally:
-            hydraulics.uninstall()
-        del installed
-        trip = hydraulics.trip_record(d)
-        if trip is not None:
-            kind, c, step, value, limit = trip
-            spec = [cc for cc in self._inputs if cc.hydraulic is not None][c].spec
-            t = (step - settle) * self.timestep
-            hint = {
-                "following error": "The demanded velocity or acceleration exceeds what the "
-                "servo valve can deliver: reduce the drive's amplitude or bandwidth.",
-                "stroke": "",
-                "force": "Reduce the drive amplitude.",
-            }[kind]
-            unit = "N" if kind == "force" else spec.unit
-            raise RigLimitError(kind, spec.name, t, value, limit, unit, hint=hint)
-        warnings = [
-            (mujoco.mjtWarning(i).name, w.number) for i, w in enumerate(d.warning) if w.number
-        ]
-        if warnings:
-            raise SimulationInstabilityError(
-                f"{self.name}: MuJoCo reported {warnings} during the run; the model became unstable "
-                "for this drive (reduce its amplitude, or check the model's timestep)"
-            )
-        # the transducer and anti-alias filters run through the settling period too (as on a
-        # real rig, where they are powered before the test): no start-up transient from DC
-        raw = sensordata[0][:, self._sensor_cols]
-        if not np.all(np.isfinite(raw)):
-            raise SimulationInstabilityError(
-                f"{self.name}: non-finite sensor values during the run"
-            )
-        full = np.array([o.spec.full_scale for o in self._outputs])
-        sampled, _ = self._acquire(raw, full, rng)
-        sampled = sampled[settle // dec :]
-        if not np.all(np.isfinite(sampled)):  # e.g. a huge transducer gain overflowed
-            raise SimulationInstabilityError(
-                f"{self.name}: non-finite response after the transducer chain (check the "
-                "transducer gains and noise levels)"
-            )
-        peak = np.abs(sampled).max(axis=0)
-        over = peak > full
-        if over.any():
-            j = int(np.argmax(over))
-            i = int(np.argmax(np.abs(sampled[:, j]) > full[j]))
-            o = self._outputs[j].spec
-            raise RigLimitError(
-                "transducer range",
-                o.name,
-                i / self.fs,
-                sampled[i, j],
-                full[j],
-                o.unit,
-                hint="The response is beyond the transducer's range: reduce the drive.",
-            )
+        valve_rng, daq_rng = rng.spawn(2)  # independent streams: chunking cannot interleave them
+        data = self._play(x, chunk, valve_rng, daq_rng)
         return TimeHistory(
-            sampled,
+            data,
             self.fs,
             [o.spec.name for o in self._outputs],
             [o.spec.unit for o in self._outputs],
         )
 
-    def _acquire(self, raw, full, rng):
-        return acquire(
-            raw,
-            [o.transducer for o in self._outputs],
-            full,
-            fs=self.fs,
-            decimation=self.decimation,
-            aa=self._desc.anti_alias,
-            rng=rng,
+    def _chunk_samples(self, chunk_seconds) -> int:
+        value = self.chunk_seconds if chunk_seconds is None else chunk_seconds
+        ok = isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(
+            value, bool
         )
+        if not ok or not value > 0:
+            raise ValueError(
+                f"chunk_seconds must be a positive number of seconds (math.inf: one chunk), "
+                f"got {chunk_seconds!r}"
+            )
+        return sys.maxsize if math.isinf(value) else max(1, round(value * self.fs))
+
+    def _play(self, x, chunk: int, valve_rng, daq_rng) -> np.ndarray:
+        """Simulate the settling period and the drive ``x`` in chunks of ``chunk`` DAQ samples;
+        returns the sampled responses of the drive period (errors: see :meth:`run`)."""
+        m, d, dec = self.model, self.data, self.decimation
+        n = x.shape[0]
+        settle = round(self._desc.settle_time * self.fs)  # whole DAQ samples, zero drive
+        total = settle + n
+        full = np.array([o.spec.full_scale for o in self._outputs])
+        # the transducer and anti-alias filters run through the settling period too (as on a
+        # real rig, where they are powered before the test): no start-up transient from DC
+        chain = Acquisition(
+            [o.transducer for o in self._outputs], full, fs=self.fs, decimation=dec,
+            aa=self._desc.anti_alias, rng=daq_rng,
+        )  # fmt: skip
+        out = np.empty((n, len(self._outputs)))
+        t_drive = np.arange(n) * dec
+        steps = min(chunk, total) * dec
+        state_buf = np.empty((1, steps, self._state0.size))
+        sens_buf = np.empty((1, steps, m.nsensordata))
+        state, warm = self._state0, None
+        over = {}  # channel -> (first sample beyond the transducer range, value)
+        hydraulics.install(m, d, self._hyd, self.timestep, states=self._hyd_states)
+        try:
+            for k0 in range(0, total, chunk):
+                k1 = min(k0 + chunk, total)
+                ctrl = self._controls(x, t_drive, k0 * dec, k1 * dec, settle * dec, valve_rng)
+                k = (k1 - k0) * dec
+                _, sens = rollout.rollout(
+                    m,
+                    d,
+                    state[None, :],
+                    ctrl,
+                    initial_warmstart=warm,
+                    state=state_buf[:, :k],
+                    sensordata=sens_buf[:, :k],
+                )
+                raw = sens[0][:, self._sensor_cols]
+                self._check_stability(k0 * dec, raw)
+                sampled = chain.process(raw)
+                if not np.all(np.isfinite(sampled)):  # e.g. a huge transducer gain overflowed
+                    raise SimulationInstabilityError(
+                        f"{self.name}: non-finite response after the transducer chain (check "
+                        "the transducer gains and noise levels)"
+                    )
+                if k1 > settle:  # the drive period (the settling samples are dropped)
+                    lo = max(k0, settle)
+                    out[lo - settle : k1 - settle] = sampled[lo - k0 :]
+                    self._note_range(over, lo - settle, sampled[lo - k0 :], full)
+                state = np.empty(self._state0.size)
+                mujoco.mj_getState(m, d, state, _STATE)
+                warm = d.qacc_warmstart[None, :].copy()
+            trip = hydraulics.trip_record(d)
+        finally:
+            hydraulics.uninstall()
+        if trip is not None:
+            raise self._trip_error(trip, settle * dec)
+        if over:  # the transducer-range interlock: the first channel, at its first sample
+            j = min(over)
+            o = self._outputs[j].spec
+            raise RigLimitError(
+                "transducer range",
+                o.name,
+                over[j][0] / self.fs,
+                over[j][1],
+                full[j],
+                o.unit,
+                hint="The response is beyond the transducer's range: reduce the drive.",
+            )
+        return out
+
+    def _controls(self, x, t_drive, g0: int, g1: int, settle_steps: int, rng) -> np.ndarray:
+        """Controls of physics steps ``g0:g1`` of the run: the drive linearly interpolated to the
+        physics rate after ``settle_steps`` of zero, plus valve or amplifier noise."""
+        ctrl = np.zeros((1, g1 - g0, self.model.nu))
+        s = np.arange(g0, g1) - settle_steps
+        noisy = [j for j, c in enumerate(self._inputs) if c.noise_rms > 0]
+        noise = rng.standard_normal((g1 - g0, len(noisy))) if noisy else None
+        for j, (c, (i_cmd, i_noise)) in enumerate(zip(self._inputs, self._slots, strict=True)):
+            ctrl[0, :, i_cmd] = np.where(s >= 0, np.interp(s, t_drive, x[:, j]), 0.0)
+            if c.noise_rms > 0:  # valve-command noise (hydraulic) or amplifier noise (direct)
+                ctrl[0, :, i_noise] += c.noise_rms * noise[:, noisy.index(j)]
+        return ctrl
+
+    def _check_stability(self, g0: int, raw) -> None:
+        """Raise SimulationInstabilityError if the chunk that starts at physics step ``g0`` blew
+        up: a MuJoCo warning (``mujoco.rollout`` stops stepping at the first one; the rig's
+        auto-reset is off, so the time says where) or a non-finite sensor value."""
+        d = self.data
+        counts = d.warning.number
+        finite = np.isfinite(raw.sum())  # one pass: NaN and inf propagate into the sum
+        if finite and not counts.any():
+            return
+        warned = [(mujoco.mjtWarning(i).name, int(c)) for i, c in enumerate(counts) if c]
+        bad = ~np.all(np.isfinite(raw), axis=1)
+        if not warned and not bad.any():  # the sum overflowed, the values did not
+            return
+        step = round(d.time / self.timestep) - 1 if warned else sys.maxsize
+        if bad.any():
+            step = min(step, g0 + int(np.argmax(bad)))
+        t = step * self.timestep - self._desc.settle_time
+        what = (
+            f"MuJoCo reported {warned} during the run"
+            if warned
+            else "non-finite sensor values during the run"
+        )
+        raise SimulationInstabilityError(
+            f"{self.name}: {what} (t = {t:.4f} s); the model became unstable for this drive "
+            "(reduce its amplitude, or check the model's timestep)"
+        )
+
+    @staticmethod
+    def _note_range(over: dict, i0: int, sampled, full) -> None:
+        """Record in ``over`` each channel's first sample beyond its transducer range among
+        ``sampled`` (samples ``i0`` on of the drive period), unless it has one already."""
+        beyond = np.abs(sampled) > full
+        for j in np.flatnonzero(beyond.any(axis=0)):
+            if j not in over:
+                i = int(np.argmax(beyond[:, j]))
+                over[int(j)] = (i0 + i, float(sampled[i, j]))
+
+    def _trip_error(self, trip, settle_steps: int) -> RigLimitError:
+        kind, c, step, value, limit = trip
+        spec = [cc for cc in self._inputs if cc.hydraulic is not None][c].spec
+        t = (step - settle_steps) * self.timestep
+        hint = {
+            "following error": "The demanded velocity or acceleration exceeds what the "
+            "servo valve can deliver: reduce the drive's amplitude or bandwidth.",
+            "stroke": "",
+            "force": "Reduce the drive amplitude.",
+        }[kind]
+        unit = "N" if kind == "force" else spec.unit
+        return RigLimitError(kind, spec.name, t, value, limit, unit, hint=hint)
 
 
 def _models_dir() -> Path:

@@ -174,6 +174,7 @@ class RigDescription:
     outputs: tuple[OutputDef, ...]
     parameters: dict
     notes: tuple[str, ...] = ()
+    fast_physics_rate: float | None = None  # Hz; None: derived (see MujocoRig)
 
 
 def schema_path() -> Path:
@@ -382,6 +383,8 @@ def read_description(path) -> RigDescription:
     }
     with _located(where):
         aa = AntiAliasFilter(**raw.get("anti_alias", {}))
+    fast_rate = raw.get("fast_physics_rate")  # range: schema; on the fs grid: MujocoRig
+    fast_rate = None if fast_rate is None else float(fast_rate)
     return RigDescription(
         name=raw["name"],
         title=raw.get("title", ""),
@@ -396,6 +399,7 @@ def read_description(path) -> RigDescription:
         outputs=tuple(outputs),
         parameters=params,
         notes=tuple(raw.get("notes", ())),
+        fast_physics_rate=fast_rate,
     )
 
 

@@ -44,8 +44,9 @@ class OutputSubset:
     def name(self) -> str:
         return f"{self.rig.name}[{','.join(self.names)}]"
 
-    def run(self, drive, *, seed: int | None = None) -> TimeHistory:
-        return self.rig.run(drive, seed=seed)[self.names]
+    def run(self, drive, *, seed: int | None = None, **options) -> TimeHistory:
+        """The wrapped rig's run (``options``: e.g. ``chunk_seconds``), selected channels."""
+        return self.rig.run(drive, seed=seed, **options)[self.names]
 
     def __repr__(self) -> str:
         return f"OutputSubset({self.rig!r}, {self.names})"
