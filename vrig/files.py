@@ -39,21 +39,18 @@ since it never imports vrig.)
 from __future__ import annotations
 
 import contextlib
-import errno
-import math
 import os
 import re
 import secrets
 import shutil
 import stat
-import tokenize
-import zipfile
-import zlib
 from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import IO
 
 import numpy as np
+
+from identification._files import read_npz as _guarded_npz
 
 from .errors import FileFormatError
 
@@ -412,47 +409,6 @@ def read_bytes(path, fmt: str, *, limit: int | None = None) -> bytes:
     return parts[0] if len(parts) == 1 else b"".join(parts)
 
 
-_NPZ_BROKEN = (  # what zipfile and numpy raise on corrupt input (found by fuzzing)
-    zipfile.BadZipFile,
-    zlib.error,
-    EOFError,
-    ValueError,
-    NotImplementedError,
-    KeyError,
-    OverflowError,
-    UnicodeDecodeError,
-    SyntaxError,
-    tokenize.TokenError,  # a .npy header numpy parses with tokenize
-    OSError,  # a seek to an offset from a corrupt directory (EINVAL); other errnos re-raised
-)
-
-
-class _Invalid(Exception):
-    """A problem found inside an ``.npz`` (becomes a FileFormatError in :func:`read_npz`)."""
-
-
-def _npz_member(zf: zipfile.ZipFile, info: zipfile.ZipInfo) -> np.ndarray:
-    """One ``.npy`` member, its header checked against its stored size before reading."""
-    with zf.open(info) as m:
-        version = np.lib.format.read_magic(m)
-        if version == (1, 0):
-            shape, _, dtype = np.lib.format.read_array_header_1_0(m)
-        elif version == (2, 0):
-            shape, _, dtype = np.lib.format.read_array_header_2_0(m)
-        else:
-            raise _Invalid(f"array {info.filename!r} has unsupported .npy version {version}")
-        if dtype.hasobject:
-            raise _Invalid(f"array {info.filename!r} holds Python objects (refused)")
-        nbytes = math.prod(shape) * dtype.itemsize
-        if nbytes > info.file_size:
-            raise _Invalid(
-                f"array {info.filename!r} declares shape {shape} ({nbytes} bytes) but stores "
-                f"only {info.file_size} bytes (truncated or tampered)"
-            )
-    with zf.open(info) as m:
-        return np.lib.format.read_array(m, allow_pickle=False)
-
-
 def read_npz(path, fmt: str, *, limit: int | None = None) -> dict[str, np.ndarray]:
     """All arrays of an ``.npz`` file, ``{name: array}``, read defensively.
 
@@ -474,26 +430,7 @@ def read_npz(path, fmt: str, *, limit: int | None = None) -> dict[str, np.ndarra
         array, a truncated or corrupt member, object arrays.
     """
     limit = MAX_FILE_BYTES if limit is None else int(limit)
-    with open_regular(path, fmt, limit=limit) as f:
-        try:
-            with zipfile.ZipFile(f) as zf:
-                infos = zf.infolist()
-                total = sum(i.file_size for i in infos)
-                if total > limit:
-                    raise _Invalid(
-                        f"its arrays hold {total} bytes, more than the {limit}-byte limit"
-                    )
-                out = {}
-                for info in infos:
-                    if not info.filename.endswith(".npy"):
-                        raise _Invalid(f"member {info.filename!r} is not a .npy array")
-                    out[info.filename[:-4]] = _npz_member(zf, info)
-                return out
-        except _Invalid as exc:
-            raise FileFormatError(path, fmt, str(exc)) from None
-        except _NPZ_BROKEN as exc:
-            if isinstance(exc, OSError) and exc.errno != errno.EINVAL:
-                raise  # a real I/O error, not a corrupt file
-            raise FileFormatError(
-                path, fmt, f"corrupt or not an .npz archive ({type(exc).__name__}: {exc})"
-            ) from None
+    open_regular(path, fmt, limit=limit).close()  # the regular-file and size checks, in vrig's words
+    # the identification package's guarded reader (vrig depends on identification, never the
+    # reverse): every array header is checked against the bytes stored before allocating
+    return _guarded_npz(path, limit=limit, error=lambda detail: FileFormatError(path, fmt, detail))
