@@ -52,7 +52,14 @@ def rig_path(name: str) -> Path:
     return path
 
 
-def load_rig(name_or_path, *, seed: int = 0, fidelity: str = "full", **overrides) -> MujocoRig:
+def load_rig(
+    name_or_path,
+    *,
+    seed: int = 0,
+    fidelity: str = "full",
+    variant: str | None = None,
+    **overrides,
+) -> MujocoRig:
     """Load a shipped rig by name, or a user's rig from an MJCF or side-car path.
 
     Parameters
@@ -65,8 +72,12 @@ def load_rig(name_or_path, *, seed: int = 0, fidelity: str = "full", **overrides
     fidelity : {"full", "fast"}
         ``"fast"``: a larger physics timestep for cheap exploratory runs (up to twice the
         documented one, within the model's stability margin; see :class:`MujocoRig`).
+    variant : str, optional
+        A named parameter set from the side-car's ``"variants"`` (``rig.describe()`` lists
+        them), e.g. ``"thesis"``; ``None`` (default) = ``"mild"`` = the documented defaults.
+        An unknown name is a :class:`~vrig.errors.RigParameterError` naming the variants.
     **overrides
-        Documented rig parameters (``rig.describe()`` lists them).
+        Documented rig parameters (``rig.describe()`` lists them); they win over the variant.
     """
     text = str(name_or_path)
     if text.endswith(".json"):
@@ -83,4 +94,6 @@ def load_rig(name_or_path, *, seed: int = 0, fidelity: str = "full", **overrides
         path = rig_path(text)
     if not path.exists():
         raise FileNotFoundError(f"no rig description at {path}")
-    return MujocoRig(read_description(path), seed=seed, fidelity=fidelity, **overrides)
+    return MujocoRig(
+        read_description(path), seed=seed, fidelity=fidelity, variant=variant, **overrides
+    )

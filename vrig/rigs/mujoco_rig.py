@@ -28,6 +28,7 @@ from ..timehistory import TimeHistory
 from . import hydraulics, stability
 from .daq import Acquisition
 from .spec import (
+    MILD,
     ChannelSpec,
     InputDef,
     OutputDef,
@@ -67,6 +68,10 @@ class MujocoRig:
         up to twice the documented one that the DAQ rate divides and that stays within
         :data:`FAST_MARGIN` of the model's explicit-integration stability limit
         (:attr:`stability_limit`).
+    variant : str, optional
+        A named parameter set of the side-car's ``"variants"`` (e.g. a calibration); ``None``
+        (default) or ``"mild"``: the documented default values. Each value is checked against
+        its parameter's range; explicit ``overrides`` win over the variant's values.
     **overrides
         Documented parameters (see :meth:`describe`).
 
@@ -90,7 +95,15 @@ class MujocoRig:
     """Default simulated seconds per chunk of :meth:`run` (memory: about 1 kB per physics step
     of a chunk on the 7-channel rig)."""
 
-    def __init__(self, description, *, seed: int = 0, fidelity: str = "full", **overrides):
+    def __init__(
+        self,
+        description,
+        *,
+        seed: int = 0,
+        fidelity: str = "full",
+        variant: str | None = None,
+        **overrides,
+    ):
         desc = (
             description
             if isinstance(description, RigDescription)
@@ -108,10 +121,21 @@ class MujocoRig:
                 key=", ".join(sorted(unknown)),
                 allowed=", ".join(sorted(desc.parameters)),
             )
+        if variant is not None and variant not in desc.variants:
+            raise RigParameterError(
+                f"unknown variant {variant!r} for rig {desc.name!r}; variants: "
+                f"{sorted(desc.variants)}",
+                key="variant",
+                value=variant,
+                allowed=", ".join(sorted(desc.variants)),
+            )
         self._desc = desc
         self.fidelity = fidelity
+        self.variant = MILD if variant is None else variant
+        chosen = desc.variants[self.variant].values if self.variant in desc.variants else {}
+        chosen = {**chosen, **overrides}  # explicit overrides win over the variant's values
         self.parameters = {
-            k: (p.check(overrides[k]) if k in overrides else p.value)
+            k: (p.check(chosen[k]) if k in chosen else p.value)
             for k, p in desc.parameters.items()
         }
         try:
@@ -406,6 +430,11 @@ class MujocoRig:
             lines.append(
                 f"  {o.spec}  noise {t.noise_rms:g} {o.spec.unit} rms{extra}  {o.spec.description}"
             )
+        if d.variants:
+            lines.append(f"variants (load_rig(name, variant=NAME); this one: {self.variant!r}):")
+            for vname, v in d.variants.items():
+                vals = ", ".join(f"{k} = {val!r}" for k, val in v.values.items())
+                lines.append(f"  {vname}: {v.description}" + (f" [{vals}]" if vals else ""))
         if self.parameters:
             lines.append("parameters (override with load_rig(name, **{param: value})):")
             for k, p in d.parameters.items():

@@ -24,9 +24,11 @@ from .daq import AntiAliasFilter, Transducer
 from .hydraulics import HydraulicActuator
 
 __all__ = [
+    "MILD",
     "ChannelSpec",
     "Parameter",
     "RigDescription",
+    "Variant",
     "check_drive_limits",
     "check_outputs_for_rate",
     "read_description",
@@ -175,6 +177,23 @@ class RigDescription:
     parameters: dict
     notes: tuple[str, ...] = ()
     fast_physics_rate: float | None = None  # Hz; None: derived (see MujocoRig)
+    variants: dict = field(default_factory=dict)  # name -> Variant ("mild": the defaults)
+
+
+MILD = "mild"
+"""The implicit variant: the side-car's documented default parameter values (``variant=None``)."""
+
+
+@dataclass(frozen=True)
+class Variant:
+    """A named set of parameter values of a rig (side-car ``"variants"``), e.g. a calibration.
+
+    ``values`` are checked against each parameter's declared range when the side-car is read.
+    """
+
+    name: str
+    description: str
+    values: dict
 
 
 def schema_path() -> Path:
@@ -327,6 +346,27 @@ def _read_parameter(name: str, p: dict, w: str) -> Parameter:
     return param
 
 
+def _read_variant(name: str, v: dict, params: dict, where: str) -> Variant:
+    """A named variant; every value must name a documented parameter and lie in its range."""
+    values = dict(v.get("parameters", {}))
+    unknown = sorted(set(values) - set(params))
+    if unknown:
+        raise RigParameterError(
+            f"{where}: unknown parameter(s) {unknown}; documented parameters: {sorted(params)}",
+            key=f"variants.{name}.parameters.{unknown[0]}",
+            value=values[unknown[0]],
+            allowed=", ".join(sorted(params)),
+        )
+    for k, value in values.items():
+        try:
+            params[k].check(value)
+        except RigParameterError as exc:
+            raise RigParameterError(
+                f"{where}: {exc}", f"variants.{name}.parameters.{k}", value, exc.allowed
+            ) from None
+    return Variant(name, v.get("description", ""), values)
+
+
 def check_outputs_for_rate(outputs, fs: float, where: str) -> None:
     """A transducer's high-pass corner must lie below the DAQ Nyquist frequency fs/2."""
     for o in outputs:
@@ -381,6 +421,20 @@ def read_description(path) -> RigDescription:
         name: _read_parameter(name, p, f"{where} parameters.{name}")
         for name, p in raw.get("parameters", {}).items()
     }
+    raw_variants = raw.get("variants", {})
+    if MILD in raw_variants and raw_variants[MILD].get("parameters"):
+        raise RigParameterError(
+            f"{where}: variants.{MILD} is the side-car's default parameter values; it cannot "
+            "change any (give the changed values another name)",
+            f"variants.{MILD}",
+            raw_variants[MILD],
+            "no parameters",
+        )
+    variants = {MILD: Variant(MILD, "the documented default parameter values", {})}
+    for vname, v in raw_variants.items():
+        variants[vname] = _read_variant(
+            vname, v, params, f"{where} variants.{vname}"
+        ) if vname != MILD else Variant(MILD, v.get("description", variants[MILD].description), {})
     with _located(where):
         aa = AntiAliasFilter(**raw.get("anti_alias", {}))
     fast_rate = raw.get("fast_physics_rate")  # range: schema; on the fs grid: MujocoRig
@@ -400,6 +454,7 @@ def read_description(path) -> RigDescription:
         parameters=params,
         notes=tuple(raw.get("notes", ())),
         fast_physics_rate=fast_rate,
+        variants=variants,
     )
 
 
