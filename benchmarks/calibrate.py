@@ -54,8 +54,13 @@ def _linear_baseline(rig) -> float:
 
     _drive, desired = pseudo_field(rig, BAND, SECONDS, seed=0)
     res = vrig.reconstruct(
-        rig, desired, method=InverseArx(6), iterations=0, bandwidth=BAND,
-        id_duration=ID_SECONDS, seed=0,
+        rig,
+        desired,
+        method=InverseArx(6),
+        iterations=0,
+        bandwidth=BAND,
+        id_duration=ID_SECONDS,
+        seed=0,
     )
     return float(res.errors[0][0])
 
@@ -154,8 +159,14 @@ def calibrate(rig_name: str, *, quick: bool = False, log=print) -> dict:
         f"({'within' if ok else 'OUTSIDE'} ±{TOLERANCE:.0%}: {lo_ok:.2f}-{hi_ok:.2f} %), "
         f"{len(evals)} evaluations, {seconds:.0f} s"
     )
-    return {"values": values, "objective": eta, "severity": sev, "ok": ok,
-            "evaluations": evals, "seconds": seconds}
+    return {
+        "values": values,
+        "objective": eta,
+        "severity": sev,
+        "ok": ok,
+        "evaluations": evals,
+        "seconds": seconds,
+    }
 
 
 def predict(rig_name: str, variant: str = "thesis", log=print) -> dict:
@@ -177,12 +188,19 @@ def predict(rig_name: str, variant: str = "thesis", log=print) -> dict:
         t0 = time.perf_counter()
         try:
             res = vrig.reconstruct(
-                rig, desired, method=method(), iterations=0, bandwidth=BAND,
-                id_duration=ID_SECONDS, seed=0,
+                rig,
+                desired,
+                method=method(),
+                iterations=0,
+                bandwidth=BAND,
+                id_duration=ID_SECONDS,
+                seed=0,
             )
             out[label] = float(res.errors[0][0])
-            log(f"  {label}: IT00 eta0 {out[label]:.2f} % vs the text's {NARX_TEXT:g} % "
-                f"[{time.perf_counter() - t0:.0f} s]")
+            log(
+                f"  {label}: IT00 eta0 {out[label]:.2f} % vs the text's {NARX_TEXT:g} % "
+                f"[{time.perf_counter() - t0:.0f} s]"
+            )
         except Exception as exc:
             out[label] = f"{type(exc).__name__}: {str(exc).splitlines()[0][:120]}"
             log(f"  {label}: FAILED {out[label]}")
@@ -241,8 +259,11 @@ def main(argv=None) -> int:
     ap.add_argument("rig", choices=sorted(CALIBRATIONS))
     ap.add_argument("--quick", action="store_true", help="a coarser grid, fewer refinements")
     ap.add_argument("--write", action="store_true", help="store the result as variant 'thesis'")
-    ap.add_argument("--predict", action="store_true",
-                    help="then run Table 6.3's NARX rows on the 'thesis' variant (not tuned)")
+    ap.add_argument(
+        "--predict",
+        action="store_true",
+        help="then run Table 6.3's NARX rows on the 'thesis' variant (not tuned)",
+    )
     args = ap.parse_args(argv)
     result = calibrate(args.rig, quick=args.quick)
     if args.write:

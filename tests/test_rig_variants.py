@@ -30,7 +30,10 @@ def _sidecar(tmp_path, variants):
     return path
 
 
-STIFF = {"description": "stiffer rubber", "parameters": {"cubic_stiffness": 1e11, "viscous_damping": 2000.0}}
+STIFF = {
+    "description": "stiffer rubber",
+    "parameters": {"cubic_stiffness": 1e11, "viscous_damping": 2000.0},
+}
 
 
 def _short_drive(rig, seconds=1.0):
