@@ -207,6 +207,19 @@ def predict(rig_name: str, variant: str = "thesis", log=print) -> dict:
     return out
 
 
+def _with_variants(original: str, raw: dict) -> str:
+    """The side-car text with its ``"variants"`` block (the last key) replaced or appended,
+    keeping the hand-written layout of the rest."""
+    block = json.dumps(raw["variants"], indent=2, ensure_ascii=False).replace("\n", "\n  ")
+    head = original.rstrip()
+    cut = head.find('\n  "variants":')
+    if cut >= 0:
+        head = head[:cut].rstrip().rstrip(",")
+    else:
+        head = head[: head.rfind("}")].rstrip()
+    return f'{head},\n  "variants": {block}\n}}\n'
+
+
 def write_variant(rig_name: str, result: dict, name: str = "thesis") -> Path:
     """Store ``result`` as the side-car variant ``name`` (validated, atomic write)."""
     from vrig.files import atomic_write
@@ -237,7 +250,9 @@ def write_variant(rig_name: str, result: dict, name: str = "thesis") -> Path:
         },
     }
     validate_description(raw, str(path))
-    text = json.dumps(raw, indent=2, ensure_ascii=False) + "\n"
+    text = _with_variants(path.read_text(), raw)
+    if json.loads(text) != raw:  # the hand layout could not be kept: plain JSON
+        text = json.dumps(raw, indent=2, ensure_ascii=False) + "\n"
     check = path.with_name(f".{path.name}.check.json")  # read back before replacing
     try:
         check.write_text(text)
