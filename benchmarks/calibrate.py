@@ -1,21 +1,29 @@
 """Calibrate a virtual rig's documented parameters on ONE observable the reference text reports.
 
-    python -m benchmarks.calibrate elastomeric-damper [--quick] [--write]
+    python -m benchmarks.calibrate RIG [--quick] [--write] [--predict]
 
 Issue 12: the virtual rigs are milder than the real ones the text measured. A twin is
-calibrated on the **linear baseline** only — the text's own linear procedure (Table 6.3: inverse
-ARX(6), IT00, η0 of ITRES against DESRES on a pseudo-field desired response; quick settings:
-20 s desired response, 30 s identification record, seed 0, band 0-25 Hz) must give the text's
-57 % within ±25 % relative (43-71 %) — by physically meaningful parameters within their
-documented plausible ranges (``models/<rig>/README.md``). What it was *not* calibrated on (the
-NARX gain, text: 24 %) is then a prediction: ``--predict`` runs it, never tunes on it.
+calibrated on the **linear baseline** only — the text's own linear procedure (inverse ARX, IT00,
+η0 of ITRES against DESRES on a pseudo-field desired response; quick settings: 20 s desired
+response, 30 s identification record, seed 0, the rig's band) must give the text's figure within
+±25 % relative — by physically meaningful parameters within their documented plausible ranges
+(``models/<rig>/README.md``). What it was *not* calibrated on (the NARX rows, later iterations)
+is then a prediction: ``--predict`` runs it, never tunes on it.
 
-Search (elastomeric damper): a scalar **progressivity severity** ``s`` multiplies the rubber's
-progressive terms together (``quadratic_stiffness`` = asymmetry, ``cubic_stiffness`` =
-progressive stiffening / travel-limiter engagement), on a coarse grid over ``s`` and the Iwan
-``iwan_slip_scale`` (hysteresis); then bisection in ``log s`` at the grid's slip scale closest to
-datasheet-typical that brackets the target. Every evaluation is printed. ``--write`` stores the
-result as the side-car variant ``"thesis"`` (atomic write); the default variant is unchanged.
+One ``CALIBRATIONS`` entry per rig: the text's table and target, band, ARX order, the parameters
+a scalar **severity** ``s`` scales together (their datasheet-typical defaults × ``s``), a coarse
+grid over ``s`` and over one **second parameter** (absolute values, datasheet-typical first), and
+the rows to predict. Search: the coarse grid, then bisection in ``log s`` at the second
+parameter's value closest to datasheet-typical that brackets the target. Every evaluation is
+printed. ``--write`` stores the result as the side-car variant ``"thesis"`` (atomic write); the
+default variant is unchanged.
+
+* ``elastomeric-damper`` (Table 6.3, inverse ARX(6), 57 %, 0-25 Hz): ``s`` scales the rubber's
+  progressive terms (``quadratic_stiffness`` = asymmetry, ``cubic_stiffness`` = progressive
+  stiffening / travel-limiter engagement); second parameter the Iwan ``iwan_slip_scale``.
+* ``shock-absorber`` (Table 6.16, inverse ARX(4), 27 %, 0-10 Hz): ``s`` scales the rubber-bush
+  ``free_play`` (the dead band at every reversal); second parameter the bush rubber's
+  ``bush_stiffness`` beyond the play.
 """
 
 from __future__ import annotations
@@ -27,51 +35,122 @@ import math
 import time
 from pathlib import Path
 
-__all__ = ["CALIBRATIONS", "calibrate", "evaluate", "predict", "write_variant"]
+__all__ = [
+    "CALIBRATIONS",
+    "calibrate",
+    "evaluate",
+    "linear_baseline",
+    "predict",
+    "write_variant",
+]
 
-TARGET = 57.0  # % Table 6.3, QanTiM inverse ARX(6), IT00
 TOLERANCE = 0.25  # relative
-NARX_TEXT = 24.0  # % Table 6.3, NARX 4th order quadratic (the prediction, never tuned)
-SECONDS, ID_SECONDS, BAND = 20.0, 30.0, (0.0, 25.0)  # the quick settings of Table 6.3
+SECONDS, ID_SECONDS = 20.0, 30.0  # the quick settings: desired response, identification record
+
+
+def _narx(order, degree, **kw):
+    def make():
+        from vrig.reconstruction import InverseNarx
+
+        return InverseNarx(order, degree, **kw)
+
+    return make
+
 
 CALIBRATIONS = {
     "elastomeric-damper": {
+        "table": "Table 6.3",
+        "target": 57.0,  # % QanTiM inverse ARX(6), IT00
+        "band": (0.0, 25.0),
+        "arx_order": 6,
         # severity s scales these together (their datasheet-typical defaults x s)
         "severity": ("quadratic_stiffness", "cubic_stiffness"),
         "grid": [1.0, 3.0, 10.0, 20.0, 40.0],
         "quick_grid": [1.0, 10.0, 30.0],
-        "slip": [1.0, 2.0],  # iwan_slip_scale (hysteresis)
-        "quick_slip": [1.0],
-    }
+        "second": "iwan_slip_scale",  # hysteresis; absolute values, datasheet-typical first
+        "second_grid": [1.0, 2.0],
+        "quick_second_grid": [1.0],
+        "what": "the rubber progressivity (quadratic_stiffness and cubic_stiffness)",
+        # the rows NOT calibrated on: label -> (method factory, iteration, the text's figure %)
+        "predict": {
+            "NARX(4, 2) full, simulation focus, SEMP terms": (
+                _narx(4, 2, kind="full", focus="simulation", selection="simulation"),
+                0,
+                24.0,
+            ),
+            "NARX(4, 2) input-polynomial": (_narx(4, 2, kind="input-polynomial"), 0, 24.0),
+        },
+    },
+    "shock-absorber": {
+        "table": "Table 6.16",
+        "target": 27.0,  # % QanTiM inverse ARX(4), IT00 (IT05: 17 %, a prediction)
+        "band": (0.0, 10.0),
+        "arx_order": 4,
+        "severity": ("free_play",),  # 0.5 mm half-width x s
+        "grid": [1.0, 2.0, 3.0, 4.0],  # 0.5 .. 2 mm (the declared maximum)
+        "quick_grid": [1.0, 2.0, 4.0],
+        "second": "bush_stiffness",  # the rubber beyond the play [N/m]
+        "second_grid": [3e6, 1.5e6],
+        "quick_second_grid": [3e6],
+        "what": "the rubber-bush free play (free_play)",
+        "predict": {
+            "inverse ARX(4) IT05": ("arx", 5, 17.0),
+            "NARX(4, 3) full, simulation focus, SEMP terms": (
+                _narx(4, 3, kind="full", focus="simulation", selection="simulation"),
+                0,
+                18.0,
+            ),
+            "NARX(4, 3) input-polynomial": (_narx(4, 3, kind="input-polynomial"), 0, 18.0),
+        },
+    },
 }
 
 
-def _linear_baseline(rig) -> float:
-    """IT00 η0 [%] of the text's linear procedure on ``rig`` (Table 6.3, quick settings)."""
+def _cal(rig_name: str) -> dict:
+    if rig_name not in CALIBRATIONS:
+        raise SystemExit(f"no calibration defined for {rig_name!r}; have {sorted(CALIBRATIONS)}")
+    return CALIBRATIONS[rig_name]
+
+
+def _arx_label(cal: dict) -> str:
+    return f"inverse ARX({cal['arx_order']}) IT00 eta0"
+
+
+def _reconstruct(rig, cal: dict, method, iterations: int = 0):
+    """The text's procedure on ``rig`` at quick settings: (errors, desired)."""
     import vrig
     from vrig.field import pseudo_field
-    from vrig.reconstruction import InverseArx
 
-    _drive, desired = pseudo_field(rig, BAND, SECONDS, seed=0)
+    band = cal["band"]
+    _drive, desired = pseudo_field(rig, band, SECONDS, seed=0)
     res = vrig.reconstruct(
         rig,
         desired,
-        method=InverseArx(6),
-        iterations=0,
-        bandwidth=BAND,
+        method=method,
+        iterations=iterations,
+        bandwidth=band,
         id_duration=ID_SECONDS,
         seed=0,
     )
-    return float(res.errors[0][0])
+    return res.errors
 
 
-def _values(rig_name: str, severity: float, slip: float) -> dict:
+def linear_baseline(rig, rig_name: str) -> float:
+    """IT00 η0 [%] of the text's linear procedure on ``rig`` (quick settings of ``rig_name``'s
+    ``CALIBRATIONS`` entry: inverse ARX of its order, its band)."""
+    from vrig.reconstruction import InverseArx
+
+    cal = _cal(rig_name)
+    return float(_reconstruct(rig, cal, InverseArx(cal["arx_order"]))[0][0])
+
+
+def _values(rig_name: str, severity: float, second: float) -> dict:
     import vrig
 
     params = vrig.load_rig(rig_name).description.parameters
-    cal = CALIBRATIONS[rig_name]
+    cal = _cal(rig_name)
     out = {k: float(params[k].value) * severity for k in cal["severity"]}
-    out["iwan_slip_scale"] = float(slip)
+    out[cal["second"]] = float(second)
     return out
 
 
@@ -80,82 +159,85 @@ def evaluate(rig_name: str, values: dict, log=print) -> float:
     fails (an interlock, a refused value): printed either way."""
     import vrig
 
+    cal = _cal(rig_name)
     t0 = time.perf_counter()
     try:
-        eta = _linear_baseline(vrig.load_rig(rig_name, seed=0, **values))
+        eta = linear_baseline(vrig.load_rig(rig_name, seed=0, **values), rig_name)
     except Exception as exc:  # the honest figure is the failure
         eta = float("nan")
         note = f"FAILED {type(exc).__name__}: {str(exc).splitlines()[0][:120]}"
     else:
-        note = f"inverse ARX(6) IT00 eta0 = {eta:6.2f} %  (text {TARGET:g} %)"
+        note = f"{_arx_label(cal)} = {eta:6.2f} %  (text {cal['target']:g} %)"
     shown = ", ".join(f"{k} = {v:.4g}" for k, v in values.items())
     log(f"  {shown}: {note}  [{time.perf_counter() - t0:.1f} s]")
     return eta
 
 
 def calibrate(rig_name: str, *, quick: bool = False, log=print) -> dict:
-    """Coarse grid over (severity, slip scale), then bisection in log(severity).
+    """Coarse grid over (severity, second parameter), then bisection in log(severity).
 
     Returns a dict: ``values`` (the calibrated parameters), ``objective`` (η0 %), ``severity``,
-    ``evaluations`` (every (values, η0) pair) and ``seconds``.
+    ``ok`` (within ±25 %), ``evaluations`` (every (values, η0) pair) and ``seconds``.
     """
-    if rig_name not in CALIBRATIONS:
-        raise SystemExit(f"no calibration defined for {rig_name!r}; have {sorted(CALIBRATIONS)}")
-    cal = CALIBRATIONS[rig_name]
+    cal = _cal(rig_name)
+    target = cal["target"]
     t_start = time.perf_counter()
     evals = []
 
-    def f(s, slip):
-        values = _values(rig_name, s, slip)
+    def f(s, second):
+        values = _values(rig_name, s, second)
         eta = evaluate(rig_name, values, log)
         evals.append((values, eta))
         return eta
 
-    lo_ok, hi_ok = TARGET * (1 - TOLERANCE), TARGET * (1 + TOLERANCE)
+    lo_ok, hi_ok = target * (1 - TOLERANCE), target * (1 + TOLERANCE)
     grid = cal["quick_grid"] if quick else cal["grid"]
-    slips = cal["quick_slip"] if quick else cal["slip"]
-    log(f"coarse grid: severity {grid} x iwan_slip_scale {slips}")
-    table = {slip: [(s, f(s, slip)) for s in grid] for slip in slips}
+    seconds_ = cal["quick_second_grid"] if quick else cal["second_grid"]
+    log(f"coarse grid: severity {grid} x {cal['second']} {seconds_}")
+    table = {b: [(s, f(s, b)) for s in grid] for b in seconds_}
     bracket = None
-    for slip in slips:  # the slip scale closest to datasheet-typical first
-        pts = [(s, e) for s, e in table[slip] if math.isfinite(e)]
+    for b in seconds_:  # the second parameter closest to datasheet-typical first
+        pts = [(s, e) for s, e in table[b] if math.isfinite(e)]
         for (s0, e0), (s1, e1) in itertools.pairwise(pts):
-            if (e0 - TARGET) * (e1 - TARGET) <= 0:
-                bracket = (slip, s0, e0, s1, e1)
+            if (e0 - target) * (e1 - target) <= 0:
+                bracket = (b, s0, e0, s1, e1)
                 break
         if bracket:
             break
     if bracket is None:
         best = min(
             ((v, e) for v, e in evals if math.isfinite(e)),
-            key=lambda ve: abs(ve[1] - TARGET),
+            key=lambda ve: abs(ve[1] - target),
             default=(None, float("nan")),
         )
-        log(f"the grid does not bracket {TARGET:g} %: best {best[1]:.2f} % at {best[0]}")
+        log(f"the grid does not bracket {target:g} %: best {best[1]:.2f} % at {best[0]}")
         values, eta, sev = best[0], best[1], float("nan")
     else:
-        slip, s0, e0, s1, e1 = bracket
-        log(f"1-D refinement: bisection in log(severity) in [{s0:g}, {s1:g}] at slip {slip:g}")
-        best_s, best_e = min(((s0, e0), (s1, e1)), key=lambda se: abs(se[1] - TARGET))
+        b, s0, e0, s1, e1 = bracket
+        log(
+            f"1-D refinement: bisection in log(severity) in [{s0:g}, {s1:g}] "
+            f"at {cal['second']} {b:g}"
+        )
+        best_s, best_e = min(((s0, e0), (s1, e1)), key=lambda se: abs(se[1] - target))
         for _ in range(3 if quick else 5):
-            if abs(best_e - TARGET) <= 0.05 * TARGET:  # within ±5 % relative: done
+            if abs(best_e - target) <= 0.05 * target:  # within ±5 % relative: done
                 break
             sm = math.sqrt(s0 * s1)
-            em = f(sm, slip)
+            em = f(sm, b)
             if not math.isfinite(em):
                 break
-            if (e0 - TARGET) * (em - TARGET) <= 0:
+            if (e0 - target) * (em - target) <= 0:
                 s1, e1 = sm, em
             else:
                 s0, e0 = sm, em
-            if abs(em - TARGET) < abs(best_e - TARGET):
+            if abs(em - target) < abs(best_e - target):
                 best_s, best_e = sm, em
         sev = best_s
-        values, eta = _values(rig_name, best_s, slip), best_e
+        values, eta = _values(rig_name, best_s, b), best_e
     seconds = time.perf_counter() - t_start
     ok = lo_ok <= eta <= hi_ok
     log(
-        f"result: {values} -> inverse ARX(6) IT00 eta0 {eta:.2f} % vs the text's {TARGET:g} % "
+        f"result: {values} -> {_arx_label(cal)} {eta:.2f} % vs the text's {target:g} % "
         f"({'within' if ok else 'OUTSIDE'} ±{TOLERANCE:.0%}: {lo_ok:.2f}-{hi_ok:.2f} %), "
         f"{len(evals)} evaluations, {seconds:.0f} s"
     )
@@ -170,35 +252,20 @@ def calibrate(rig_name: str, *, quick: bool = False, log=print) -> dict:
 
 
 def predict(rig_name: str, variant: str = "thesis", log=print) -> dict:
-    """Table 6.3's NARX rows on the variant (what it was NOT calibrated on), IT00 η0 %."""
+    """The table's rows the variant was NOT calibrated on (η0 % at their iteration)."""
     import vrig
-    from vrig.field import pseudo_field
-    from vrig.reconstruction import InverseNarx
+    from vrig.reconstruction import InverseArx
 
-    rig = vrig.load_rig(rig_name, seed=0, variant=variant)
-    _drive, desired = pseudo_field(rig, BAND, SECONDS, seed=0)
-    rows = {
-        "NARX(4, 2) full, simulation focus, SEMP terms": lambda: InverseNarx(
-            4, 2, kind="full", focus="simulation", selection="simulation"
-        ),
-        "NARX(4, 2) input-polynomial": lambda: InverseNarx(4, 2, kind="input-polynomial"),
-    }
+    cal = _cal(rig_name)
     out = {}
-    for label, method in rows.items():
+    for label, (make, iteration, text) in cal["predict"].items():
+        rig = vrig.load_rig(rig_name, seed=0, variant=variant)
+        method = InverseArx(cal["arx_order"]) if make == "arx" else make()
         t0 = time.perf_counter()
         try:
-            res = vrig.reconstruct(
-                rig,
-                desired,
-                method=method(),
-                iterations=0,
-                bandwidth=BAND,
-                id_duration=ID_SECONDS,
-                seed=0,
-            )
-            out[label] = float(res.errors[0][0])
+            out[label] = float(_reconstruct(rig, cal, method, iteration)[iteration][0])
             log(
-                f"  {label}: IT00 eta0 {out[label]:.2f} % vs the text's {NARX_TEXT:g} % "
+                f"  {label}: IT{iteration:02d} eta0 {out[label]:.2f} % vs the text's {text:g} % "
                 f"[{time.perf_counter() - t0:.0f} s]"
             )
         except Exception as exc:
@@ -228,22 +295,24 @@ def write_variant(rig_name: str, result: dict, name: str = "thesis") -> Path:
 
     path = Path(rig_path(rig_name))
     raw = json.loads(path.read_text())
+    cal = _cal(rig_name)
     v = result["values"]
+    band = "-".join(f"{x:g}" for x in cal["band"])
     desc = (
         f"calibrated (benchmarks/calibrate.py, issue 12) on ONE observable of the reference text: "
-        f"Table 6.3's linear baseline, inverse ARX(6) IT00 eta0 = {TARGET:g} %, by the rubber "
-        f"progressivity (quadratic_stiffness and cubic_stiffness x {result['severity']:.3g} of "
-        f"the datasheet-typical defaults) at iwan_slip_scale {v['iwan_slip_scale']:g}; gives "
-        f"{result['objective']:.1f} % (quick settings: 20 s pseudo-field desired response, 30 s "
-        f"identification, seed 0, 0-25 Hz). Everything else datasheet-typical. Not tuned on "
-        f"the NARX rows (the text's 24 %): see the README."
+        f"{cal['table']}'s linear baseline, {_arx_label(cal)} = {cal['target']:g} %, by "
+        f"{cal['what']} x {result['severity']:.3g} of the datasheet-typical default at "
+        f"{cal['second']} {v[cal['second']]:g}; gives {result['objective']:.1f} % (quick "
+        f"settings: 20 s pseudo-field desired response, 30 s identification, seed 0, {band} Hz). "
+        f"Everything else datasheet-typical. Not tuned on the rows it was not calibrated on: "
+        f"see the README."
     )
     raw.setdefault("variants", {})[name] = {
         "description": desc,
         "parameters": {k: float(f"{x:.4g}") for k, x in v.items()},
         "calibration": {
-            "observable": "Table 6.3 inverse ARX(6) IT00 eta0 [%], quick settings",
-            "target": TARGET,
+            "observable": f"{cal['table']} {_arx_label(cal)} [%], quick settings",
+            "target": cal["target"],
             "achieved": round(result["objective"], 2),
             "severity": round(result["severity"], 4),
             "evaluations": len(result["evaluations"]),
@@ -277,7 +346,7 @@ def main(argv=None) -> int:
     ap.add_argument(
         "--predict",
         action="store_true",
-        help="then run Table 6.3's NARX rows on the 'thesis' variant (not tuned)",
+        help="then run the rows it was not calibrated on, on the 'thesis' variant (not tuned)",
     )
     args = ap.parse_args(argv)
     result = calibrate(args.rig, quick=args.quick)
