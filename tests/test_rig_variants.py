@@ -119,6 +119,7 @@ CALIBRATED = [
     ("elastomeric-damper", "57"),
     ("shock-absorber", "27"),
     ("radiator", "35"),
+    ("fuel-tank-2ch", "46"),
 ]
 
 
