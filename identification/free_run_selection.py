@@ -19,6 +19,7 @@ leave-one-out one-step error of the least-squares fit, :func:`identification.val
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 
 import numpy as np
@@ -67,7 +68,8 @@ def check_criterion(criterion) -> None:
 
 
 def _siso_view(ch: ChannelStructure, k: int, ny: int, u, y):
-    """Channel k as a single-output model: its own output fed back, other outputs as inputs."""
+    """Channel k as a single-output model (its own output fed back, other outputs as inputs):
+    the remapped structure (functions and breakpoints kept) and its input record."""
     others = [j for j in range(ny) if j != k]
     src = ch.regressors[:, 0].copy()
     new = np.empty_like(src)
@@ -78,20 +80,17 @@ def _siso_view(ch: ChannelStructure, k: int, ny: int, u, y):
     new[is_in] = 1 + len(others) + (src[is_in] - ny)
     regs = np.column_stack([new, ch.regressors[:, 1]])
     inputs = np.column_stack([y[:, others], u]) if others else u
-    return regs, np.ascontiguousarray(inputs)
+    return dataclasses.replace(ch, regressors=regs), np.ascontiguousarray(inputs)
 
 
 class _FreeRunScorer:
     """Least squares + compiled free run of one channel's candidate term subsets."""
 
-    def __init__(self, ch, X, regs, inputs, yk, start, bound, functions=None, breakpoints=None):
-        self.ch, self.X, self.regs, self.inputs = ch, X, regs, inputs
+    def __init__(self, siso: ChannelStructure, X, inputs, yk, start, bound):
+        self.siso, self.X, self.inputs = siso, X, inputs
         self.yk = np.ascontiguousarray(yk[:, None])
         self.target = yk[start:]
         self.start, self.bound = start, np.array([bound])
-        self.extra = {}
-        if functions is not None:
-            self.extra = {"functions": functions, "breakpoints": breakpoints}
 
     def fit(self, cols):
         coef, *_ = np.linalg.lstsq(self.X[:, cols], self.target, rcond=None)
@@ -101,7 +100,7 @@ class _FreeRunScorer:
         """Free-run MSE of the least-squares model on ``cols`` (inf when it diverges)."""
         cols = np.asarray(cols, dtype=np.int64)
         coef = self.fit(cols)
-        sub = ChannelStructure(self.regs, self.ch.terms[cols], self.ch.order, **self.extra)
+        sub = dataclasses.replace(self.siso, terms=self.siso.terms[cols])
         plan = compile_plan((sub,), (coef,), 1, self.inputs.shape[1])
         try:
             sim = simulate_plan(plan, self.inputs, self.yk[: self.start], self.bound, ("y",))
@@ -157,9 +156,8 @@ def simulation_selection(
     M = X.shape[1]
     n_max = min(M, 40 if n_terms is None else int(n_terms))
     target = y[start:, k]
-    regs, inputs = _siso_view(ch, k, y.shape[1], u, y)
-    scorer = _FreeRunScorer(ch, X, regs, inputs, y[:, k], start, bound,
-                            getattr(ch, "functions", None), getattr(ch, "breakpoints", None))
+    siso, inputs = _siso_view(ch, k, y.shape[1], u, y)
+    scorer = _FreeRunScorer(siso, X, inputs, y[:, k], start, bound)
     selected: list[int] = []
     steps, mses, crits = [], [], []
     current = np.inf

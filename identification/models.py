@@ -121,8 +121,7 @@ def _is_output_affine_term(ch: ChannelStructure, row, ny: int) -> bool:
     outs = [i for i in factors if ch.regressors[i - 1, 0] < ny]
     if not outs:
         return True
-    fn = getattr(ch, "functions", None)
-    transformed = fn is not None and any(fn[i - 1] != 0 for i in outs)
+    transformed = any(ch.functions[i - 1] != 0 for i in outs)
     return len(factors) == 1 and not transformed
 
 

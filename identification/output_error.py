@@ -65,10 +65,8 @@ class FlatModel:
             R = ch.n_regressors
             src.append(ch.regressors[:, 0])
             lag.append(ch.regressors[:, 1])
-            functions = getattr(ch, "functions", None)  # non-polynomial regressor functions
-            breakpoints = getattr(ch, "breakpoints", None)
-            fn.append(np.zeros(R, np.int64) if functions is None else functions)
-            bp.append(np.zeros(R) if breakpoints is None else breakpoints)
+            fn.append(ch.functions)  # non-polynomial regressor functions (0 = identity)
+            bp.append(ch.breakpoints)
             rptr.append(rptr[-1] + R)
             t = np.zeros((ch.n_terms, L), dtype=np.int64)
             t[:, L - ch.degree :] = ch.terms
