@@ -60,6 +60,7 @@ import scipy
 
 from identification import Narx, band_limited_noise, metrics, random_narx, regression_matrix
 from identification.solvers import SOLVERS
+from vrig.files import atomic_write
 
 T = TypeVar("T")
 
@@ -628,7 +629,8 @@ def main(argv: list[str] | None = None) -> int:
         "figures": [asdict(f) for f in report.figures],
         "missed": [f.key for f in report.missed],
     }
-    args.output.write_text(json.dumps(payload, indent=2) + "\n")
+    with atomic_write(args.output, "w", encoding="utf-8") as f:
+        f.write(json.dumps(payload, indent=2) + "\n")
     print(f"results written to {args.output}")
     return 1 if args.strict and report.missed else 0
 

@@ -146,6 +146,7 @@ from identification import (
     StabilityWarning,
     metrics,
 )
+from vrig.files import atomic_write
 
 ENV_VAR = "VRIG_EXTERNAL_DATA"
 RESULTS_PATH = Path(__file__).resolve().parent.parent / "results" / "public_data.json"
@@ -1334,7 +1335,8 @@ def main(argv: list[str] | None = None) -> int:
         "notes": report.notes,
     }
     args.output.parent.mkdir(parents=True, exist_ok=True)
-    args.output.write_text(json.dumps(out, indent=2))
+    with atomic_write(args.output, "w", encoding="utf-8") as f:
+        f.write(json.dumps(out, indent=2))
     print(f"written {args.output}")
     return 0
 

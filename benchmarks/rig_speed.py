@@ -22,6 +22,7 @@ from mujoco import rollout
 
 import vrig
 from identification import band_limited_noise
+from vrig.files import atomic_write
 
 
 def _drive(rig, seconds, seed=0):
@@ -91,7 +92,8 @@ def main(argv=None) -> int:
         rows.append({**r, "target_rtf": target, "pass": ok})
     out = Path(args.output)
     out.parent.mkdir(parents=True, exist_ok=True)
-    out.write_text(json.dumps(rows, indent=2))
+    with atomic_write(out, "w", encoding="utf-8") as f:
+        f.write(json.dumps(rows, indent=2))
     print(f"results written to {out}")
     return 0
 

@@ -24,6 +24,8 @@ from pathlib import Path
 
 import numpy as np
 
+from vrig.files import atomic_write
+
 __all__ = ["TABLES", "belgian_road_example", "table_3_7", "thesis_report"]
 
 
@@ -527,7 +529,8 @@ def thesis_report(out_dir: Path | str, quick: bool = False, log=print) -> str:
     parts.append(belgian_road_example(seconds=seconds, log=log))
     parts.append(f"_wall time {time.perf_counter() - t0:.0f} s_\n")
     text = "\n".join(parts)
-    (out_dir / "thesis_reproduction.md").write_text(text, encoding="utf-8")
+    with atomic_write(out_dir / "thesis_reproduction.md", "w", encoding="utf-8") as f:
+        f.write(text)
     return text
 
 
