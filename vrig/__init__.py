@@ -15,7 +15,7 @@ from .errors import (
 )
 from .field import pseudo_field
 from .reconstruction import ReconstructionResult, reconstruct
-from .rigs import ChannelSpec, FileRig, MujocoRig, list_rigs, load_rig, rig_path
+from .rigs import ChannelSpec, FileRig, MujocoRig, list_rigs, load_rig, rig_path, severity_rigs
 from .testfolder import TestFolder
 from .timehistory import TimeHistory
 
@@ -40,4 +40,5 @@ __all__ = [
     "pseudo_field",
     "reconstruct",
     "rig_path",
+    "severity_rigs",
 ]

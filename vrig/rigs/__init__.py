@@ -31,6 +31,7 @@ __all__ = [
     "list_rigs",
     "load_rig",
     "rig_path",
+    "severity_rigs",
 ]
 
 
@@ -42,6 +43,12 @@ def list_rigs() -> list[str]:
     """Names of the rigs shipped in ``models/`` (folders with a ``<name>.rig.json``)."""
     root = _models_dir()
     return sorted(p.name for p in root.iterdir() if (p / f"{p.name}.rig.json").exists())
+
+
+def severity_rigs() -> list[str]:
+    """Names of the shipped rigs with a non-linearity severity axis (``load_rig(name,
+    severity=s)``; side-car ``"severity"``); the others are linear in their operating range."""
+    return [n for n in list_rigs() if read_description(rig_path(n)).severity is not None]
 
 
 def rig_path(name: str) -> Path:
@@ -58,6 +65,7 @@ def load_rig(
     seed: int = 0,
     fidelity: str = "full",
     variant: str | None = None,
+    severity: float | None = None,
     **overrides,
 ) -> MujocoRig:
     """Load a shipped rig by name, or a user's rig from an MJCF or side-car path.
@@ -74,8 +82,13 @@ def load_rig(
         documented one, within the model's stability margin; see :class:`MujocoRig`).
     variant : str, optional
         A named parameter set from the side-car's ``"variants"`` (``rig.describe()`` lists
-        them), e.g. ``"thesis"``; ``None`` (default) = ``"mild"`` = the documented defaults.
-        An unknown name is a :class:`~vrig.errors.RigParameterError` naming the variants.
+        them), e.g. ``"thesis"``; ``None`` (default): the rig's default variant (its
+        side-car's ``default_variant``); ``"mild"``: the documented parameter values. An
+        unknown name is a :class:`~vrig.errors.RigParameterError` naming the variants.
+    severity : float, optional
+        Non-linearity severity in [0, 2] for a rig with a severity axis
+        (:func:`severity_rigs`): 0 the linearised rig, 1 (default) the rig as loaded, 2 twice
+        as non-linear; it scales the rig's non-linear elements after the variant and overrides.
     **overrides
         Documented rig parameters (``rig.describe()`` lists them); they win over the variant.
     """
@@ -95,5 +108,10 @@ def load_rig(
     if not path.exists():
         raise FileNotFoundError(f"no rig description at {path}")
     return MujocoRig(
-        read_description(path), seed=seed, fidelity=fidelity, variant=variant, **overrides
+        read_description(path),
+        seed=seed,
+        fidelity=fidelity,
+        variant=variant,
+        severity=severity,
+        **overrides,
     )

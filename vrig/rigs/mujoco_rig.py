@@ -28,13 +28,13 @@ from ..timehistory import TimeHistory
 from . import hydraulics, stability
 from .daq import Acquisition
 from .spec import (
-    MILD,
     ChannelSpec,
     InputDef,
     OutputDef,
     RigDescription,
     check_drive_limits,
     check_outputs_for_rate,
+    check_severity,
     read_description,
 )
 
@@ -70,8 +70,15 @@ class MujocoRig:
         (:attr:`stability_limit`).
     variant : str, optional
         A named parameter set of the side-car's ``"variants"`` (e.g. a calibration); ``None``
-        (default) or ``"mild"``: the documented default values. Each value is checked against
-        its parameter's range; explicit ``overrides`` win over the variant's values.
+        (default): the side-car's ``default_variant``; ``"mild"``: the documented parameter
+        values. Each value is checked against its parameter's range; explicit ``overrides``
+        win over the variant's values.
+    severity : float, optional
+        The non-linearity severity in [0, 2] (side-car ``"severity"``,
+        :class:`~vrig.rigs.spec.Severity`): scales the rig's non-linear elements *after* the
+        variant and the overrides — 0 the linearised rig, 1 (``None``, default) the rig as
+        loaded, 2 twice as non-linear. A rig without a severity axis (a linear rig) refuses
+        it with :class:`~vrig.errors.RigParameterError`.
     **overrides
         Documented parameters (see :meth:`describe`).
 
@@ -102,6 +109,7 @@ class MujocoRig:
         seed: int = 0,
         fidelity: str = "full",
         variant: str | None = None,
+        severity: float | None = None,
         **overrides,
     ):
         desc = (
@@ -131,13 +139,16 @@ class MujocoRig:
             )
         self._desc = desc
         self.fidelity = fidelity
-        self.variant = MILD if variant is None else variant
+        self.variant = desc.default_variant if variant is None else variant
         chosen = desc.variants[self.variant].values if self.variant in desc.variants else {}
         chosen = {**chosen, **overrides}  # explicit overrides win over the variant's values
         self.parameters = {
             k: (p.check(chosen[k]) if k in chosen else p.value)
             for k, p in desc.parameters.items()
         }
+        self.severity = self._severity(severity)
+        if severity is not None:
+            self.parameters = desc.severity.apply(self.parameters, self.severity)
         try:
             spec = mujoco.MjSpec.from_file(str(desc.mjcf))
         except ValueError as exc:
@@ -171,6 +182,22 @@ class MujocoRig:
         self.seed = seed
 
     # ------------------------------------------------------------------ set-up
+    def _severity(self, severity) -> float | None:
+        """The checked severity: None for a linear rig, 1.0 when not given."""
+        desc = self._desc
+        if desc.severity is None:
+            if severity is not None:
+                raise RigParameterError(
+                    f"rig {desc.name!r} has no severity axis (no non-linear element in its "
+                    "operating range is declared in its side-car's \"severity\"); rigs with one: "
+                    "see vrig.rigs.severity_rigs()",
+                    key="severity",
+                    value=severity,
+                    allowed="None",
+                )
+            return None
+        return 1.0 if severity is None else check_severity(severity, desc.name)
+
     def _apply(self, spec: mujoco.MjSpec, param, value) -> None:
         """Apply one parameter's rules; any failure is a RigModelError naming the parameter
         (a channel setting it makes invalid, e.g. a high-pass corner beyond fs/2, included)."""
@@ -431,10 +458,19 @@ class MujocoRig:
                 f"  {o.spec}  noise {t.noise_rms:g} {o.spec.unit} rms{extra}  {o.spec.description}"
             )
         if d.variants:
-            lines.append(f"variants (load_rig(name, variant=NAME); this one: {self.variant!r}):")
+            lines.append(
+                f"variants (load_rig(name, variant=NAME); this one: {self.variant!r}, "
+                f"default: {d.default_variant!r}):"
+            )
             for vname, v in d.variants.items():
                 vals = ", ".join(f"{k} = {val!r}" for k, val in v.values.items())
                 lines.append(f"  {vname}: {v.description}" + (f" [{vals}]" if vals else ""))
+        if d.severity is not None:
+            scaled = ", ".join(f"{k} ({law})" for k, law in d.severity.scales.items())
+            lines.append(
+                f"severity (load_rig(name, severity=s), s in [0, 2]; this one: {self.severity:g}): "
+                f"{d.severity.description} [scales {scaled}]"
+            )
         if self.parameters:
             lines.append("parameters (override with load_rig(name, **{param: value})):")
             for k, p in d.parameters.items():

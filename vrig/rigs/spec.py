@@ -25,12 +25,16 @@ from .hydraulics import HydraulicActuator
 
 __all__ = [
     "MILD",
+    "SEVERITY_LAWS",
+    "SEVERITY_RANGE",
     "ChannelSpec",
     "Parameter",
     "RigDescription",
+    "Severity",
     "Variant",
     "check_drive_limits",
     "check_outputs_for_rate",
+    "check_severity",
     "read_description",
     "rig_schema",
     "schema_path",
@@ -178,10 +182,13 @@ class RigDescription:
     notes: tuple[str, ...] = ()
     fast_physics_rate: float | None = None  # Hz; None: derived (see MujocoRig)
     variants: dict = field(default_factory=dict)  # name -> Variant ("mild": the defaults)
+    default_variant: str = "mild"  # the variant load_rig(name) gives (variant=None)
+    severity: Severity | None = None  # the non-linearity severity axis; None: a linear rig
 
 
 MILD = "mild"
-"""The implicit variant: the side-car's documented default parameter values (``variant=None``)."""
+"""The implicit variant: the side-car's documented parameter values (``parameters.*.value``).
+``variant=None`` gives the side-car's ``default_variant`` (``"mild"`` unless it names another)."""
 
 
 @dataclass(frozen=True)
@@ -194,6 +201,54 @@ class Variant:
     name: str
     description: str
     values: dict
+
+
+SEVERITY_RANGE = (0.0, 2.0)
+"""The documented severity axis: 0 = the linearised rig, 1 = the rig as loaded, 2 = twice as
+non-linear."""
+
+SEVERITY_LAWS = {
+    "proportional": "value x s (a play, a gap, a polynomial stiffness coefficient: 0 removes it)",
+    "reciprocal": "value / s, and 0 at s = 0 (a slip displacement whose 0 means 'no slider': "
+    "at s -> 0 the element never slips, i.e. it is the elastic spring it is at s = 0)",
+}
+"""How a :class:`Severity` scales a parameter's value with the severity ``s``."""
+
+
+@dataclass(frozen=True)
+class Severity:
+    """The non-linearity severity axis of a rig (side-car ``"severity"``).
+
+    ``severity=s`` (``load_rig(name, severity=s)``, ``s`` in :data:`SEVERITY_RANGE`) scales the
+    parameters named in ``scales`` — the rig's non-linear elements, after the variant and any
+    explicit overrides are applied — by their law (:data:`SEVERITY_LAWS`): ``s = 0`` is the
+    linearised rig (plays closed, polynomial stiffness linear, hysteresis elements stuck),
+    ``s = 1`` the rig as loaded (the calibrated twin by default), ``s = 2`` twice as non-linear.
+    Values at ``s > 1`` may leave a parameter's documented *plausible* range (the axis is a
+    benchmark axis, not a physical rig); they never leave its physically valid range (a
+    parameter's minimum).
+    """
+
+    description: str
+    scales: dict  # parameter name -> law (a key of SEVERITY_LAWS)
+
+    def apply(self, values: dict, s: float) -> dict:
+        """``values`` (parameter name -> value) with the scaled parameters at severity ``s``."""
+        out = dict(values)
+        for name, law in self.scales.items():
+            v = float(values[name])
+            if law == "proportional":
+                out[name] = v * s
+            else:  # reciprocal
+                out[name] = v / s if s > 0 else 0.0
+        return out
+
+
+def check_severity(value, rig: str) -> float:
+    """``value`` as a float if it lies in :data:`SEVERITY_RANGE`, else RigParameterError."""
+    lo, hi = SEVERITY_RANGE
+    check_number(f"rig {rig!r}: severity", value, minimum=lo, maximum=hi)
+    return float(value)
 
 
 def schema_path() -> Path:
@@ -367,6 +422,23 @@ def _read_variant(name: str, v: dict, params: dict, where: str) -> Variant:
     return Variant(name, v.get("description", ""), values)
 
 
+def _read_severity(raw: dict | None, params: dict, where: str) -> Severity | None:
+    """The side-car's severity axis; every scaled parameter must be a documented numeric one."""
+    if raw is None:
+        return None
+    for name, law in raw["scales"].items():
+        if name not in params or isinstance(params[name].value, str):
+            numeric = sorted(k for k, p in params.items() if not isinstance(p.value, str))
+            raise RigParameterError(
+                f"{where}: severity scales {name!r}, which is not a documented numeric "
+                f"parameter; documented numeric parameters: {numeric}",
+                f"severity.scales.{name}",
+                law,
+                ", ".join(numeric),
+            )
+    return Severity(raw.get("description", ""), dict(raw["scales"]))
+
+
 def check_outputs_for_rate(outputs, fs: float, where: str) -> None:
     """A transducer's high-pass corner must lie below the DAQ Nyquist frequency fs/2."""
     for o in outputs:
@@ -435,6 +507,15 @@ def read_description(path) -> RigDescription:
         variants[vname] = _read_variant(
             vname, v, params, f"{where} variants.{vname}"
         ) if vname != MILD else Variant(MILD, v.get("description", variants[MILD].description), {})
+    default_variant = raw.get("default_variant", MILD)
+    if default_variant not in variants:
+        raise RigParameterError(
+            f"{where}: default_variant {default_variant!r} is not a variant; variants: "
+            f"{sorted(variants)}",
+            "default_variant",
+            default_variant,
+            ", ".join(sorted(variants)),
+        )
     with _located(where):
         aa = AntiAliasFilter(**raw.get("anti_alias", {}))
     fast_rate = raw.get("fast_physics_rate")  # range: schema; on the fs grid: MujocoRig
@@ -455,6 +536,8 @@ def read_description(path) -> RigDescription:
         notes=tuple(raw.get("notes", ())),
         fast_physics_rate=fast_rate,
         variants=variants,
+        default_variant=default_variant,
+        severity=_read_severity(raw.get("severity"), params, where),
     )
 
 

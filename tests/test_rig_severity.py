@@ -1,0 +1,153 @@
+"""The non-linearity severity axis (``load_rig(name, severity=s)``, side-car ``"severity"``).
+
+Truth used here: the side-car's own documented values (a play or polynomial coefficient × s, a
+slip displacement / s), MuJoCo's compiled model (what the physics actually runs with), and the
+physics of a linearised rig: at severity 0 the rig has no non-linear element in its operating
+range, so a NARX that contains the ARX (all linear lags, least squares, non-linear terms admitted
+only when BIC says they pay) can gain nothing over the ARX; the linear error grows with severity.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+
+import numpy as np
+import pytest
+
+import vrig
+from vrig.errors import RigParameterError
+from vrig.rigs import rig_path, severity_rigs
+
+NONLINEAR = ["elastomeric-damper", "radiator", "shock-absorber"]
+
+
+def _thesis(name):
+    return json.loads(rig_path(name).read_text())["variants"]["thesis"]["parameters"]
+
+
+def test_the_non_linear_rigs_have_a_severity_axis_and_the_linear_ones_refuse_it():
+    assert set(NONLINEAR) <= set(severity_rigs())
+    for name in ("fuel-tank-7ch", "fuel-tank-2ch"):  # linear in their operating range
+        assert name not in severity_rigs()
+        with pytest.raises(RigParameterError, match="no severity axis") as exc:
+            vrig.load_rig(name, severity=0.5)
+        assert exc.value.key == "severity"
+    assert vrig.load_rig("fuel-tank-7ch").severity is None
+
+
+@pytest.mark.parametrize("bad", [-0.1, 2.5, math.nan, math.inf, "1"])
+def test_severity_outside_its_range_is_refused(bad):
+    with pytest.raises(RigParameterError, match="severity"):
+        vrig.load_rig("shock-absorber", severity=bad)
+
+
+def test_shock_absorber_free_play_scales_with_severity_in_the_compiled_model():
+    play = _thesis("shock-absorber")["free_play"]
+    for s in (0.0, 0.5, 1.0, 2.0):
+        rig = vrig.load_rig("shock-absorber", variant="thesis", severity=s)
+        assert rig.severity == s
+        assert rig.parameters["free_play"] == pytest.approx(play * s)
+        t = rig.model.tendon("bush").id
+        lo, hi = rig.model.tendon_lengthspring[t]  # the dead band is [-play, +play]
+        assert (lo, hi) == pytest.approx((-play * s, play * s), abs=1e-15)
+    assert vrig.load_rig("shock-absorber", variant="thesis").severity == 1.0
+
+
+def test_severity_scales_after_the_overrides():
+    rig = vrig.load_rig("shock-absorber", variant="thesis", free_play=1e-3, severity=0.5)
+    assert rig.parameters["free_play"] == pytest.approx(0.5e-3)
+
+
+def test_damper_severity_zero_is_the_linearised_mount():
+    """s = 0: no quadratic/cubic stiffness, the Iwan sliders stuck (springyield 0 = elastic);
+    s = 2: twice the polynomial terms and half the slip displacements of the side-car."""
+    raw = json.loads(rig_path("elastomeric-damper").read_text())
+    slips = [r["scale"] for r in raw["parameters"]["iwan_slip_scale"]["apply"]]
+    thesis = _thesis("elastomeric-damper")
+    zero = vrig.load_rig("elastomeric-damper", variant="thesis", severity=0)
+    j = zero.model.joint("mount").id
+    k1 = raw["parameters"]["linear_stiffness"]["value"]
+    assert zero.model.jnt_stiffness[j] == pytest.approx(k1)
+    assert np.all(zero.model.jnt_stiffnesspoly[j] == 0)
+    for i in range(1, 5):
+        assert zero.model.tendon_springyield[zero.model.tendon(f"iwan{i}").id] == 0
+    two = vrig.load_rig("elastomeric-damper", variant="thesis", severity=2)
+    assert two.model.jnt_stiffnesspoly[j][:2] == pytest.approx(
+        [2 * thesis["quadratic_stiffness"], 2 * thesis["cubic_stiffness"]]
+    )
+    for i, slip in enumerate(slips, start=1):
+        y = two.model.tendon_springyield[two.model.tendon(f"iwan{i}").id]
+        assert y == pytest.approx(slip * thesis["iwan_slip_scale"] / 2)
+
+
+def test_linearised_damper_responds_in_proportion_to_its_drive():
+    """Superposition holds on the linearised mount (s = 0) and fails on the calibrated one:
+    doubling a noise-free drive doubles the load within the hydraulics' own small
+    non-linearity."""
+    def ratio(s):
+        rig = vrig.load_rig(
+            "elastomeric-damper", variant="thesis", severity=s, valve_noise=0.0, load_noise=0.0
+        )
+        n = round(2.0 * rig.fs)
+        t = np.arange(n) / rig.fs
+        x = 2e-3 * np.sin(2 * np.pi * 4 * t) * np.sin(np.pi * t / t[-1]) ** 2
+        one = rig.run(x[:, None], seed=1).data[:, 0]
+        two = rig.run(2 * x[:, None], seed=1).data[:, 0]
+        return np.linalg.norm(two - 2 * one) / np.linalg.norm(2 * one)
+
+    assert ratio(0.0) < 0.02
+    assert ratio(1.0) > 5 * ratio(0.0)
+
+
+def test_side_car_severity_must_scale_documented_numeric_parameters(tmp_path):
+    spec = rig_path("shock-absorber")
+    d = json.loads(spec.read_text())
+    d["mjcf"] = str((spec.parent / d["mjcf"]).resolve())
+    for scales, match in (({"mounting": "proportional"}, "numeric"), ({"free_ply": "proportional"}, "free_ply")):
+        d["severity"] = {"description": "x", "scales": scales}
+        path = tmp_path / "s.rig.json"
+        path.write_text(json.dumps(d))
+        with pytest.raises(RigParameterError, match=match):
+            vrig.load_rig(path)
+    d["severity"] = {"description": "x", "scales": {"free_play": "quadratic"}}
+    path.write_text(json.dumps(d))
+    with pytest.raises(RigParameterError, match="quadratic"):
+        vrig.load_rig(path)
+
+
+# --------------------------------------------------------- reconstruction on the severity axis
+
+_CACHE: dict = {}
+
+
+def _eta(name, severity, method="arx"):
+    """IT00 η0 [%] of the text's procedure (quick settings of benchmarks.calibrate) on the
+    calibrated twin at ``severity``, on the rig's objective channel."""
+    key = (name, severity, method)
+    if key not in _CACHE:
+        from benchmarks import calibrate
+        from vrig.reconstruction import InverseNarx
+
+        cal = calibrate.CALIBRATIONS[name]
+        rig = vrig.load_rig(name, seed=0, variant="thesis", severity=severity)
+        if method == "arx":
+            m = calibrate._arx(cal)
+        else:  # contains the ARX: all linear lags; quadratic terms of the inputs if BIC admits
+            kw = {"responses": cal["responses"]} if cal.get("responses") else {}
+            m = InverseNarx(cal["arx_order"], 2, kind="input-polynomial", criterion="bic", **kw)
+        errors = calibrate._reconstruct(rig, cal, m)[0]
+        _CACHE[key] = errors[calibrate._channels(cal, rig)[0]]
+    return _CACHE[key]
+
+
+@pytest.mark.parametrize("name", NONLINEAR)
+def test_linearised_twin_gives_a_narx_nothing_to_win(name):
+    arx, narx = _eta(name, 0.0), _eta(name, 0.0, "narx")
+    assert abs(narx - arx) <= 0.10 * arx, (arx, narx)
+
+
+@pytest.mark.parametrize("name", NONLINEAR)
+def test_linear_error_grows_with_severity(name):
+    e = [_eta(name, s) for s in (0.0, 1.0, 2.0)]
+    assert e[0] < e[1] < e[2], e
