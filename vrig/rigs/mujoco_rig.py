@@ -148,7 +148,7 @@ class MujocoRig:
         }
         self.severity = self._severity(severity)
         if severity is not None:
-            self.parameters = desc.severity.apply(self.parameters, self.severity)
+            self.parameters = desc.severity.apply(self.parameters, self.severity, desc.parameters)
         try:
             spec = mujoco.MjSpec.from_file(str(desc.mjcf))
         except ValueError as exc:

@@ -211,6 +211,9 @@ SEVERITY_LAWS = {
     "proportional": "value x s (a play, a gap, a polynomial stiffness coefficient: 0 removes it)",
     "reciprocal": "value / s, and 0 at s = 0 (a slip displacement whose 0 means 'no slider': "
     "at s -> 0 the element never slips, i.e. it is the elastic spring it is at s = 0)",
+    "linearised": "{'linearised': L}: L + s (value - L), kept at or above the parameter's minimum; "
+    "L is a number, another parameter's name, or {'mean': [names]} (e.g. asymmetric damping "
+    "about its mean; a contact that lifts off, bonded at s = 0)",
 }
 """How a :class:`Severity` scales a parameter's value with the severity ``s``."""
 
@@ -230,17 +233,36 @@ class Severity:
     """
 
     description: str
-    scales: dict  # parameter name -> law (a key of SEVERITY_LAWS)
+    scales: dict  # parameter name -> law: "proportional", "reciprocal" or {"linearised": L}
 
-    def apply(self, values: dict, s: float) -> dict:
-        """``values`` (parameter name -> value) with the scaled parameters at severity ``s``."""
+    def linearised_value(self, law: dict, values: dict) -> float:
+        """The value ``L`` of a ``{"linearised": L}`` law, resolved on ``values``."""
+        target = law["linearised"]
+        if isinstance(target, str):
+            return float(values[target])
+        if isinstance(target, dict):
+            return float(sum(float(values[k]) for k in target["mean"]) / len(target["mean"]))
+        return float(target)
+
+    def apply(self, values: dict, s: float, parameters: dict | None = None) -> dict:
+        """``values`` (parameter name -> value, the variant and overrides applied) with the
+        scaled parameters at severity ``s``; every linearised reference is resolved on the
+        unscaled ``values``. ``parameters`` (name -> :class:`Parameter`) supply the minima a
+        linearised law keeps to."""
         out = dict(values)
         for name, law in self.scales.items():
             v = float(values[name])
             if law == "proportional":
                 out[name] = v * s
-            else:  # reciprocal
+            elif law == "reciprocal":
                 out[name] = v / s if s > 0 else 0.0
+            else:
+                lin = self.linearised_value(law, values)
+                new = lin + s * (v - lin)
+                p = (parameters or {}).get(name)
+                if p is not None and p.minimum is not None:
+                    new = max(new, float(p.minimum))
+                out[name] = new
         return out
 
 
@@ -426,16 +448,23 @@ def _read_severity(raw: dict | None, params: dict, where: str) -> Severity | Non
     """The side-car's severity axis; every scaled parameter must be a documented numeric one."""
     if raw is None:
         return None
+    numeric = sorted(k for k, p in params.items() if not isinstance(p.value, str))
     for name, law in raw["scales"].items():
-        if name not in params or isinstance(params[name].value, str):
-            numeric = sorted(k for k, p in params.items() if not isinstance(p.value, str))
-            raise RigParameterError(
-                f"{where}: severity scales {name!r}, which is not a documented numeric "
-                f"parameter; documented numeric parameters: {numeric}",
-                f"severity.scales.{name}",
-                law,
-                ", ".join(numeric),
+        named = [name]
+        if isinstance(law, dict):
+            target = law["linearised"]
+            named += [target] if isinstance(target, str) else list(
+                target["mean"] if isinstance(target, dict) else []
             )
+        for k in named:
+            if k not in numeric:
+                raise RigParameterError(
+                    f"{where}: severity.scales.{name} names {k!r}, which is not a documented "
+                    f"numeric parameter; documented numeric parameters: {numeric}",
+                    f"severity.scales.{name}",
+                    law,
+                    ", ".join(numeric),
+                )
     return Severity(raw.get("description", ""), dict(raw["scales"]))
 
 
