@@ -296,7 +296,11 @@ def cmd_run(args) -> int:
     print(
         f"benchmark: {len(rigs)} rigs × {len(methods)} methods ({', '.join(methods)}) × "
         f"{len(desired)} desired × {len(seeds)} seeds"
-        + (f" × severities {', '.join(map(format_severity, args.severity))}" if args.severity else "")
+        + (
+            f" × severities {', '.join(map(format_severity, args.severity))}"
+            if args.severity
+            else ""
+        )
         + f" -> {out}/"
     )
     flat = [r for r in rigs if severities[r] == [None]]

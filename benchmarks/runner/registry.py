@@ -194,9 +194,7 @@ class ForwardFrf:
 def _register_builtins() -> None:
     from vrig.reconstruction import InverseArx, InverseFrf, InverseNarx
 
-    register_method(
-        "arx", lambda: InverseArx(4), description="inverse ARX(4), QanTiM", linear=True
-    )
+    register_method("arx", lambda: InverseArx(4), description="inverse ARX(4), QanTiM", linear=True)
     register_method(
         "narx",
         lambda: InverseNarx(4, 2, kind="full"),
