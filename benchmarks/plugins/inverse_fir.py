@@ -29,4 +29,4 @@ class InverseFir:
         return self.coef.size
 
 
-register_method("fir", lambda rig, band: InverseFir(), description="inverse FIR (example plugin)")
+register_method("fir", lambda: InverseFir(), description="inverse FIR, example plugin", linear=True)

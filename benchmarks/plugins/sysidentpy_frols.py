@@ -84,4 +84,5 @@ if FROLS is not None:
         lambda rig, band: InverseFrols(),
         description="SysIdentPy FROLS inverse NARX (example plugin, needs sysidentpy)",
         quick=False,
+        linear=False,
     )

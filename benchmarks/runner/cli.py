@@ -4,7 +4,7 @@
 
     python -m benchmarks run --quick                       # ~8 min on 2 shared cores
     python -m benchmarks run [--rigs R ...] [--methods M ...] [--desired D ...] [--seeds S ...]
-                             [--out DIR] [--backend process|serial|ray] [--workers N]
+                             [--severity S ...] [--out DIR] [--backend process|serial|ray] [--workers N]
                              [--address RAY_ADDRESS] [--plugin MODULE_OR_FILE.py ...]
     python -m benchmarks report --out DIR                  # rebuild leaderboard/plots
     python -m benchmarks list                              # rigs and registered methods
@@ -30,7 +30,7 @@ from pathlib import Path
 
 from .execute import BACKENDS, SettingsMismatchError, Store, execute, write_atomic
 from .lifetime import LockHeldError, PidLock, die_with_parent
-from .record import RecordKey, Settings
+from .record import SEVERITY_RANGE, RecordKey, Settings, check_severity, format_severity
 from .registry import (
     PluginError,
     default_plugin_specs,
@@ -57,7 +57,8 @@ every channel pair, three times per record); it is in the full run."""
 def _parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(
         prog="python -m benchmarks",
-        description="vrig reconstruction benchmark: rigs × methods × desired responses × seeds",
+        description="vrig reconstruction benchmark: rigs × methods × desired responses × seeds "
+        "(× non-linearity severities)",
     )
     sub = p.add_subparsers(dest="command", required=True)
     run = sub.add_parser(
@@ -72,6 +73,15 @@ def _parser() -> argparse.ArgumentParser:
     run.add_argument("--methods", nargs="+", help="method names (default: all registered)")
     run.add_argument("--desired", nargs="+", type=int, help="desired-response seeds")
     run.add_argument("--seeds", nargs="+", type=int, help="rig/identification seeds (default 0)")
+    run.add_argument(
+        "--severity",
+        nargs="+",
+        type=float,
+        metavar="S",
+        help="non-linearity severities in [0, 2] (vrig.load_rig(rig, severity=S); 0 linearised, "
+        "1 as loaded, 2 twice as non-linear); rigs without a severity axis run once as loaded. "
+        "Default: the rigs as loaded, no severity axis",
+    )
     run.add_argument("--seconds", type=float, help="desired record length [s]")
     run.add_argument("--iterations", type=int, help="iterations after IT00")
     run.add_argument("--gain", type=float, help="iteration gain")
@@ -265,7 +275,15 @@ def cmd_run(args) -> int:
     desired = args.desired or (QUICK_DESIRED if args.quick else FULL_DESIRED)
     seeds = args.seeds or (0,)
     out = args.out or Path("results") / ("benchmarks-quick" if args.quick else "benchmarks")
-    keys = [RecordKey(r, m, d, s) for r in rigs for m in methods for d in desired for s in seeds]
+    severities = _rig_severities(rigs, args.severity)
+    keys = [
+        RecordKey(r, m, d, s, sev)
+        for r in rigs
+        for m in methods
+        for d in desired
+        for s in seeds
+        for sev in severities[r]
+    ]
     store = Store(out)
     try:
         store.prepare(settings, overwrite=args.overwrite)
@@ -277,8 +295,20 @@ def cmd_run(args) -> int:
         return 2
     print(
         f"benchmark: {len(rigs)} rigs × {len(methods)} methods ({', '.join(methods)}) × "
-        f"{len(desired)} desired × {len(seeds)} seeds -> {out}/"
+        f"{len(desired)} desired × {len(seeds)} seeds"
+        + (
+            f" × severities {', '.join(map(format_severity, args.severity))}"
+            if args.severity
+            else ""
+        )
+        + f" -> {out}/"
     )
+    flat = [r for r in rigs if severities[r] == [None]]
+    if args.severity and flat:
+        print(
+            f"note: {', '.join(flat)} ha{'s' if len(flat) == 1 else 've'} no severity axis "
+            "(linear rigs; vrig.severity_rigs()): run once as loaded (severity None)"
+        )
     if threading.current_thread() is threading.main_thread():  # SIGTERM -> clean stop
         signal.signal(signal.SIGTERM, _terminate)
     thesis = None
@@ -330,6 +360,7 @@ def cmd_run(args) -> int:
         "methods": methods,
         "desired": list(desired),
         "seeds": list(seeds),
+        "severity": args.severity,
         "backend": args.backend,
         "workers": args.workers,
         "computed": len(summary["computed"]),
@@ -383,6 +414,19 @@ def cmd_list(args) -> int:
     return 0
 
 
+def _rig_severities(rigs: list[str], severity: list[float] | None) -> dict[str, list]:
+    """The severities each rig runs at: ``[None]`` (as loaded) without ``--severity`` and for
+    a rig without a severity axis (a linear rig refuses ``severity=``: it runs once, as
+    loaded, instead of failing or being dropped); else ``--severity``'s values."""
+    import vrig
+
+    if not severity:
+        return {r: [None] for r in rigs}
+    axis = set(vrig.severity_rigs())
+    values = sorted({check_severity(s) for s in severity})
+    return {r: (values if r in axis else [None]) for r in rigs}
+
+
 class _BadInput(Exception):
     """Bad input found before the run: one line, exit status 2."""
 
@@ -393,6 +437,13 @@ def _check_run_args(args) -> None:
     for flag, values in (("--desired", args.desired), ("--seeds", args.seeds)):
         if values and min(values) < 0:
             raise _BadInput(f"{flag} must be integers >= 0, got {values}")
+    lo, hi = SEVERITY_RANGE
+    bad = [s for s in args.severity or () if not lo <= s <= hi]  # NaN fails too
+    if bad:
+        raise _BadInput(
+            f"--severity must lie in [{lo:g}, {hi:g}] (0 linearised, 1 as loaded, 2 twice as "
+            f"non-linear), got {', '.join(map(str, bad))}"
+        )
     if args.backend == "ray" and importlib.util.find_spec("ray") is None:
         raise _BadInput("--backend ray needs Ray: pip install 'vrig[ray]' (or 'ray>=2.9')")
     if args.out is not None and args.out.exists() and not args.out.is_dir():

@@ -1,10 +1,15 @@
 """One benchmark record: a reconstruction of one desired response on one rig by one method.
 
-A record is a pure function of its key (rig, method, desired, seed) and the run's settings:
+A record is a pure function of its key (rig, method, desired, seed, severity) and the run's
+settings:
 
+* the rig is ``vrig.load_rig(rig, seed=..., fidelity=..., severity=severity)``; severity None
+  (the default, and every record written before the severity axis existed) is the rig as loaded,
+  without ``severity=``;
 * the desired response is the pseudo-field response :func:`vrig.field.pseudo_field` of rig
-  ``rig`` (loaded with seed 0) over its default simulation band, with seed ``desired``;
-* the reconstruction runs on the rig loaded with seed ``seed``:
+  ``rig`` (loaded with seed 0, at the record's severity) over its default simulation band, with
+  seed ``desired``;
+* the reconstruction runs on the rig loaded with seed ``seed`` at the same severity:
   ``vrig.reconstruct(rig, desired, method=<plugin's object>, iterations, gain, bandwidth,
   seed=seed)``.
 
@@ -57,10 +62,14 @@ import numpy as np
 from .registry import get_method, load_plugins, model_size
 
 __all__ = [
+    "SEVERITY_RANGE",
     "RecordKey",
     "Settings",
     "check_record",
+    "check_severity",
     "compute_record",
+    "format_severity",
+    "key_dict",
     "record_id",
     "strip_timing",
 ]
@@ -92,18 +101,78 @@ class Settings:
             raise ValueError(f"holdout must be 0.1..0.5, got {self.holdout}")
 
 
-@dataclass(frozen=True, order=True)
+SEVERITY_RANGE = (0.0, 2.0)
+"""Non-linearity severities a record can have (``vrig.load_rig(..., severity=s)``)."""
+
+
+def check_severity(severity) -> float | None:
+    """``severity`` as the record key holds it: None (the rig as loaded) or a float in
+    :data:`SEVERITY_RANGE`; raises ValueError otherwise."""
+    if severity is None:
+        return None
+    if isinstance(severity, bool) or not isinstance(severity, (int, float)):
+        raise ValueError(f"severity must be a number or None, got {severity!r}")
+    lo, hi = SEVERITY_RANGE
+    if not (math.isfinite(severity) and lo <= severity <= hi):
+        raise ValueError(f"severity must lie in [{lo:g}, {hi:g}], got {severity}")
+    return float(severity)
+
+
+@functools.total_ordering
+@dataclass(frozen=True)
 class RecordKey:
+    """What a record is a function of (with the run :class:`Settings`).
+
+    ``severity`` is the rig's non-linearity severity (``vrig.load_rig(rig, severity=s)``, s in
+    [0, 2]); None (default) is the rig as loaded without one, which is what every record made
+    before the severity axis existed is (their files have no ``severity`` in their key)."""
+
     rig: str
     method: str
     desired: int
     seed: int
+    severity: float | None = None
+
+    def __post_init__(self):
+        object.__setattr__(self, "severity", check_severity(self.severity))
+
+    def _order(self):
+        sev = -1.0 if self.severity is None else self.severity  # None sorts first
+        return (self.rig, self.method, self.desired, self.seed, sev)
+
+    def __lt__(self, other):
+        if not isinstance(other, RecordKey):
+            return NotImplemented
+        return self._order() < other._order()
+
+
+def key_dict(key: RecordKey) -> dict:
+    """The ``key`` field of ``key``'s record: ``{rig, method, desired, seed}``, plus
+    ``severity`` when it is not None (so a record at the rig as loaded is written exactly as
+    before the severity axis existed)."""
+    d = asdict(key)
+    if d["severity"] is None:
+        del d["severity"]
+    return d
+
+
+def format_severity(severity: float | None) -> str:
+    """``"None"`` or the shortest text that reads back as the same float (``0.5``, ``1``)."""
+    if severity is None:
+        return "None"
+    short = f"{severity:g}"
+    return short if float(short) == severity else repr(float(severity))
 
 
 def record_id(key: RecordKey) -> str:
-    """File-name-safe id: ``rig--method--dDESIRED--sSEED``."""
+    """File-name-safe id: ``rig--method--dDESIRED--sSEED``, with ``--sevSEVERITY`` appended
+    when the key has a severity (``...--s0--sev0.5``); a key without one keeps the id it had
+    before the severity axis existed, so older results folders resume."""
     safe = "".join(c if c.isalnum() or c in "-_." else "_" for c in key.rig)
-    return f"{safe}--{key.method}--d{key.desired}--s{key.seed}"
+    rid = f"{safe}--{key.method}--d{key.desired}--s{key.seed}"
+    if key.severity is not None:
+        rid += f"--sev{format_severity(key.severity)}"
+    return rid
 
 
 def _is_int(x) -> bool:
@@ -147,17 +216,25 @@ def check_record(rec, key: RecordKey | None = None, settings: Settings | None = 
     if rec.get("schema") != SCHEMA:
         return f"schema {rec.get('schema')!r}, not {SCHEMA}"
     k = rec.get("key")
-    fields = ("rig", "method", "desired", "seed")
-    if not (isinstance(k, dict) and set(k) == set(fields)):
-        return "key is not {rig, method, desired, seed}"
+    fields = {"rig", "method", "desired", "seed"}
+    if not (isinstance(k, dict) and set(k) in (fields, fields | {"severity"})):
+        return "key is not {rig, method, desired, seed[, severity]}"
     if not (isinstance(k["rig"], str) and isinstance(k["method"], str)):
         return "key rig/method are not strings"
     if not (_is_int(k["desired"]) and _is_int(k["seed"])):
         return "key desired/seed are not integers"
-    if rec.get("id") != record_id(RecordKey(**k)):
+    if "severity" in k:  # written only when not None: a null severity is not a record's
+        if k["severity"] is None:
+            return "key severity is null (a record at the rig as loaded has no severity)"
+        try:
+            check_severity(k["severity"])
+        except ValueError as exc:
+            return f"key {exc}"
+    have = RecordKey(**k)
+    if rec.get("id") != record_id(have):
         return f"id {rec.get('id')!r} does not match its key {k}"
-    if key is not None and k != asdict(key):
-        return f"a record of {record_id(RecordKey(**k))}, not of {record_id(key)}"
+    if key is not None and have != key:
+        return f"a record of {record_id(have)}, not of {record_id(key)}"
     if settings is not None and rec.get("settings") != asdict(settings):
         return "made with other settings"
     if not isinstance(rec.get("timing"), dict):
@@ -227,13 +304,25 @@ class _Timed:
         return d() if callable(d) else type(self.wrapped).__name__
 
 
-@functools.lru_cache(maxsize=8)
-def _desired(rig_name: str, fidelity: str, seconds: float, desired: int):
-    """The pseudo-field desired response (pure function of its arguments; cached per process)."""
+def _load_rig(rig_name: str, seed: int, fidelity: str, severity: float | None):
+    """``vrig.load_rig`` at ``severity`` (None: the rig as loaded, no ``severity=`` given)."""
     import vrig
+
+    extra = {} if severity is None else {"severity": severity}
+    return vrig.load_rig(rig_name, seed=seed, fidelity=fidelity, **extra)
+
+
+@functools.lru_cache(maxsize=8)
+def _desired(rig_name: str, fidelity: str, seconds: float, desired: int, severity=None):
+    """The pseudo-field desired response (pure function of its arguments; cached per process).
+
+    It is the response of the rig *at the record's severity* (seed 0) to the pseudo-field
+    drive: the field record a real rig with that non-linearity would have given, so every
+    severity has a desired response its rig can reproduce (the pseudo-field drive does), and
+    the error measures the method, not an unreachable target (benchmarks/README.md, Runner)."""
     from vrig.field import default_band, pseudo_field
 
-    rig = vrig.load_rig(rig_name, seed=0, fidelity=fidelity)
+    rig = _load_rig(rig_name, 0, fidelity, severity)
     band = default_band(rig)
     _drive, response = pseudo_field(rig, band, seconds, seed=desired)
     return band, response
@@ -314,7 +403,7 @@ def compute_record(key: RecordKey, settings: Settings, plugin_specs=()) -> dict:
     rec: dict = {
         "schema": SCHEMA,
         "id": record_id(key),
-        "key": asdict(key),
+        "key": key_dict(key),
         "settings": asdict(settings),
         "status": "failed",
         "error": None,
@@ -324,11 +413,15 @@ def compute_record(key: RecordKey, settings: Settings, plugin_specs=()) -> dict:
     try:
         plugin = get_method(key.method)
         rec["method_origin"] = plugin.origin
+        if plugin.linear is not None:
+            rec["method_linear"] = plugin.linear
         stage = "desired response"
-        band, desired = _desired(key.rig, settings.fidelity, float(settings.seconds), key.desired)
+        band, desired = _desired(
+            key.rig, settings.fidelity, float(settings.seconds), key.desired, key.severity
+        )
         rec["band"] = list(band)
         stage = "rig"
-        rig = vrig.load_rig(key.rig, seed=key.seed, fidelity=settings.fidelity)
+        rig = _load_rig(key.rig, key.seed, settings.fidelity, key.severity)
         rec["n_drives"], rec["n_responses"] = len(rig.inputs), len(rig.outputs)
         stage = "method"
         timed = _Timed(plugin.make(rig, band))

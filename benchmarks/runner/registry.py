@@ -56,6 +56,9 @@ class MethodPlugin:
     ``forward`` (optional) builds the object used for the *normal* (forward) modelling error
     with the roles of drive and response swapped; by default the method's own factory is used.
     ``quick`` says whether the method belongs to ``--quick`` runs; ``origin`` where it came from.
+    ``linear``: True for a linear model (ARX, FIR, FRF, split spectra of ARX), False for a
+    non-linear one (NARX), None when the plugin did not say; the leaderboard's severity section
+    compares the best non-linear with the best linear method (unclassified ones are left out).
     """
 
     name: str
@@ -64,6 +67,7 @@ class MethodPlugin:
     quick: bool = True
     forward: Callable | None = None
     origin: str = "builtin"
+    linear: bool | None = None
 
     def make(self, rig, band):
         return _call(self.factory, rig, band)
@@ -91,6 +95,7 @@ def register_method(
     description: str = "",
     quick: bool = True,
     forward: Callable | None = None,
+    linear: bool | None = None,
 ) -> MethodPlugin:
     """Register a reconstruction method under ``name`` (re-registering replaces it).
 
@@ -108,12 +113,18 @@ def register_method(
         Include the method in ``--quick`` runs (say False for slow methods).
     forward : callable, optional
         Factory of the object used for the normal modelling error (see ``record.py``).
+    linear : bool, optional
+        True if the method's model is linear in the response (ARX, FIR, FRF), False if it is
+        non-linear (NARX); None (default): unclassified, left out of the severity crossover
+        (the lowest severity at which the best non-linear method beats the best linear one).
     """
     if not name or not all(c.isalnum() or c in "-_" for c in name):
         raise ValueError(f"method name {name!r}: use letters, digits, '-' and '_' only")
     if not callable(factory):
         raise TypeError(f"factory of method {name!r} must be callable")
-    plugin = MethodPlugin(name, factory, description, bool(quick), forward, _LOADING[-1])
+    if linear is not None and not isinstance(linear, bool):
+        raise TypeError(f"linear of method {name!r} must be True, False or None, got {linear!r}")
+    plugin = MethodPlugin(name, factory, description, bool(quick), forward, _LOADING[-1], linear)
     _REGISTRY[name] = plugin
     return plugin
 
@@ -183,28 +194,32 @@ class ForwardFrf:
 def _register_builtins() -> None:
     from vrig.reconstruction import InverseArx, InverseFrf, InverseNarx
 
-    register_method("arx", lambda: InverseArx(4), description="inverse ARX(4), QanTiM")
+    register_method("arx", lambda: InverseArx(4), description="inverse ARX(4), QanTiM", linear=True)
     register_method(
         "narx",
         lambda: InverseNarx(4, 2, kind="full"),
         description="inverse NARX(4), quadratic, every monomial (full)",
         quick=False,  # its free run diverges on most rigs at --quick settings; narx-ip is quick
+        linear=False,
     )
     register_method(
         "narx-ip",
         lambda: InverseNarx(4, 2, kind="input-polynomial"),
         description="inverse NARX(4), quadratic, input-polynomial terms (vrig's default)",
+        linear=False,
     )
     register_method(
         "split",
         _split,
         description="split spectra at the band's geometric mean, inverse ARX(4) per band",
+        linear=True,
     )
     register_method(
         "frf",
         lambda: InverseFrf(),
         description="H1 FRF, regularised inverse (RPC)",
         forward=lambda: ForwardFrf(),
+        linear=True,
     )
 
 

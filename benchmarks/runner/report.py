@@ -3,10 +3,16 @@
 * ``records.json`` — the list of records (sorted by id), exactly as in ``records/``;
 * ``records.csv`` — one row per record, scalar fields (per-iteration η0 as ``a;b;c``);
 * ``leaderboard.md`` — the overall ranking and one table per rig (see :func:`leaderboard`);
-* ``plots/bars_<rig>.png`` — mean η0 at IT00 and at the best iteration per method;
-* ``plots/error_vs_iteration_<method>.png`` — mean η0 versus iteration, one line per record.
+  a rig run at a non-linearity severity s is its own "rig" ``rig@s`` there; when a rig has
+  records at more than one severity, a section "Severity" follows (:func:`severity_section`);
+* ``plots/bars_<rig>.png`` — mean η0 at IT00 and at the best iteration per method
+  (``bars_<rig>--sev<s>.png`` at severity s);
+* ``plots/error_vs_iteration_<method>.png`` — mean η0 versus iteration, one line per record;
+* ``plots/severity-<rig>.png`` — per rig with more than one severity: each method's IT00 and
+  best η0 against severity (:func:`plot_severity`).
 
-Figures use matplotlib's Agg canvas directly (no global backend switch).
+Figures use matplotlib's Agg canvas directly (no global backend switch) and are written
+atomically (``vrig.files.atomic_write``).
 """
 
 from __future__ import annotations
@@ -20,8 +26,18 @@ from pathlib import Path
 import numpy as np
 
 from .execute import write_atomic
+from .record import format_severity
 
-__all__ = ["aggregate", "leaderboard", "write_outputs"]
+__all__ = [
+    "aggregate",
+    "leaderboard",
+    "method_linearity",
+    "plot_severity",
+    "severity_crossover",
+    "severity_section",
+    "severity_tables",
+    "write_outputs",
+]
 
 FAILED_SCORE = 100.0  # η0 [%] a failed record counts as in the overall ranking
 
@@ -31,6 +47,7 @@ _CSV_FIELDS = [
     "method",
     "desired",
     "seed",
+    "severity",
     "status",
     "eta0_it00",
     "eta0_final",
@@ -61,11 +78,29 @@ def _mean(values):
     return float(np.mean(vals)) if vals else None
 
 
+def severity_of(record: dict) -> float | None:
+    """The record's severity (None: the rig as loaded, and every record older than the axis)."""
+    return record["key"].get("severity")
+
+
+def rig_label(record: dict) -> str:
+    """``rig``, or ``rig@s`` for a record at severity s (a rig at two severities is two rigs
+    in the leaderboard's tables: their errors are not averaged together)."""
+    sev = severity_of(record)
+    rig = record["key"]["rig"]
+    return rig if sev is None else f"{rig}@{format_severity(sev)}"
+
+
+def _file_label(label: str) -> str:
+    return label.replace("@", "--sev")
+
+
 def aggregate(records: list[dict]) -> dict:
-    """Per (rig, method): counts and means over the records (desired responses × seeds)."""
+    """Per (rig, method): counts and means over the records (desired responses × seeds); the
+    rig is :func:`rig_label` (``rig@s`` at severity s)."""
     groups: dict[tuple[str, str], list[dict]] = defaultdict(list)
     for r in records:
-        groups[(r["key"]["rig"], r["key"]["method"])].append(r)
+        groups[(rig_label(r), r["key"]["method"])].append(r)
     out = {}
     for (rig, method), recs in sorted(groups.items()):
         ok = [r for r in recs if r["status"] == "ok"]
@@ -130,6 +165,14 @@ def leaderboard(records: list[dict], settings: dict | None = None, *, title: str
             f"the last {100 * s['holdout']:.0f} % of the identification records. η0 is the "
             "DC-corrected QanTiM fit value (eq. 5-28), mean over response channels, lower is "
             "better; values are means over desired responses × seeds.",
+            "",
+        ]
+    if any(severity_of(r) is not None for r in records):
+        lines += [
+            "`rig@s` is the rig at non-linearity severity s (`vrig.load_rig(rig, severity=s)`: "
+            "0 linearised, 1 as loaded, 2 twice as non-linear; the desired response is the "
+            "pseudo-field response of the rig at that severity); a rig without `@` is the rig "
+            "as loaded.",
             "",
         ]
     wins: dict[str, int] = defaultdict(int)
@@ -206,13 +249,243 @@ def leaderboard(records: list[dict], settings: dict | None = None, *, title: str
             lines += ["", "Failures:", ""]
             lines += [f"* {m}: {f}" for m, f in fails]
         lines.append("")
+    lines += severity_section(records)
     descs = {}
     for (_rig, m), a in agg.items():
         descs.setdefault(m, a["description"])
+    linear = method_linearity(records)
+    kind = {True: " (linear)", False: " (non-linear)", None: ""}
     lines += ["## Methods", ""]
-    lines += [f"* **{m}**: {descs.get(m) or '—'}" for m in methods]
+    lines += [f"* **{m}**{kind[linear.get(m)]}: {descs.get(m) or '—'}" for m in methods]
     lines.append("")
     return "\n".join(lines)
+
+
+# ---------------------------------------------------------------------------------------------
+# the severity axis
+# ---------------------------------------------------------------------------------------------
+def method_linearity(records: list[dict]) -> dict[str, bool | None]:
+    """``{method: True (linear) | False (non-linear) | None (unclassified)}``: the
+    ``method_linear`` field of its records (the registry's ``linear`` flag when the record
+    was made), else the flag of the method registered in this process, else None."""
+    from .registry import get_method
+
+    out: dict[str, bool | None] = {}
+    for r in records:
+        m = r["key"]["method"]
+        if r.get("method_linear") is not None:
+            out[m] = bool(r["method_linear"])
+        else:
+            out.setdefault(m, None)
+    for m, flag in out.items():
+        if flag is None:
+            try:
+                out[m] = get_method(m).linear
+            except KeyError:
+                pass
+    return out
+
+
+def severity_tables(records: list[dict]) -> dict[str, dict]:
+    """Per rig with records at two or more severities (None, the rig as loaded, is not a
+    point of the axis): ``{"severities": [s, ...], "methods": [m, ...], "cells": {(m, s):
+    {"n", "ok", "eta0_it00", "eta0_best"}}}``; the η0 values [%] are means over the ok records
+    (desired responses × seeds) of the mean over channels."""
+    by_rig: dict[str, dict] = defaultdict(lambda: defaultdict(list))
+    for r in records:
+        sev = severity_of(r)
+        if sev is not None:
+            by_rig[r["key"]["rig"]][(r["key"]["method"], sev)].append(r)
+    out = {}
+    for rig, groups in sorted(by_rig.items()):
+        sevs = sorted({s for _m, s in groups})
+        if len(sevs) < 2:
+            continue
+        cells = {}
+        for key, recs in groups.items():
+            ok = [r for r in recs if r["status"] == "ok"]
+            cells[key] = {
+                "n": len(recs),
+                "ok": len(ok),
+                "eta0_it00": _mean(r["eta0_it00"] for r in ok),
+                "eta0_best": _mean(r["eta0_best"] for r in ok),
+            }
+        out[rig] = {
+            "severities": sevs,
+            "methods": sorted({m for m, _s in groups}),
+            "cells": cells,
+        }
+    return out
+
+
+def severity_crossover(
+    it00: dict[str, dict[float, float | None]], linear: dict[str, bool | None]
+) -> dict:
+    """The lowest severity at which the best non-linear method beats the best linear one at
+    IT00.
+
+    ``it00[method][severity]`` is the method's mean IT00 η0 [%] at that severity, None where
+    it failed (or has no record there); a failed method reaches nothing, so it is beaten by
+    any method that ran. ``linear[method]`` is True/False/None (None: left out). "Beats" is a
+    strictly lower η0. Returns ``{"severity": s or None, "reason": str, "nonlinear": (method,
+    η0) or None, "linear": (method, η0) or None, "not_at": [higher severities where the
+    non-linear method does not beat the linear one again]}``."""
+    lin = [m for m in it00 if linear.get(m) is True]
+    nonlin = [m for m in it00 if linear.get(m) is False]
+    out = {"severity": None, "nonlinear": None, "linear": None, "not_at": []}
+    if not lin or not nonlin:
+        out["reason"] = (
+            "no crossover: needs a linear and a non-linear method "
+            f"(linear: {', '.join(lin) or 'none'}; non-linear: {', '.join(nonlin) or 'none'})"
+        )
+        return out
+
+    def best(methods, s):
+        vals = [(it00[m].get(s), m) for m in methods if it00[m].get(s) is not None]
+        return min(vals) if vals else None
+
+    sevs = sorted({s for m in it00 for s in it00[m]})
+    beats = {}
+    for s in sevs:
+        b_nl, b_l = best(nonlin, s), best(lin, s)
+        beats[s] = b_nl is not None and (b_l is None or b_nl[0] < b_l[0])
+        if beats[s] and out["severity"] is None:
+            out["severity"] = s
+            out["nonlinear"] = (b_nl[1], b_nl[0])
+            out["linear"] = None if b_l is None else (b_l[1], b_l[0])
+    if out["severity"] is None:
+        out["reason"] = (
+            f"no crossover in the range {format_severity(sevs[0])}–{format_severity(sevs[-1])}: "
+            f"the best non-linear method ({', '.join(nonlin)}) never beats the best linear one "
+            f"({', '.join(lin)}) at IT00"
+        )
+        return out
+    out["not_at"] = [s for s in sevs if s > out["severity"] and not beats[s]]
+    (m_nl, v_nl), b_l = out["nonlinear"], out["linear"]
+    versus = "every linear method failed" if b_l is None else f"{b_l[0]} {b_l[1]:.1f} %"
+    out["reason"] = (
+        f"crossover at severity {format_severity(out['severity'])}: {m_nl} {v_nl:.1f} % "
+        f"beats {versus} (IT00 η0)"
+        + (
+            f"; not again at {', '.join(map(format_severity, out['not_at']))}"
+            if out["not_at"]
+            else ""
+        )
+    )
+    return out
+
+
+def _it00_by_method(table: dict) -> dict[str, dict[float, float | None]]:
+    """``{method: {severity: IT00 η0 or None}}``: None where a record failed or is missing."""
+    out = {}
+    for m in table["methods"]:
+        out[m] = {}
+        for s in table["severities"]:
+            c = table["cells"].get((m, s))
+            ok = c is not None and c["ok"] == c["n"] and c["eta0_it00"] is not None
+            out[m][s] = c["eta0_it00"] if ok else None
+    return out
+
+
+def _cell(c: dict | None, field: str) -> str:
+    if c is None:
+        return ""
+    if c["ok"] == 0:
+        return "fail"
+    return _f(c[field]) + ("" if c["ok"] == c["n"] else f" ({c['ok']}/{c['n']})")
+
+
+def severity_section(records: list[dict]) -> list[str]:
+    """The leaderboard's "Severity" section (empty when no rig has two or more severities):
+    per rig, method × severity tables of IT00 and best η0 and the crossover
+    (:func:`severity_crossover`)."""
+    tables = severity_tables(records)
+    if not tables:
+        return []
+    linear = method_linearity(records)
+    kind = {True: "linear", False: "non-linear", None: "unclassified"}
+    lines = [
+        "## Severity",
+        "",
+        "Each method's mean η0 [%] against the rig's non-linearity severity s [-] "
+        "(`vrig.load_rig(rig, severity=s)`: 0 linearised, 1 as loaded, 2 twice as non-linear; "
+        "the desired response is the pseudo-field response of the rig at that severity). "
+        "Crossover: the lowest severity at which the best non-linear method beats the best "
+        "linear one at IT00 (method classes from the registry's `linear` flag; a failed record "
+        "counts as worse than any result). Plots: `plots/severity-<rig>.png`.",
+        "",
+    ]
+    for rig, table in tables.items():
+        sevs = table["severities"]
+        head = "| method | class | " + " | ".join(f"s = {format_severity(s)}" for s in sevs)
+        rule = "|---|---|" + "---:|" * len(sevs)
+        lines += [f"### {rig}", ""]
+        for field, what in (("eta0_it00", "IT00"), ("eta0_best", "best")):
+            lines += [f"{what} η0 [%]:", "", head + " |", rule]
+            for m in table["methods"]:
+                cells = [_cell(table["cells"].get((m, s)), field) for s in sevs]
+                lines.append(f"| {m} | {kind[linear.get(m)]} | " + " | ".join(cells) + " |")
+            lines.append("")
+        cross = severity_crossover(_it00_by_method(table), linear)
+        lines += [f"**{cross['reason']}**", ""]
+    return lines
+
+
+def plot_severity(rig: str, table: dict, linear: dict, path: Path) -> Path:
+    """Each method's IT00 (left) and best (right) mean η0 against severity; linear methods
+    solid, non-linear dashed, unclassified dotted; a failed point is a red × at the top; the
+    crossover (if any) a vertical line. Log y when the values span more than a decade."""
+    from matplotlib.transforms import blended_transform_factory
+
+    sevs = table["severities"]
+    fig = _figure(10.0, 4.2)
+    axes = fig.subplots(1, 2, sharey=True)
+    values = [
+        c[f]
+        for c in table["cells"].values()
+        for f in ("eta0_it00", "eta0_best")
+        if c["ok"] and c[f] is not None and c[f] > 0
+    ]
+    log = bool(values) and max(values) / min(values) > 10
+    style = {True: ("-", "o", "linear"), False: ("--", "s", "non-linear"), None: (":", "^", "")}
+    cross = severity_crossover(_it00_by_method(table), linear)
+    for ax, field, what in zip(
+        axes, ("eta0_it00", "eta0_best"), ("IT00", "best iteration"), strict=True
+    ):
+        top = blended_transform_factory(ax.transData, ax.transAxes)
+        for i, m in enumerate(table["methods"]):
+            ls, marker, cls = style[linear.get(m)]
+            xs, ys, failed = [], [], []
+            for s in sevs:
+                c = table["cells"].get((m, s))
+                if c is None:
+                    continue
+                if c["ok"] < c["n"] or c[field] is None:
+                    failed.append(s)
+                if c["ok"] and c[field] is not None:
+                    xs.append(s)
+                    ys.append(c[field])
+            label = f"{m} ({cls})" if cls else m
+            ax.plot(xs, ys, linestyle=ls, marker=marker, color=f"C{i % 10}", label=label)
+            if failed:
+                ax.plot(
+                    failed, [0.96] * len(failed), "x", color="tab:red", ms=9, mew=2,
+                    transform=top, label=f"{m}: failed record(s)",
+                )  # fmt: skip
+        if cross["severity"] is not None:
+            ax.axvline(cross["severity"], color="0.4", linestyle="-.", linewidth=1)
+            ax.text(cross["severity"], 0.02, " crossover", transform=top, color="0.3", fontsize=8)
+        if log:
+            ax.set_yscale("log")
+        ax.set_xticks(sevs, [format_severity(s) for s in sevs])
+        ax.set_xlabel("severity [-]")
+        ax.set_title(f"{what}")
+        ax.grid(alpha=0.3, which="both")
+    axes[0].set_ylabel("mean η0 [%]")
+    axes[1].legend(fontsize=8)
+    fig.suptitle(f"{rig}: reconstruction error against non-linearity severity", fontsize=11)
+    fig.tight_layout()
+    return _save(fig, path)
 
 
 def _csv_row(r: dict) -> dict:
@@ -252,6 +525,15 @@ def _figure(w=7.0, h=4.0):
     return fig
 
 
+def _save(fig, path: Path) -> Path:
+    """Write ``fig`` as PNG to ``path`` atomically (a killed run leaves no half image)."""
+    from vrig.files import atomic_write
+
+    with atomic_write(path, "wb") as fh:
+        fig.savefig(fh, format="png", dpi=100)
+    return path
+
+
 def plot_bars(rig: str, agg: dict, path: Path) -> Path:
     methods = sorted(m for r, m in agg if r == rig)
     fig = _figure(max(5.0, 1.1 * len(methods) + 2), 4.0)
@@ -280,8 +562,7 @@ def plot_bars(rig: str, agg: dict, path: Path) -> Path:
     ax.legend()
     ax.grid(axis="y", alpha=0.3)
     fig.tight_layout()
-    fig.savefig(path, dpi=100)
-    return path
+    return _save(fig, path)
 
 
 def plot_iterations(method: str, records: list[dict], path: Path) -> Path:
@@ -289,14 +570,14 @@ def plot_iterations(method: str, records: list[dict], path: Path) -> Path:
 
     fig = _figure()
     ax = fig.add_subplot()
-    rigs = sorted({r["key"]["rig"] for r in records})
+    rigs = sorted({rig_label(r) for r in records})
     colors = {rig: f"C{i % 10}" for i, rig in enumerate(rigs)}
     labelled = set()
     for r in sorted(records, key=lambda r: r["id"]):
         ys = [y for y in (r.get("eta0_per_iteration") or []) if y is not None]
         if r["status"] != "ok" or not ys:
             continue
-        rig = r["key"]["rig"]
+        rig = rig_label(r)
         ax.semilogy(
             range(len(ys)),
             ys,
@@ -306,7 +587,7 @@ def plot_iterations(method: str, records: list[dict], path: Path) -> Path:
             alpha=0.8,
         )
         labelled.add(rig)
-    failed = sorted({r["key"]["rig"] for r in records if r["status"] != "ok"})
+    failed = sorted({rig_label(r) for r in records if r["status"] != "ok"})
     title = f"{method}: error versus iteration"
     if failed:
         title += f"\n(failed on: {', '.join(failed)})"
@@ -318,8 +599,7 @@ def plot_iterations(method: str, records: list[dict], path: Path) -> Path:
     if labelled:
         ax.legend(fontsize=8)
     fig.tight_layout()
-    fig.savefig(path, dpi=100)
-    return path
+    return _save(fig, path)
 
 
 def write_outputs(
@@ -341,10 +621,13 @@ def write_outputs(
         pdir.mkdir(exist_ok=True)
         agg = aggregate(records)
         for rig in sorted({r for r, _ in agg}):
-            written.append(plot_bars(rig, agg, pdir / f"bars_{rig}.png"))
+            written.append(plot_bars(rig, agg, pdir / f"bars_{_file_label(rig)}.png"))
         by_method = defaultdict(list)
         for r in records:
             by_method[r["key"]["method"]].append(r)
         for m, recs in sorted(by_method.items()):
             written.append(plot_iterations(m, recs, pdir / f"error_vs_iteration_{m}.png"))
+        linear = method_linearity(records)
+        for rig, table in severity_tables(records).items():
+            written.append(plot_severity(rig, table, linear, pdir / f"severity-{rig}.png"))
     return written
