@@ -1,6 +1,7 @@
 """Reproduce the reference text's reconstruction tables on the virtual rigs, side by side.
 
     python -m benchmarks.thesis_tables [--quick] [--out results/thesis]
+                                       [--variant NAME [NAME ...]] [--severity S]
 
 Each row runs the same procedure as the text (rig, simulation band, model type and order, the
 responses the inverse is built on, the iteration reported) on vrig's virtual rig, with a
@@ -13,6 +14,19 @@ are not expected to match (other rigs, other field data); the ordering is the ph
 Tables: 6.3 (elastomeric damper), 6.16 (shock absorber), 6.12 (radiator), 3.4 (two-channel fuel
 tank, split spectra), 3.5 (motorcycle, multiple-transducer split spectra), 3.7 (seven-channel
 fuel tank, rig-specific identification PSDs of Algorithm 3.1).
+
+``--variant NAME``: each table runs on the rig's variant NAME where the rig has it, else on the
+rig's default variant (e.g. the motorcycle has no ``"thesis"``); several names run each table
+once per variant, side by side. ``--severity S`` scales the non-linear elements of the rigs with
+a severity axis (``vrig.severity_rigs()``); the linear rigs run as loaded. Every heading names
+the variant (and severity) each column ran on.
+
+Calibrated versus predicted (issue 12): a twin's ``"thesis"`` variant was calibrated on ONE row
+of its table, the text's linear baseline (``benchmarks.calibrate.CALIBRATIONS``: Table 6.3
+inverse ARX(6) IT00, 6.16 ARX(4) IT00, 6.12 ARX(6) top tank IT00, 3.4 full-spectrum ARX(4)
+IT00). That row is marked *calibrated on* and judged against the text within the calibration's
+tolerance (±25 % relative); every other row is a *prediction*, never tuned, judged on the
+text's ordering and on the size of its gain over the baseline row against the text's gain.
 """
 
 from __future__ import annotations
@@ -26,7 +40,15 @@ import numpy as np
 
 from vrig.files import atomic_write
 
-__all__ = ["TABLES", "belgian_road_example", "table_3_7", "thesis_report"]
+__all__ = [
+    "TABLES",
+    "belgian_road_example",
+    "calibrated_row",
+    "gain_verdicts",
+    "resolve_variant",
+    "table_3_7",
+    "thesis_report",
+]
 
 
 @dataclass
@@ -51,6 +73,7 @@ class Table:
     verdict: str  # the ordering the text found, as a Python expression over row values v[i]
     claim: str  # the same in words
     note: str = ""
+    baseline: int = 0  # the row gains are measured from when no row was calibrated on
 
     def verdict_rows(self):
         """The rows the text reports (vrig-only rows, labelled "vrig:", come after them)."""
@@ -237,20 +260,116 @@ TABLES = [
 ]
 
 
+def resolve_variant(rig_name: str, requested: str | None) -> str:
+    """The variant a table on ``rig_name`` runs on for ``--variant requested``: ``requested``
+    where the rig has it, else the rig's default variant (``None``: the default)."""
+    from vrig.rigs import rig_path
+    from vrig.rigs.spec import read_description
+
+    desc = read_description(rig_path(rig_name))
+    return requested if requested in desc.variants else desc.default_variant
+
+
+def resolve_severity(rig_name: str, severity: float | None) -> float | None:
+    """``severity`` for a rig with a severity axis, ``None`` (as loaded) for a linear rig."""
+    import vrig
+
+    if severity is None or rig_name not in vrig.severity_rigs():
+        return None
+    return float(severity)
+
+
+def _setting(rig_name: str, requested: str | None, severity: float | None) -> tuple:
+    """(variant, severity) a table on ``rig_name`` runs on."""
+    return resolve_variant(rig_name, requested), resolve_severity(rig_name, severity)
+
+
+def _setting_text(setting: tuple, requested: str | None) -> str:
+    variant, severity = setting
+    text = f"variant {variant!r}"
+    if requested is not None and requested != variant:
+        text += f" (the rig has no {requested!r})"
+    if severity is not None:
+        text += f", severity {severity:g}"
+    return text
+
+
+def calibrated_row(table: Table) -> int | None:
+    """Index of the row the rig's ``"thesis"`` variant was calibrated on, taken from
+    ``benchmarks.calibrate.CALIBRATIONS`` (the single source of truth): the inverse ARX of the
+    calibration's order, on its responses, at IT00, in its band. ``None`` if the rig was not
+    calibrated (every row a prediction). A calibrated rig whose table has no such row, or whose
+    text figure for it differs from the calibration's target, is an error."""
+    from benchmarks.calibrate import CALIBRATIONS
+    from vrig.reconstruction import InverseArx
+
+    cal = CALIBRATIONS.get(table.rig)
+    if cal is None:
+        return None
+    if tuple(table.band) != tuple(cal["band"]):
+        raise ValueError(
+            f"{table.name}: band {table.band} Hz is not the band {cal['band']} Hz "
+            f"{table.rig!r} was calibrated in (benchmarks/calibrate.py)"
+        )
+    responses = list(cal["responses"]) if cal.get("responses") else None
+    for i, row in enumerate(table.verdict_rows()):
+        if row.iteration or not callable(row.method):
+            continue
+        method = row.method()
+        if not isinstance(method, InverseArx) or method.order != cal["arx_order"]:
+            continue
+        if (list(method.responses) if method.responses is not None else None) != responses:
+            continue
+        chans = _cal_channels(table)
+        texts = [t for c, t in zip(table.channels, row.thesis, strict=False) if c in chans]
+        if any(t != cal["target"] for t in texts):
+            raise ValueError(
+                f"{table.name}: row {row.label!r} gives the text's figure {row.thesis} but "
+                f"{table.rig!r} was calibrated on {cal['target']:g} % (benchmarks/calibrate.py)"
+            )
+        return i
+    raise ValueError(
+        f"{table.name}: no row is the linear baseline {table.rig!r} was calibrated on "
+        f"(inverse ARX({cal['arx_order']}) on {responses or 'all responses'}, IT00; "
+        "benchmarks/calibrate.py CALIBRATIONS)"
+    )
+
+
+def _cal_channels(table: Table) -> list:
+    """The channels the calibration's objective is taken on (its ``channels``, default the
+    table's first channel: the rig's first output in every table here)."""
+    from benchmarks.calibrate import CALIBRATIONS
+
+    cal = CALIBRATIONS.get(table.rig, {})
+    return list(cal.get("channels") or table.channels[:1])
+
+
 def _pseudo_field(rig, band, seconds, cache):
     from vrig.field import pseudo_field
 
-    key = (rig.name, band, seconds)
+    key = (rig.name, getattr(rig, "variant", None), getattr(rig, "severity", None), band, seconds)
     if key not in cache:
         cache[key] = pseudo_field(rig, band, seconds, seed=0)
     return cache[key]
 
 
-def run_table(table: Table, *, seconds: float, id_seconds: float, cache: dict, log=print):
-    """vrig's figures for one table: a list (per row) of per-channel values or an error string."""
+def run_table(
+    table: Table,
+    *,
+    seconds: float,
+    id_seconds: float,
+    cache: dict,
+    variant: str | None = None,
+    severity: float | None = None,
+    log=print,
+):
+    """vrig's figures for one table: a list (per row) of per-channel values or an error string.
+
+    ``variant``/``severity``: as resolved by :func:`resolve_variant`/:func:`resolve_severity`
+    (``None``: the rig's default, as loaded)."""
     import vrig
 
-    rig = vrig.load_rig(table.rig, seed=0)
+    rig = vrig.load_rig(table.rig, seed=0, variant=variant, severity=severity)
     _desdrv, desired = _pseudo_field(rig, table.band, seconds, cache)
     runs, values = {}, []
     for row in table.rows:
@@ -293,30 +412,141 @@ def _verdict(table: Table, values) -> str:
     return f"{'same ordering as' if ok else 'different ordering from'} the text ({table.claim})"
 
 
-def _markdown(table: Table, values) -> str:
+CALIBRATED_VARIANT = "thesis"  # the variant benchmarks.calibrate writes (write_variant)
+
+
+def calibrated_verdict(table: Table, values, variant: str | None = CALIBRATED_VARIANT) -> str:
+    """The calibrated row's verdict: each objective channel within the calibration's
+    tolerance of the text's figure (the tolerance and target from ``CALIBRATIONS``). On
+    another ``variant`` than the calibrated one it is said to be a comparison only."""
+    from benchmarks.calibrate import CALIBRATIONS, TOLERANCE
+
+    i = calibrated_row(table)
+    if i is None:
+        return (
+            f"no row calibrated on: {table.rig!r} has no calibration "
+            "(benchmarks/calibrate.py); every row is a prediction"
+        )
+    cal, row, v = CALIBRATIONS[table.rig], table.rows[i], values[i]
+    if isinstance(v, str):
+        return f"calibrated row ({row.label}) failed: {v[:120]}"
+    lo, hi = cal["target"] * (1 - TOLERANCE), cal["target"] * (1 + TOLERANCE)
+    figs = {c: v[table.channels.index(c)] for c in _cal_channels(table)}
+    ok = all(lo <= x <= hi for x in figs.values())
+    shown = ", ".join(f"{c} {x:.1f} %" for c, x in figs.items())
+    note = (
+        ""
+        if variant == CALIBRATED_VARIANT
+        else f" (variant {variant!r} is not the calibrated {CALIBRATED_VARIANT!r}: a comparison)"
+    )
+    return (
+        f"calibrated row ({row.label}): {shown} vs the text's {cal['target']:g} % -> "
+        f"{'within' if ok else 'OUTSIDE'} ±{TOLERANCE:.0%} ({lo:.1f}-{hi:.1f} %){note}"
+    )
+
+
+GAIN_TOLERANCE = 0.25  # relative: a predicted gain "as the text's" if within ±25 % of it
+
+
+def gain_verdicts(table: Table, values, baseline: int) -> list[str]:
+    """Per text-reported row other than ``baseline`` and per channel the text reports for both:
+    vrig's gain over the baseline row (percentage points, and as a fraction of the baseline)
+    against the text's. The size is judged on the fraction (the calibrated baseline itself
+    only lands within ±25 % of the text's): "as the text's" within ±25 % relative of it,
+    else larger or smaller; "none" where vrig's row is not below its baseline."""
+    out = []
+    base_v, base_t = values[baseline], table.rows[baseline].thesis
+    for i, row in enumerate(table.verdict_rows()):
+        if i == baseline:
+            continue
+        for k, c in enumerate(table.channels):
+            t_base = base_t[k] if k < len(base_t) else None
+            t_row = row.thesis[k] if k < len(row.thesis) else None
+            if t_base is None or t_row is None:
+                continue
+            text_gain = t_base - t_row
+            head = f"{row.label}, {c}: "
+            text = f"the text's {text_gain:g} pts ({text_gain / t_base:.0%} of {t_base:g} %)"
+            if isinstance(values[i], str) or isinstance(base_v, str):
+                out.append(head + f"not comparable (a procedure failed) vs {text}")
+                continue
+            b, r = base_v[k], values[i][k]
+            gain, frac = b - r, (b - r) / b
+            out.append(
+                head + f"gain {gain:.1f} pts ({frac:.0%} of {b:.1f} %) vs {text} -> "
+                + _gain_size(frac, text_gain / t_base)
+            )
+    return out
+
+
+def _gain_size(frac: float, text_frac: float) -> str:
+    """vrig's relative gain ``frac`` against the text's ``text_frac`` (both signed fractions of
+    their baselines: negative = worse than the baseline)."""
+    if text_frac == 0:
+        return "as the text's (none)" if abs(frac) < 0.05 else "a change where the text has none"
+    ratio = frac / text_frac
+    if ratio <= 0:
+        return "none (not below the baseline)" if text_frac > 0 else "opposite to the text's"
+    if abs(ratio - 1) <= GAIN_TOLERANCE:
+        return "as the text's"
+    return f"{'larger' if ratio > 1 else 'smaller'} ({ratio:.2f} x the text's)"
+
+
+def _baseline(table: Table) -> int:
+    i = calibrated_row(table)
+    return table.baseline if i is None else i
+
+
+def _fmt(v, k) -> str:
+    if isinstance(v, str):
+        return v if k == 0 else ""
+    return f"{v[k]:.1f}"
+
+
+def _markdown(table: Table, runs) -> str:
+    """``runs``: a list of (column name, setting text, values, variant), one per variant run."""
     chans = table.channels
-    head = "| procedure | " + " | ".join(f"vrig {c} [%]" for c in chans)
-    head += " | " + " | ".join(f"text {c} [%]" for c in chans) + " |"
+    cal_i = calibrated_row(table)
+    head = "| procedure | role | "
+    cols = []
+    for c in chans:
+        cols += [f"vrig({run[0]}) {c} [%]" for run in runs] + [f"text {c} [%]"]
+    head += " | ".join(cols) + " |"
     lines = [
         f"### {table.name}",
         "",
-        f"rig `{table.rig}`, band {table.band[0]:g}-{table.band[1]:g} Hz",
+        f"rig `{table.rig}`, band {table.band[0]:g}-{table.band[1]:g} Hz; "
+        + "; ".join(f"vrig({run[0]}) ran on {run[1]}" for run in runs),
     ]
     if table.note:
         lines.append(f"({table.note})")
-    lines += ["", head, "|" + "---|" * (1 + 2 * len(chans))]
-    for row, v in zip(table.rows, values, strict=True):
-        ours = [v] + [""] * (len(chans) - 1) if isinstance(v, str) else [f"{x:.1f}" for x in v]
-        text = ["-" if t is None else f"{t:g}" for t in row.thesis] or ["-"] * len(chans)
-        lines.append(f"| {row.label} | " + " | ".join(ours) + " | " + " | ".join(text) + " |")
-    lines += ["", f"**Verdict:** {_verdict(table, values)}", ""]
+    lines += ["", head, "|" + "---|" * (2 + len(cols))]
+    for i, row in enumerate(table.rows):
+        role = "CALIBRATED ON" if i == cal_i else "predicted"
+        cells = []
+        for k in range(len(chans)):
+            cells += [_fmt(run[2][i], k) for run in runs]
+            t = row.thesis[k] if k < len(row.thesis) else None
+            cells.append("-" if t is None else f"{t:g}")
+        lines.append(f"| {row.label} | {role} | " + " | ".join(cells) + " |")
+    lines.append("")
+    base = _baseline(table)
+    for name, _text, values, variant in runs:
+        tag = f"vrig({name})"
+        lines.append(f"**Calibrated, {tag}:** {calibrated_verdict(table, values, variant)}  ")
+        lines.append(f"**Predicted ordering, {tag}:** {_verdict(table, values)}  ")
+        gains = gain_verdicts(table, values, base)
+        what = "gain over the calibrated row" if cal_i is not None else "gain over the first row"
+        for g in gains:
+            lines.append(f"**Predicted {what}, {tag}:** {g}  ")
+    lines.append("")
     return "\n".join(lines)
 
 
 THESIS_3_7 = (20, 22, 19, 29, 23, 19, 37)
 
 
-def table_3_7(*, seconds: float, order: int = 4, log=print):
+def table_3_7(*, seconds: float, order: int = 4, variant: str | None = None, log=print):
     """Table 3.7: modelling error per channel, rig-specific (Algorithm 3.1) vs triangular PSD.
 
     A 0-40 Hz linear sine sweep at 0.015" (0.38 mm) is played through each actuator in turn
@@ -332,7 +562,7 @@ def table_3_7(*, seconds: float, order: int = 4, log=print):
     from vrig.signals import random_drive, rig_specific_psd, sine_sweep, triangular_psd
     from vrig.timehistory import TimeHistory
 
-    rig = vrig.load_rig("fuel-tank-7ch", seed=0)
+    rig = vrig.load_rig("fuel-tank-7ch", seed=0, variant=variant)
     band, fs, n_in = (1.0, 40.0), rig.fs, len(rig.inputs)
     names = [c.name for c in rig.inputs]
     sweep = sine_sweep(0.5, 40.0, 20.0, fs, amplitude=0.015 * 0.0254).data[:, 0]
@@ -399,11 +629,11 @@ def table_3_7(*, seconds: float, order: int = 4, log=print):
     return [c.name for c in rig.inputs], out
 
 
-def _markdown_3_7(names, out) -> str:
+def _markdown_3_7(names, out, setting: str = "its default variant") -> str:
     lines = [
         "### Table 3.7: seven-channel fuel tank, modelling error per channel",
         "",
-        "rig `fuel-tank-7ch`, band 1-40 Hz, QanTiM 4th order, same identification RMS for both "
+        f"rig `fuel-tank-7ch` ({setting}), band 1-40 Hz, QanTiM 4th order, same identification RMS for both "
         "PSDs; error = η0 [%] in free run on a held-out record of the same PSD: the inverse "
         "model's drive per drive channel (the text's measure) and the normal model's response "
         "per response channel",
@@ -440,7 +670,12 @@ def _markdown_3_7(names, out) -> str:
 
 
 def belgian_road_example(
-    *, seconds: float, iterations: int = 3, level: float = 0.25, log=print
+    *,
+    seconds: float,
+    iterations: int = 3,
+    level: float = 0.25,
+    variant: str | None = None,
+    log=print,
 ) -> str:
     """The Belgian-block road record (real wheel accelerations, 256 Hz) as the desired response
     of the seven-channel fuel-tank rig.
@@ -468,7 +703,7 @@ def belgian_road_example(
     if not path.exists():
         return f"Belgian road example skipped: {path} not found\n"
     field_rec = vrig.io.read_rpc3(path)
-    full = vrig.load_rig("fuel-tank-7ch", seed=0)
+    full = vrig.load_rig("fuel-tank-7ch", seed=0, variant=variant)
     verticals = ["LF_vertical_acc", "RF_vertical_acc", "LR_vertical_acc", "RR_vertical_acc"]
     rig = OutputSubset(full, verticals)
     band = (1.0, 40.0)
@@ -497,39 +732,109 @@ def belgian_road_example(
     log(res.table())
     return (
         "### Belgian-block road record on the seven-channel fuel tank (ARX, 1-40 Hz)\n\n"
+        f"rig `fuel-tank-7ch`, variant {full.variant!r}; "
         f"{seconds:g} s of the four outer wheel accelerations, resampled to 250 Hz, scaled to "
         f"{level:g} x the rig's pseudo-field level ({', '.join(f'{v:.1f}' for v in target_rms)} m/s² RMS)\n\n"
         "```\n" + res.table() + f"\n```\n{('stopped: ' + res.stopped) if res.stopped else ''}\n"
     )
 
 
-def thesis_report(out_dir: Path | str, quick: bool = False, log=print) -> str:
-    """Run every table, write ``thesis_reproduction.md`` into ``out_dir`` and return it."""
+def report_name(variants=None, severity: float | None = None) -> str:
+    """The report's file name: ``thesis_reproduction.md`` on the rigs' defaults, else tagged
+    with the variants and severity it ran on (so a variant run never overwrites the default's)."""
+    tag = "".join(f"_{v}" for v in variants or ())
+    if severity is not None:
+        tag += f"_s{severity:g}"
+    return f"thesis_reproduction{tag}.md"
+
+
+def _check_variants(variants) -> list:
+    """``variants`` as a list (``[None]``: each rig's default); a name no rig has is an error."""
+    if not variants:
+        return [None]
+    from vrig.rigs import list_rigs, rig_path
+    from vrig.rigs.spec import read_description
+
+    known = set()
+    for name in list_rigs():
+        known |= set(read_description(rig_path(name)).variants)
+    bad = [v for v in variants if v not in known]
+    if bad:
+        raise ValueError(f"unknown variant(s) {bad}: the rigs have {sorted(known)}")
+    if len(set(variants)) != len(variants):
+        raise ValueError(f"variant named twice in {list(variants)}")
+    return list(variants)
+
+
+def thesis_report(
+    out_dir: Path | str,
+    quick: bool = False,
+    log=print,
+    *,
+    variants=None,
+    severity: float | None = None,
+) -> str:
+    """Run every table, write the report into ``out_dir`` (:func:`report_name`) and return it.
+
+    ``variants``: names, each table run once per name on the rig's variant of that name where
+    it has one, else its default (``None``: once, on each rig's default variant).
+    ``severity``: in [0, 2], for the rigs with a severity axis (``None``: as loaded)."""
+    requested = _check_variants(variants)
+    if severity is not None and not (0.0 <= float(severity) <= 2.0):
+        raise ValueError(f"severity must lie in [0, 2], got {severity!r}")
     seconds, id_seconds = (20.0, 30.0) if quick else (30.0, 60.0)
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     t0 = time.perf_counter()
+    flags = " --quick" if quick else ""
+    if variants:
+        flags += " --variant " + " ".join(variants)
+    if severity is not None:
+        flags += f" --severity {severity:g}"
     parts = [
         "# Reference-text tables reproduced on the virtual rigs",
         "",
         f"pseudo-field desired responses of {seconds:g} s, identification records of "
         f"{id_seconds:g} s, seed 0; η0 (eq. 5-28) in %. Generated by "
-        f"`python -m benchmarks.thesis_tables{' --quick' if quick else ''}`.",
+        f"`python -m benchmarks.thesis_tables{flags}`. Role: CALIBRATED ON = the row the "
+        "rig's `thesis` variant was calibrated on (benchmarks/calibrate.py CALIBRATIONS; it "
+        "only says something on that variant); predicted = never tuned.",
         "",
     ]
     cache: dict = {}
     for table in TABLES:
-        log(table.name)
-        values = run_table(table, seconds=seconds, id_seconds=id_seconds, cache=cache, log=log)
-        parts.append(_markdown(table, values))
-    log("Table 3.7: seven-channel fuel tank")
-    names, out = table_3_7(seconds=id_seconds, log=log)
-    parts.append(_markdown_3_7(names, out))
-    log("Belgian road on the seven-channel fuel tank")
-    parts.append(belgian_road_example(seconds=seconds, log=log))
+        done: dict = {}  # setting -> values: a variant the rig lacks runs its default once
+        runs = []
+        for req in requested:
+            setting = _setting(table.rig, req, severity)
+            if setting not in done:
+                log(f"{table.name} [{_setting_text(setting, req)}]")
+                done[setting] = run_table(
+                    table,
+                    seconds=seconds,
+                    id_seconds=id_seconds,
+                    cache=cache,
+                    variant=setting[0],
+                    severity=setting[1],
+                    log=log,
+                )
+            runs.append(
+                (req or setting[0], _setting_text(setting, req), done[setting], setting[0])
+            )
+        parts.append(_markdown(table, runs))
+    settings_7 = {}
+    for req in requested:
+        settings_7.setdefault(resolve_variant("fuel-tank-7ch", req), req)
+    for variant, req in settings_7.items():
+        text = _setting_text((variant, None), req)
+        log(f"Table 3.7: seven-channel fuel tank [{text}]")
+        names, out = table_3_7(seconds=id_seconds, variant=variant, log=log)
+        parts.append(_markdown_3_7(names, out, text))
+        log(f"Belgian road on the seven-channel fuel tank [{text}]")
+        parts.append(belgian_road_example(seconds=seconds, variant=variant, log=log))
     parts.append(f"_wall time {time.perf_counter() - t0:.0f} s_\n")
     text = "\n".join(parts)
-    with atomic_write(out_dir / "thesis_reproduction.md", "w", encoding="utf-8") as f:
+    with atomic_write(out_dir / report_name(variants, severity), "w", encoding="utf-8") as f:
         f.write(text)
     return text
 
@@ -542,8 +847,28 @@ def main(argv=None) -> int:
     ap.add_argument(
         "--out", default="results/thesis", help="output folder (default results/thesis)"
     )
+    ap.add_argument(
+        "--variant",
+        nargs="+",
+        metavar="NAME",
+        help="run each table on the rig's variant NAME where it has one, else on its default "
+        "(default: each rig's default variant); several names: side by side",
+    )
+    ap.add_argument(
+        "--severity",
+        type=float,
+        metavar="S",
+        help="non-linearity severity in [0, 2] of the rigs with a severity axis "
+        "(default: as loaded); the linear rigs run as loaded",
+    )
     args = ap.parse_args(argv)
-    print(thesis_report(args.out, quick=args.quick))
+    try:
+        text = thesis_report(
+            args.out, quick=args.quick, variants=args.variant, severity=args.severity
+        )
+    except ValueError as exc:
+        ap.error(str(exc))
+    print(text)
     return 0
 
 

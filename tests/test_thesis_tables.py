@@ -1,0 +1,273 @@
+"""benchmarks.thesis_tables: which variant each table runs on (``--variant``), which row is the
+one the calibrated twin was calibrated on (from ``benchmarks.calibrate.CALIBRATIONS``) and the
+verdicts on synthetic numbers. No rig is run here (the real tables take minutes: run
+``python -m benchmarks.thesis_tables --quick``)."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+
+from benchmarks import calibrate, thesis_tables
+from benchmarks.thesis_tables import (
+    TABLES,
+    calibrated_row,
+    calibrated_verdict,
+    gain_verdicts,
+    resolve_severity,
+    resolve_variant,
+)
+from vrig.rigs import list_rigs, rig_path
+
+
+def _raw(rig):
+    return json.loads(rig_path(rig).read_text())
+
+
+def _table(rig):
+    return next(t for t in TABLES if t.rig == rig)
+
+
+# ------------------------------------------------------------------------------ --variant
+
+
+@pytest.mark.parametrize("rig", list_rigs())
+def test_a_variant_resolves_to_the_rigs_own_or_its_default(rig):
+    """Read from the side-car itself: "thesis" where the side-car has a "thesis" variant, else
+    its default_variant ("mild" when it names none); no name: the default."""
+    raw = _raw(rig)
+    default = raw.get("default_variant", "mild")
+    has_thesis = "thesis" in raw.get("variants", {})
+    assert resolve_variant(rig, "thesis") == ("thesis" if has_thesis else default)
+    assert resolve_variant(rig, None) == default
+    assert resolve_variant(rig, "mild") == "mild"
+
+
+def test_the_four_calibrated_rigs_have_thesis_and_the_motorcycle_does_not():
+    for rig in ("elastomeric-damper", "shock-absorber", "radiator", "fuel-tank-2ch"):
+        assert resolve_variant(rig, "thesis") == "thesis"
+    assert resolve_variant("motorcycle-rear", "thesis") == _raw("motorcycle-rear").get(
+        "default_variant", "mild"
+    )
+
+
+def test_severity_only_reaches_the_rigs_with_a_severity_axis():
+    for rig in list_rigs():
+        has_axis = "severity" in _raw(rig)
+        assert resolve_severity(rig, 0.5) == (0.5 if has_axis else None)
+        assert resolve_severity(rig, None) is None
+
+
+def _fake_runs(monkeypatch):
+    """thesis_report with the rig work replaced: records (rig, variant, severity) per run."""
+    calls = []
+
+    def run_table(table, *, variant, severity, **_kw):
+        calls.append((table.rig, variant, severity))
+        return [[10.0 + len(calls)] * len(table.channels) for _ in table.rows]
+
+    monkeypatch.setattr(thesis_tables, "run_table", run_table)
+    monkeypatch.setattr(
+        thesis_tables,
+        "table_3_7",
+        lambda *, variant, **_kw: calls.append(("fuel-tank-7ch", variant, None)) or ([], {}),
+    )
+    monkeypatch.setattr(thesis_tables, "_markdown_3_7", lambda names, out, setting: setting)
+    monkeypatch.setattr(thesis_tables, "belgian_road_example", lambda **_kw: "")
+    return calls
+
+
+def test_several_variants_run_each_table_per_variant_the_rig_has(tmp_path, monkeypatch):
+    calls = _fake_runs(monkeypatch)
+    text = thesis_tables.thesis_report(
+        tmp_path, True, log=lambda *_: None, variants=["mild", "thesis"]
+    )
+    for rig in ("elastomeric-damper", "shock-absorber", "radiator", "fuel-tank-2ch"):
+        assert [(v, s) for r, v, s in calls if r == rig] == [("mild", None), ("thesis", None)]
+    motorcycle_default = _raw("motorcycle-rear").get("default_variant", "mild")
+    # the motorcycle has no "thesis": one run on its default, shown in both columns
+    assert [v for r, v, _s in calls if r == "motorcycle-rear"] == [motorcycle_default]
+    assert "the rig has no 'thesis'" in text
+    assert (
+        "vrig(mild) spring_strain [%] | vrig(thesis) spring_strain [%] | text spring_strain" in text
+    )
+    damper = text[text.index("### Table 6.3") : text.index("### Table 6.16")]
+    assert "vrig(mild) ran on variant 'mild'; vrig(thesis) ran on variant 'thesis'" in damper
+    assert (tmp_path / "thesis_reproduction_mild_thesis.md").read_text() == text
+
+
+def test_no_variant_runs_each_rigs_default_once_into_the_default_report(tmp_path, monkeypatch):
+    calls = _fake_runs(monkeypatch)
+    thesis_tables.thesis_report(tmp_path, True, log=lambda *_: None)
+    for table in TABLES:
+        assert [(v, s) for r, v, s in calls if r == table.rig] == [
+            (_raw(table.rig).get("default_variant", "mild"), None)
+        ]
+    assert (tmp_path / "thesis_reproduction.md").exists()
+
+
+def test_severity_is_passed_to_the_severity_rigs_and_named_in_the_heading(tmp_path, monkeypatch):
+    calls = _fake_runs(monkeypatch)
+    text = thesis_tables.thesis_report(
+        tmp_path, True, log=lambda *_: None, variants=["thesis"], severity=1.5
+    )
+    assert ("shock-absorber", "thesis", 1.5) in calls
+    assert ("fuel-tank-2ch", "thesis", None) in calls  # a linear rig runs as loaded
+    assert "variant 'thesis', severity 1.5" in text
+    assert (tmp_path / "thesis_reproduction_thesis_s1.5.md").exists()
+
+
+@pytest.mark.parametrize(
+    ("argv", "message"),
+    [
+        (["--variant", "no-such-variant"], "unknown variant(s) ['no-such-variant']"),
+        (["--variant", "mild", "mild"], "variant named twice"),
+        (["--severity", "3"], "severity must lie in [0, 2], got 3.0"),
+    ],
+)
+def test_bad_variant_or_severity_is_refused_before_any_run(
+    argv, message, tmp_path, monkeypatch, capsys
+):
+    calls = _fake_runs(monkeypatch)
+    with pytest.raises(SystemExit) as exc:
+        thesis_tables.main(["--out", str(tmp_path), *argv])
+    assert exc.value.code == 2 and calls == []
+    assert message in capsys.readouterr().err
+
+
+# ------------------------------------------------------------------- calibrated vs predicted
+
+
+def test_the_calibrated_row_is_the_calibrations_linear_baseline():
+    """Each calibrated rig's table marks exactly the inverse ARX of the calibration's order and
+    responses at IT00 (and its text figure is the calibration's target); the motorcycle, not
+    calibrated, has none."""
+    from vrig.reconstruction import InverseArx
+
+    for table in TABLES:
+        i = calibrated_row(table)
+        cal = calibrate.CALIBRATIONS.get(table.rig)
+        if cal is None:
+            assert i is None
+            continue
+        row = table.rows[i]
+        method = row.method()
+        assert isinstance(method, InverseArx) and method.order == cal["arx_order"]
+        assert row.iteration == 0 and tuple(table.band) == tuple(cal["band"])
+        assert (list(method.responses) if method.responses else None) == cal.get("responses")
+        for c in cal.get("channels") or table.channels[:1]:
+            assert row.thesis[table.channels.index(c)] == cal["target"]
+    assert {t.rig for t in TABLES if calibrated_row(t) is not None} == set(calibrate.CALIBRATIONS)
+
+
+def test_the_marking_follows_calibrations_not_a_copy(monkeypatch):
+    damper = _table("elastomeric-damper")
+    cals = dict(calibrate.CALIBRATIONS)
+    monkeypatch.setattr(calibrate, "CALIBRATIONS", cals)
+    cals["elastomeric-damper"] = {**cals["elastomeric-damper"], "arx_order": 4}
+    with pytest.raises(ValueError, match="no row is the linear baseline"):
+        calibrated_row(damper)
+    cals["elastomeric-damper"] = {**calibrate.CALIBRATIONS["elastomeric-damper"], "target": 50.0}
+    cals["elastomeric-damper"]["arx_order"] = 6
+    with pytest.raises(ValueError, match="calibrated on 50 %"):
+        calibrated_row(damper)
+    del cals["elastomeric-damper"]
+    assert calibrated_row(damper) is None
+    cals["motorcycle-rear"] = {"band": (0.0, 30.0), "arx_order": 4, "target": 56.0,
+                               "responses": ["spring_strain"]}  # fmt: skip
+    assert calibrated_row(_table("motorcycle-rear")) == 0
+
+
+def test_the_report_marks_the_calibrated_row_and_predictions(tmp_path, monkeypatch):
+    _fake_runs(monkeypatch)
+    text = thesis_tables.thesis_report(tmp_path, True, log=lambda *_: None, variants=["thesis"])
+    assert "| QanTiM 6th order (inverse) | CALIBRATED ON |" in text
+    assert "| NARX 4th order quadratic (inverse), simulation focus | predicted |" in text
+    assert "| Broad spectrum, strain gauge simulation | predicted |" in text  # not calibrated
+    assert text.count("CALIBRATED ON |") == len(calibrate.CALIBRATIONS)
+
+
+# ----------------------------------------------------------------- verdicts, synthetic numbers
+
+
+def _values(table, first, second, rest=5.0):
+    """Synthetic values: row 0 ``first``, row 1 ``second``, the others ``rest`` (per channel)."""
+    n = len(table.channels)
+    out = [[first] * n, [second] * n] + [[rest] * n for _ in table.rows[2:]]
+    return out
+
+
+@pytest.mark.parametrize(
+    ("eta", "within"),
+    [(57.0, True), (43.0, True), (42.5, False), (71.0, True), (71.5, False)],
+)
+def test_the_calibrated_verdict_is_the_25_percent_band_of_the_texts_57(eta, within):
+    """Table 6.3's text figure 57 %: ±25 % relative is 42.75-71.25 %."""
+    verdict = calibrated_verdict(
+        _table("elastomeric-damper"), _values(_table("elastomeric-damper"), eta, 20.0)
+    )
+    assert ("within" in verdict) is within and ("OUTSIDE" in verdict) is (not within)
+    assert "42.8-71.2 %" in verdict
+
+
+def test_the_calibrated_verdict_needs_every_objective_channel():
+    """Table 3.4 is calibrated on both channels (46 % each): one channel out is out."""
+    table = _table("fuel-tank-2ch")
+    vals = _values(table, 46.0, 20.0)
+    assert "within" in calibrated_verdict(table, vals)
+    vals[0] = [46.0, 60.0]  # aft 60 % > 57.5 %
+    assert "OUTSIDE" in calibrated_verdict(table, vals)
+
+
+def test_the_calibrated_verdict_on_another_variant_is_a_comparison():
+    table = _table("shock-absorber")
+    assert "not the calibrated 'thesis'" in calibrated_verdict(
+        table, _values(table, 27.0, 17.0), "mild"
+    )
+    assert "no row calibrated on" in calibrated_verdict(_table("motorcycle-rear"), [[1.0, 1.0]] * 3)
+    failed = ["RigLimitError: tripped", *_values(table, 27.0, 17.0)[1:]]
+    assert "failed" in calibrated_verdict(table, failed)
+
+
+@pytest.mark.parametrize(
+    ("arx", "narx", "size"),
+    [
+        # the text: 57 -> 24 %, a gain of 33 pts = 57.9 % of its baseline
+        (60.0, 60.0 * (1 - 33 / 57), "as the text's"),
+        (40.0, 40.0 * (1 - 1.2 * 33 / 57), "as the text's"),  # 1.2 x: inside ±25 %
+        (60.0, 60.0 * (1 - 0.5 * 33 / 57), "smaller (0.50 x the text's)"),
+        (60.0, 60.0 * (1 - 1.5 * 33 / 57), "larger (1.50 x the text's)"),
+        (60.0, 61.0, "none (not below the baseline)"),
+    ],
+)
+def test_the_nonlinear_gain_is_judged_as_a_fraction_of_the_baseline(arx, narx, size):
+    table = _table("elastomeric-damper")
+    (verdict,) = gain_verdicts(table, _values(table, arx, narx), 0)
+    assert verdict.startswith("NARX 4th order quadratic (inverse), simulation focus, damper_load")
+    assert "the text's 33 pts (58% of 57 %)" in verdict
+    assert verdict.endswith(size)
+
+
+def test_gains_cover_every_text_row_and_channel_the_text_reports():
+    """Table 6.12: NARX (top tank) and non-square NARX (top tank only: the text gives no
+    linear base-acceleration figure); Table 6.16: IT05 and NARX; a failed row is no verdict."""
+    radiator = _table("radiator")
+    verdicts = gain_verdicts(radiator, _values(radiator, 35.0, 16.0, 14.0), 0)
+    assert len(verdicts) == 2 and all(", toptank_acc: " in v for v in verdicts)
+    assert all(v.endswith("as the text's") for v in verdicts)  # 19/35 and 21/35 exactly
+    shock = _table("shock-absorber")
+    vals = _values(shock, 27.0, 17.0, 18.0)
+    vals[2] = "UnstableModelError: diverged"
+    v_it05, v_narx = gain_verdicts(shock, vals, 0)
+    assert v_it05.endswith("as the text's") and "not comparable" in v_narx
+
+
+def test_a_loss_the_text_also_has_is_as_the_texts():
+    """Table 3.5: the accelerometer alone is worse on the strain channel (56 -> 78 %)."""
+    table = _table("motorcycle-rear")
+    vals = [[56.0, 51.0], [78.0, 31.0], [50.0, 29.0]]  # the text's own figures
+    verdicts = gain_verdicts(table, vals, 0)
+    assert len(verdicts) == 4 and all(v.endswith("as the text's") for v in verdicts)
+    vals[1] = [40.0, 31.0]  # better than the strain gauge: the opposite of the text
+    assert gain_verdicts(table, vals, 0)[0].endswith("opposite to the text's")
