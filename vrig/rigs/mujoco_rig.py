@@ -25,7 +25,7 @@ from mujoco import rollout
 
 from ..errors import RigLimitError, RigModelError, RigParameterError, SimulationInstabilityError
 from ..timehistory import TimeHistory
-from . import hydraulics, stability
+from . import gas_spring, hydraulics, stability
 from .daq import Acquisition
 from .spec import (
     ChannelSpec,
@@ -154,6 +154,7 @@ class MujocoRig:
         except ValueError as exc:
             raise RigModelError(f"{desc.mjcf}: MuJoCo could not read the model: {exc}") from exc
         self._inputs, self._outputs = list(desc.inputs), list(desc.outputs)
+        self._air = list(desc.air_springs)  # gas springs (vrig.rigs.gas_spring), parameter rules may change them
         for name, value in self.parameters.items():
             self._apply(spec, desc.parameters[name], value)
         n_hyd = sum(1 for c in self._inputs if c.hydraulic is not None)
@@ -223,6 +224,12 @@ class MujocoRig:
             v = v * rule["scale"]
         if "input" in rule or "output" in rule:
             self._apply_channel(rule, v, param.name)
+            return
+        if "air_spring" in rule:
+            i = next((k for k, a in enumerate(self._air) if a.name == rule["air_spring"]), None)
+            if i is None:
+                raise RigModelError(f"parameter {param.name!r}: no air spring {rule['air_spring']!r}")
+            self._air[i] = self._air[i].replace(**{rule["field"]: float(v)})
             return
         kind = next((k for k in _ELEMENTS if k in rule), None)
         if kind is None:
@@ -298,6 +305,28 @@ class MujocoRig:
             else:
                 i_act = actuator(c.actuator)
                 self._slots.append((i_act, i_act))
+        self._air_bound = []  # (AirSpring, tendon id, pressure sensor address or -1)
+        for a in self._air:
+            t = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_TENDON, a.tendon)
+            if t < 0:
+                raise RigModelError(f"{self.name}: air spring {a.name!r}: no tendon {a.tendon!r}")
+            if m.tendon_stiffness[t] != 0:
+                raise RigModelError(
+                    f"{self.name}: air spring {a.name!r}: its tendon {a.tendon!r} must have no "
+                    "stiffness of its own (the gas law is the spring)"
+                )
+            adr = -1
+            if a.sensor is not None:
+                s = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_SENSOR, a.sensor)
+                if s < 0 or m.sensor_type[s] != mujoco.mjtSensor.mjSENS_USER or (
+                    m.sensor_dim[s] != 1 or m.sensor_needstage[s] != mujoco.mjtStage.mjSTAGE_POS
+                ):
+                    raise RigModelError(
+                        f"{self.name}: air spring {a.name!r}: its sensor {a.sensor!r} must be an "
+                        "MJCF <user dim=\"1\" needstage=\"pos\"/> sensor"
+                    )
+                adr = int(m.sensor_adr[s])
+            self._air_bound.append((a, t, adr))
         self._sensor_cols = []
         for o in self._outputs:
             s = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_SENSOR, o.sensor)
@@ -324,10 +353,24 @@ class MujocoRig:
             (c.spec.name, c.hydraulic.oil_stiffness, h[5])
             for c, h in zip(hyd_inputs, self._hyd, strict=True)
         ]
-        elements = stability.stiff_elements(self.model, self.data, oil)
+        elements = stability.stiff_elements(self.model, self.data, oil, self._air_rates())
         limit = stability.max_stable_timestep(self.model, self.data, elements)
         integrator = int(self.model.opt.integrator)
         return limit, sorted(elements, key=lambda e: e.limit(integrator))[:3]
+
+    def _air_rates(self) -> list:
+        """(name, small-signal rate [N/m], tendon Jacobian) of each air spring at the pose in
+        ``self.data`` (the home pose): its linear part, for the stability limit."""
+        if not self._air_bound:
+            return []
+        m, d = self.model, self.data
+        mujoco.mj_forward(m, d)
+        jac = np.zeros((m.ntendon, m.nv))
+        mujoco.mju_sparse2dense(jac, d.ten_J, m.ten_J_rownnz, m.ten_J_rowadr, m.ten_J_colind)
+        return [
+            (f"air spring {a.name!r}", float(a.rate_at(d.ten_length[t])), jac[t].copy())
+            for a, t, _ in self._air_bound
+        ]
 
     def _stiffest_text(self) -> str:
         return ", ".join(f"{e.name} {e.frequency:.0f} Hz" for e in self._stiffest)
@@ -379,10 +422,12 @@ class MujocoRig:
         for w in d.warning:
             w.number = 0
         hydraulics.install(m, d, self._hyd, self.timestep)
+        gas_spring.install(m, d, self._air_bound)
         try:
             state, _ = rollout.rollout(m, d, self._state0[None, :], np.zeros((1, steps, m.nu)))
         finally:
             hydraulics.uninstall()
+            gas_spring.uninstall()
         if hydraulics.trip_record(d) is not None or any(w.number for w in d.warning):
             raise RigModelError(f"{self.name}: the rig does not settle under gravity at rest")
         self._state0 = state[0, -1].copy()
@@ -601,6 +646,7 @@ class MujocoRig:
         state, warm = self._state0, None
         over = {}  # channel -> (first sample beyond the transducer range, value)
         hydraulics.install(m, d, self._hyd, self.timestep, states=self._hyd_states)
+        gas_spring.install(m, d, self._air_bound)
         try:
             for k0 in range(0, total, chunk):
                 k1 = min(k0 + chunk, total)
@@ -633,6 +679,7 @@ class MujocoRig:
             trip = hydraulics.trip_record(d)
         finally:
             hydraulics.uninstall()
+            gas_spring.uninstall()
         if trip is not None:
             raise self._trip_error(trip, settle * dec)
         if over:  # the transducer-range interlock: the first channel, at its first sample

@@ -21,6 +21,7 @@ import numpy as np
 from ..errors import RigLimitError, RigModelError, RigParameterError
 from ._checks import check_number, describe_range
 from .daq import AntiAliasFilter, Transducer
+from .gas_spring import AirSpring
 from .hydraulics import HydraulicActuator
 
 __all__ = [
@@ -184,6 +185,7 @@ class RigDescription:
     variants: dict = field(default_factory=dict)  # name -> Variant ("mild": the defaults)
     default_variant: str = "mild"  # the variant load_rig(name) gives (variant=None)
     severity: Severity | None = None  # the non-linearity severity axis; None: a linear rig
+    air_springs: tuple = ()  # AirSpring elements (vrig.rigs.gas_spring), side-car "air_springs"
 
 
 MILD = "mild"
@@ -404,6 +406,20 @@ def _read_output(item: dict, w: str) -> OutputDef:
     return OutputDef(spec, item["sensor"], int(item.get("component", 0)), transducer)
 
 
+def _read_air_springs(raw: list, w: str) -> tuple:
+    """The side-car's ``"air_springs"`` as :class:`~vrig.rigs.gas_spring.AirSpring` elements
+    (each number checked; names unique)."""
+    out = []
+    for i, item in enumerate(raw):
+        with _located(f"{w} air_springs[{i}]"):
+            fields_ = {k: v for k, v in item.items() if k != "description"}
+            out.append(AirSpring(**fields_))
+    names = [a.name for a in out]
+    if len(set(names)) != len(names):
+        raise RigModelError(f"{w}: air-spring names must be unique, got {names}")
+    return tuple(out)
+
+
 def _read_parameter(name: str, p: dict, w: str) -> Parameter:
     param = Parameter(
         name=name,
@@ -567,6 +583,7 @@ def read_description(path) -> RigDescription:
         variants=variants,
         default_variant=default_variant,
         severity=_read_severity(raw.get("severity"), params, where),
+        air_springs=_read_air_springs(raw.get("air_springs", []), where),
     )
 
 

@@ -117,7 +117,7 @@ def _joint_dofs(model: mujoco.MjModel, j: int) -> range:
 
 
 def stiff_elements(
-    model: mujoco.MjModel, data: mujoco.MjData, oil_columns=()
+    model: mujoco.MjModel, data: mujoco.MjData, oil_columns=(), springs=()
 ) -> list[StiffElement]:
     """The springs of ``model`` at the pose in ``data`` (``data`` is forwarded in place).
 
@@ -127,6 +127,10 @@ def stiff_elements(
         The compiled rig and a pose (e.g. its ``home`` keyframe).
     oil_columns : sequence of (name, stiffness, dof address)
         Servo-hydraulic oil columns: ``4 β A² / V_t`` on the piston's degree of freedom.
+    springs : sequence of (name, stiffness, direction (nv,))
+        Springs evaluated outside MuJoCo's own elements, e.g. the small-signal rate of an air
+        spring (:mod:`vrig.rigs.gas_spring`, applied explicitly by a passive-force callback)
+        along its tendon's Jacobian.
 
     Returns
     -------
@@ -161,6 +165,9 @@ def stiff_elements(
         e = np.zeros(model.nv)
         e[dof] = 1.0
         add(f"oil column of {name!r}", k, 0.0, False, e)
+    for name, k, direction in springs:
+        if k > 0 and np.any(direction):
+            add(name, k, 0.0, False, np.asarray(direction, dtype=float))
     return out
 
 
