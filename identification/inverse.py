@@ -229,18 +229,42 @@ class InverseModel:
         rest = sorted((k for k in scores if k != best and np.isfinite(scores[k])), key=scores.get)
         return [best, *rest] if np.isfinite(low) else usable
 
-    def simulate(self, response, *, bound=None) -> np.ndarray:
+    def simulate(self, response, *, bound=None, run_in: int | str = 0) -> np.ndarray:
         """Drive (N, n_drives) that the inverse model predicts for ``response`` (N, n_resp).
 
         The response is advanced by ``lead_`` samples; for the last ``lead_`` drive samples the
         response beyond the record's end is held at its last value.
+
+        ``run_in`` chooses the free run's past. ``0`` (default): a zero past, right for a
+        response that starts from rest (the rig at rest before sample 0). A response cut out of
+        a longer record (a field record, anything band-pass filtered) does not start from rest,
+        and a zero past then makes sample 0 a step: the inverse answers with a start-up
+        transient that belongs to no drive. A non-linear inverse is hit hardest: its products of
+        closely spaced response lags carry large coefficients that cancel only on in-band
+        signals, and a step is broadband; near-integrator poles then stretch the kick over
+        hundreds of samples. A positive ``run_in`` (samples, at most ``N - 1``) first runs the
+        model from a zero past over that many samples of a plausible history: the start of the
+        record mirrored in time (its level and spectrum), faded in from zero with a raised
+        cosine; only the record's samples are returned. ``"auto"``: ``max(64, 16 * max_lag_)``
+        samples.
         """
         if not hasattr(self, "lead_"):
             raise IdentificationError(
                 "this InverseModel is not fitted yet; call fit(drive, response)"
             )
         r = as_signal(response, "response", n_channels=self.model.n_inputs_)
+        if run_in == "auto":
+            run_in = max(64, 16 * self.model.max_lag_)
+        if not isinstance(run_in, (int, np.integer)) or isinstance(run_in, bool) or run_in < 0:
+            raise IdentificationError(
+                f"run_in must be 'auto' or a number of samples >= 0, got {run_in!r}"
+            )
         # beyond the record's end the response is held at its last value (a step to zero there
         # would make the inverse put a spike at the end of the drive)
         shifted = np.concatenate([r[self.lead_ :], np.repeat(r[-1:], self.lead_, axis=0)])
-        return self.model.simulate(shifted, bound=bound)
+        k = min(int(run_in), shifted.shape[0] - 1)
+        if k <= 0:
+            return self.model.simulate(shifted, bound=bound)
+        fade = 0.5 - 0.5 * np.cos(np.pi * np.arange(k) / k)
+        past = shifted[k:0:-1] * fade[:, None]  # times -k .. -1: the record mirrored about 0
+        return self.model.simulate(np.concatenate([past, shifted]), bound=bound)[k:]
