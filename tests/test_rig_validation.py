@@ -55,7 +55,7 @@ def test_the_schema_is_published_in_the_package_and_every_shipped_side_car_obeys
     schema = json.loads(path.read_text())
     jsonschema.Draft202012Validator.check_schema(schema)
     validator = jsonschema.Draft202012Validator(schema)
-    assert len(SIDE_CARS) == len(vrig.list_rigs()) == 7
+    assert len(SIDE_CARS) == len(vrig.list_rigs()) == 8
     for side_car in SIDE_CARS:
         errors = [e.message for e in validator.iter_errors(json.loads(side_car.read_text()))]
         assert errors == [], side_car.name
