@@ -456,13 +456,14 @@ def _cmd_reconstruct(args) -> int:
     _check_writable(out)  # before the run, not after it
     if args.desired is None:  # a pseudo-field response: a rig run
         field, source, records = _read_field(args, rig, band)
-    print(f"rig       {rig.name}: {rig.description.title}")
+    print(f"rig       {rig.name} (variant {rig.variant}): {rig.description.title}")
     print(f"method    {method_text}, gain {args.gain:g}, {args.iterations} iterations")
     print(f"band      {band[0]:g}-{band[1]:g} Hz (simulation bandwidth)")
     print(f"desired   {source}")
     settings = {
         "command": "vrig reconstruct",
         "argv": args.argv,
+        "variant": rig.variant,
         "method": method_text,
         "gain": args.gain,
         "iterations": args.iterations,
