@@ -514,3 +514,53 @@ def test_an_unexpected_error_is_one_line_and_exit_3(capsys, monkeypatch):
         "vrig rigs: unexpected error ZeroDivisionError: float division by zero (a bug: "
         "VRIG_DEBUG=1 shows the traceback)"
     )
+
+
+# ---------------------------------------------------------------------------------------------
+# per-rig reconstruction defaults (side-car "reconstruction")
+# ---------------------------------------------------------------------------------------------
+def _gain_run(tmp_path, rig, *extra):
+    out = tmp_path / rig
+    argv = ["reconstruct", "--rig", rig, "--seconds", "3", "--iterations", "0", "--out", str(out)]
+    buf = io.StringIO()
+    with contextlib.redirect_stdout(buf), contextlib.redirect_stderr(io.StringIO()):
+        code = main([*argv, *extra])
+    assert code == 0, buf.getvalue()
+    return json.loads((out / "summary.json").read_text())["settings"]["gain"], buf.getvalue()
+
+
+def test_reconstruct_takes_the_rigs_side_car_gain_unless_told(tmp_path):
+    """The calibrated damper's side-car names gain 0.5 (the global 0.8 over-corrects its
+    progressive mount); the shock absorber names none (0.8); --gain wins over both."""
+    side_car = json.loads(vrig.rig_path("elastomeric-damper").read_text())
+    documented = side_car["reconstruction"]["gain"]
+    assert documented == 0.5 and vrig.load_rig("elastomeric-damper").description.reconstruction == {
+        "gain": documented
+    }
+    gain, text = _gain_run(tmp_path, "elastomeric-damper")
+    assert gain == documented and f"gain {documented:g}," in text
+    gain, _ = _gain_run(tmp_path / "explicit", "elastomeric-damper", "--gain", "0.7")
+    assert gain == 0.7
+    assert "reconstruction" not in json.loads(vrig.rig_path("shock-absorber").read_text())
+    gain, _ = _gain_run(tmp_path, "shock-absorber")
+    assert gain == 0.8
+
+
+@pytest.mark.parametrize(
+    "block,key",
+    [
+        ({"description": "x", "gain": 3.0}, "gain"),
+        ({"description": "x", "gain": 0.0}, "gain"),
+        ({"gain": 0.5}, "description"),
+        ({"description": "x", "gian": 0.5}, "gian"),
+    ],
+)
+def test_a_bad_side_car_reconstruction_block_is_refused(tmp_path, block, key):
+    path = vrig.rig_path("shock-absorber")
+    d = json.loads(path.read_text())
+    d["mjcf"] = str((path.parent / d["mjcf"]).resolve())
+    d["reconstruction"] = block
+    bad = tmp_path / "bad.rig.json"
+    bad.write_text(json.dumps(d))
+    with pytest.raises(vrig.RigParameterError, match=key):
+        vrig.load_rig(bad)

@@ -184,6 +184,7 @@ class RigDescription:
     variants: dict = field(default_factory=dict)  # name -> Variant ("mild": the defaults)
     default_variant: str = "mild"  # the variant load_rig(name) gives (variant=None)
     severity: Severity | None = None  # the non-linearity severity axis; None: a linear rig
+    reconstruction: dict = field(default_factory=dict)  # the CLI's per-rig defaults ("gain")
 
 
 MILD = "mild"
@@ -538,6 +539,9 @@ def read_description(path) -> RigDescription:
         variants=variants,
         default_variant=default_variant,
         severity=_read_severity(raw.get("severity"), params, where),
+        reconstruction={
+            k: float(v) for k, v in raw.get("reconstruction", {}).items() if k != "description"
+        },  # ranges: schema
     )
 
 
