@@ -15,8 +15,10 @@ a scalar **severity** ``s`` scales together (their datasheet-typical defaults ×
 grid over ``s`` and over one **second parameter** (absolute values, datasheet-typical first), and
 the rows to predict. Search: the coarse grid, then bisection in ``log s`` at the second
 parameter's value closest to datasheet-typical that brackets the target. Every evaluation is
-printed. ``--write`` stores the result as the side-car variant ``"thesis"`` (atomic write); the
-default variant is unchanged.
+printed. The search always starts from the datasheet-typical set (``variant="mild"``), never
+from the rig's default: the calibrated side-cars name ``"thesis"`` as their ``default_variant``.
+``--write`` stores the result as the side-car variant ``"thesis"`` (atomic write; the
+``default_variant`` key is kept).
 
 * ``elastomeric-damper`` (Table 6.3, inverse ARX(6), 57 %, 0-25 Hz): ``s`` scales the rubber's
   progressive terms (``quadratic_stiffness`` = asymmetry, ``cubic_stiffness`` = progressive
@@ -253,7 +255,9 @@ def _within(cal: dict, per: dict) -> bool:
 def _values(rig_name: str, severity: float, second: float) -> dict:
     import vrig
 
-    params = vrig.load_rig(rig_name).description.parameters
+    # the search starts from the datasheet-typical set ("mild"), not from the rig's default
+    # (the calibrated "thesis" variant, issue 12)
+    params = vrig.load_rig(rig_name, variant="mild").description.parameters
     cal = _cal(rig_name)
     out = {k: float(params[k].value) * severity for k in cal["severity"]}
     out[cal["second"]] = float(second)
@@ -269,7 +273,8 @@ def evaluate(rig_name: str, values: dict, log=print, per_channel: dict | None = 
     cal = _cal(rig_name)
     t0 = time.perf_counter()
     try:
-        per = linear_baseline_channels(vrig.load_rig(rig_name, seed=0, **values), rig_name)
+        rig = vrig.load_rig(rig_name, seed=0, variant="mild", **values)  # mild + the searched values
+        per = linear_baseline_channels(rig, rig_name)
         eta = float(sum(per.values()) / len(per))
     except Exception as exc:  # the honest figure is the failure
         eta, per = float("nan"), {}

@@ -250,3 +250,52 @@ def test_invalid_constructor_arguments_raise():
         make(max_iterations=0)
     with pytest.raises(ValueError, match="gain_range"):
         make(gain_range=(1.0, 0.5))
+
+
+def _trip_on(monkeypatch, bad_seeds):
+    """IT00 of the targets whose field seed is in ``bad_seeds`` trips the force interlock."""
+    from vrig.reconstruction.iteration import DriveIteration
+
+    play, seen = DriveIteration.play, []
+
+    def tripping(self, drive, iteration, *a, **kw):
+        seed = seen[-1] if seen else None
+        if iteration == 0 and seed in bad_seeds:
+            raise vrig.RigLimitError("force", "actuator_disp", 1.0, 2.5e4, 2.4e4, "N")
+        return play(self, drive, iteration, *a, **kw)
+
+    return tripping, seen
+
+
+def test_a_drawn_target_whose_it00_trips_is_redrawn_an_explicit_one_raises(monkeypatch):
+    """A hardening rig (the calibrated damper) can trip on the linear inverse's IT00 drive of a
+    drawn pseudo-field target: reset draws another target (deterministically); a target the
+    caller named raises the trip."""
+    from vrig.envs.drive_iteration import FIELD_REDRAWS
+    from vrig.reconstruction.iteration import DriveIteration
+
+    e = make_short()
+    u = e.unwrapped
+    _o, info = e.reset(seed=5)
+    first = info["field_seed"]
+    tripping, seen = _trip_on(monkeypatch, {first})
+    monkeypatch.setattr(DriveIteration, "play", tripping)
+    pseudo = u.physics.pseudo_field
+    monkeypatch.setattr(u.physics, "pseudo_field", lambda s: (seen.append(s), pseudo(s))[1])
+    _o, info = e.reset(seed=5)
+    assert seen[0] == first and info["field_seed"] == seen[-1] != first
+    assert info["iteration"] == 0 and np.all(np.isfinite(info["eta0"]))
+    _o, again = e.reset(seed=5)  # the redraw is deterministic
+    assert again["field_seed"] == info["field_seed"]
+    with pytest.raises(vrig.RigLimitError, match="force"):
+        e.reset(seed=5, options={"field_seed": first})
+    # every draw trips: the last trip is raised after FIELD_REDRAWS redraws
+    def always(self, drive, iteration, *a, **kw):
+        raise vrig.RigLimitError("force", "actuator_disp", 1.0, 2.5e4, 2.4e4, "N")
+
+    monkeypatch.setattr(DriveIteration, "play", always)
+    seen.clear()
+    with pytest.raises(vrig.RigLimitError, match="force"):
+        e.reset(seed=6)
+    assert len(seen) == FIELD_REDRAWS + 1 and len(set(seen)) == len(seen)
+    e.close()

@@ -8,6 +8,13 @@ README), for a slow (quasi-static) symmetric cycle of amplitude X:
   min(k_i, k_i d_i / X) to the secant and 4 k_i d_i (X - d_i) to the loop area when X > d_i;
 * viscous part c: loop area pi c w X^2.
 
+Each test runs on the datasheet-typical ``mild`` set and on the calibrated ``thesis`` variant (the
+rig's default, issue 12: the polynomial coefficients k2, k3 of the side-car's variant), with the
+truth computed from the variant's documented values. On ``thesis`` the progressive rubber reaches
+the load cell's 25 kN well before the 8 mm drive full scale (README "Variants"), so the large
+amplitudes are chosen from the documented polynomial: the largest slow cycle whose predicted
+peak force stays below 60 % of the load cell's full scale.
+
 The loop area is measured against the actuator LVDT (the MJCF's diagnostic sensor
 ``piston_lvdt``, exposed through a user side-car written by the fixture): it passes through the
 same DAQ chain as the load, so neither the servo lag nor the anti-alias delay distorts the loop.
@@ -44,15 +51,45 @@ def diag_path(tmp_path_factory):
     return path
 
 
-def _p(name):
-    """A documented parameter value from the shipped side-car."""
-    return float(json.loads(SPEC.read_text())["parameters"][name]["value"])
+VARIANTS = ["mild", "thesis"]
 
 
-def _iwan():
-    k = _p("iwan_stiffness")
-    d = IWAN_SLIP * _p("iwan_slip_scale")
+def _p(name, variant="mild"):
+    """A documented parameter of ``variant`` from the shipped side-car (the variant's value,
+    else the documented default)."""
+    d = json.loads(SPEC.read_text())
+    values = d.get("variants", {}).get(variant, {}).get("parameters", {})
+    return float(values.get(name, d["parameters"][name]["value"]))
+
+
+def _iwan(variant="mild"):
+    k = _p("iwan_stiffness", variant)
+    d = IWAN_SLIP * _p("iwan_slip_scale", variant)
     return k, d
+
+
+def _peak_force(x, variant):
+    """Predicted compression peak force [N] of the mount at amplitude ``x`` [m]: the elastic
+    polynomial plus every Iwan element at its slip force (an upper bound)."""
+    k, d = _iwan(variant)
+    elastic = _p("linear_stiffness", variant) * x + _p("quadratic_stiffness", variant) * x**2
+    return elastic + _p("cubic_stiffness", variant) * x**3 + np.sum(k * np.minimum(d, x))
+
+
+def _largest_amplitude(variant, limit=0.0075):
+    """The largest slow-cycle amplitude up to ``limit`` [m] whose predicted peak force stays
+    below 60 % of the load cell's documented full scale."""
+    full = json.loads(SPEC.read_text())["outputs"][0]["full_scale"]
+    xs = np.linspace(1e-4, limit, 741)
+    ok = xs[[_peak_force(x, variant) <= 0.6 * full for x in xs]]
+    return float(ok.max())
+
+
+def test_the_documented_polynomials():
+    assert _p("cubic_stiffness") == 2e10 and _p("quadratic_stiffness") == 1.7e7  # README
+    assert _p("cubic_stiffness", "thesis") > _p("cubic_stiffness")  # calibrated: progressive
+    assert _largest_amplitude("mild") == 0.0075  # the whole working travel on mild
+    assert _largest_amplitude("thesis") < 0.004  # README: ~±3.5 mm usable on thesis
 
 
 def _slow_cycle(rig, amplitude, freq=0.2, seed=0):
@@ -67,8 +104,9 @@ def _slow_cycle(rig, amplitude, freq=0.2, seed=0):
     return x[s], y[s]
 
 
-def test_random_drive_runs_with_the_documented_channels():
-    rig = vrig.load_rig("elastomeric-damper", seed=0)
+@pytest.mark.parametrize("variant", VARIANTS)
+def test_random_drive_runs_with_the_documented_channels(variant):
+    rig = vrig.load_rig("elastomeric-damper", seed=0, variant=variant)
     assert rig.fs == 250.0
     assert rig.bandwidth == (0.0, 25.0)
     assert [c.name for c in rig.inputs] == ["actuator_disp"]
@@ -84,19 +122,24 @@ def test_random_drive_runs_with_the_documented_channels():
     assert 300.0 < y.data.std() < 3000.0
 
 
-def test_hysteresis_loop_area_is_positive_and_matches_the_iwan_model(diag_path):
+@pytest.mark.parametrize("variant", VARIANTS)
+def test_hysteresis_loop_area_is_positive_and_matches_the_iwan_model(diag_path, variant):
     """(a) slow sine, 3 mm at 0.2 Hz: the load-displacement loop (load vs actuator LVDT) encloses
-    a clearly positive area, the Masing area of the documented Iwan elements plus viscous loss."""
-    rig = vrig.load_rig(diag_path, seed=1)
+    a clearly positive area, the Masing area of the documented Iwan elements plus viscous loss.
+
+    The load cell is elastic (no area of its own): the loop is the mount's, at the mount's own
+    amplitude X (the commanded 3 mm less the load cell's deflection)."""
+    rig = vrig.load_rig(diag_path, seed=1, variant=variant)
     amp, freq = 0.003, 0.2
     _, y = _slow_cycle(rig, amp, freq)
-    load, lvdt = y[:, 0], y[:, 1]
+    load, lvdt, comp = y[:, 0], y[:, 1], y[:, 2]
     area = np.trapezoid(load, lvdt)  # closed loop: ∮ F dx [J]
-    k, d = _iwan()
-    masing = 4 * np.sum(k * d * np.clip(amp - d, 0.0, None))
-    viscous = np.pi * _p("viscous_damping") * 2 * np.pi * freq * amp**2
+    xm = (comp.max() - comp.min()) / 2
+    k, d = _iwan(variant)
+    masing = 4 * np.sum(k * d * np.clip(xm - d, 0.0, None))
+    viscous = np.pi * _p("viscous_damping", variant) * 2 * np.pi * freq * xm**2
     # what noise alone could produce: sum n_k dx_k with n ~ N(0, load_noise)
-    noise_area = _p("load_noise") * np.sqrt(np.sum(np.diff(lvdt) ** 2))
+    noise_area = _p("load_noise", variant) * np.sqrt(np.sum(np.diff(lvdt) ** 2))
     assert area > 0
     assert area > 100 * noise_area
     assert area == pytest.approx(masing + viscous, rel=0.1)
@@ -104,43 +147,51 @@ def test_hysteresis_loop_area_is_positive_and_matches_the_iwan_model(diag_path):
     assert abs(lvdt[-1] - lvdt[0]) < 0.01 * amp
 
 
-def test_hysteresis_comes_from_the_slip_elements(diag_path):
-    """With the sliders turned off (elastic Iwan springs) only the small viscous loop remains."""
+@pytest.mark.parametrize("variant", VARIANTS)
+def test_hysteresis_comes_from_the_slip_elements(diag_path, variant):
+    """With the sliders turned off (elastic Iwan springs) only the small viscous loop remains, at
+    the mount's own amplitude X (the command less the load cell's deflection: 0.15 mm on the
+    stiff thesis mount)."""
     amp, freq = 0.003, 0.2
-    rig = vrig.load_rig(diag_path, seed=1, iwan_slip_scale=0.0)
+    rig = vrig.load_rig(diag_path, seed=1, variant=variant, iwan_slip_scale=0.0)
     _, y = _slow_cycle(rig, amp, freq)
     area = np.trapezoid(y[:, 0], y[:, 1])
-    viscous = np.pi * _p("viscous_damping") * 2 * np.pi * freq * amp**2
-    k, d = _iwan()
+    xm = (y[:, 2].max() - y[:, 2].min()) / 2
+    viscous = np.pi * _p("viscous_damping", variant) * 2 * np.pi * freq * xm**2
+    k, d = _iwan(variant)
     assert area < 0.1 * 4 * np.sum(k * d * np.clip(amp - d, 0.0, None))
     assert area == pytest.approx(viscous, rel=0.3)
 
 
-def test_secant_stiffness_is_progressive(diag_path):
+@pytest.mark.parametrize("variant", VARIANTS)
+def test_secant_stiffness_is_progressive(diag_path, variant):
     """(b) secant stiffness (F_max - F_min)/(x_max - x_min) over the commanded displacement of a
-    slow sine: >= 1.5x larger at 7.5 mm than at 1 mm, and each secant of the mount itself as the
-    documented elastic + Iwan parameters predict."""
-    rig = vrig.load_rig(diag_path, seed=2)
-    k1, k3 = _p("linear_stiffness"), _p("cubic_stiffness")
-    k, d = _iwan()
+    slow sine: >= 1.5x larger at the largest amplitude (7.5 mm on mild; on thesis the largest
+    whose documented peak force stays below 60 % of the load cell's range) than at 1 mm, and
+    each secant of the mount itself as the documented elastic + Iwan parameters predict."""
+    rig = vrig.load_rig(diag_path, seed=2, variant=variant)
+    k1, k3 = _p("linear_stiffness", variant), _p("cubic_stiffness", variant)
+    k, d = _iwan(variant)
+    large = _largest_amplitude(variant)
     secant = {}
-    for amp in (0.001, 0.0075):
+    for amp in (0.001, large):
         x_cmd, y = _slow_cycle(rig, amp)
         load, comp = y[:, 0], y[:, 2]
         secant[amp] = (load.max() - load.min()) / (x_cmd.max() - x_cmd.min())
         xm = (comp.max() - comp.min()) / 2  # the mount's own amplitude
         predicted = k1 + k3 * xm**2 + np.sum(np.minimum(k, k * d / xm))
         assert (load.max() - load.min()) / (2 * xm) == pytest.approx(predicted, rel=0.03)
-        if amp == 0.0075:
+        if amp == large:
             # k2 > 0: stiffer in compression (+) than in rebound (-) by ~2 k2 X^2
             asym = load.max() + load.min()
-            assert asym == pytest.approx(2 * _p("quadratic_stiffness") * xm**2, rel=0.25)
-    ratio = secant[0.0075] / secant[0.001]
+            k2 = _p("quadratic_stiffness", variant)
+            assert asym == pytest.approx(2 * k2 * xm**2, rel=0.25)
+    ratio = secant[large] / secant[0.001]
     assert ratio >= 1.5, ratio
 
 
 def test_interlocks():
-    rig = vrig.load_rig("elastomeric-damper", seed=0)
+    rig = vrig.load_rig("elastomeric-damper", seed=0, variant="mild")
     t = np.arange(500) / rig.fs
     with pytest.raises(vrig.RigLimitError, match="drive"):
         rig.run(0.0085 * np.sin(2 * np.pi * 1.0 * t))  # beyond the 8 mm full scale
@@ -150,3 +201,20 @@ def test_interlocks():
     # full scale at 2 Hz is within the rig's abilities
     y = rig.run(0.008 * np.sin(2 * np.pi * 2.0 * t))
     assert np.all(np.isfinite(y.data))
+
+
+def test_thesis_mount_cannot_be_driven_to_full_scale():
+    """On the calibrated mount the documented polynomial needs far more than the load cell's
+    25 kN at the 8 mm drive full scale: a slow full-scale sine trips an interlock, while the
+    largest amplitude the polynomial keeps below 60 % of the range runs."""
+    rig = vrig.load_rig("elastomeric-damper", seed=0)
+    assert rig.variant == "thesis"  # the default (issue 12)
+    full = rig.outputs[0].full_scale
+    assert _peak_force(0.008, "thesis") > 4 * full
+    assert _peak_force(0.008, "mild") < full
+    t = np.arange(500) / rig.fs
+    with pytest.raises(vrig.RigLimitError):
+        rig.run(0.008 * np.sin(2 * np.pi * 2.0 * t))
+    y = rig.run(_largest_amplitude("thesis") * np.sin(2 * np.pi * 2.0 * t))
+    assert np.all(np.isfinite(y.data))
+    assert np.abs(y.data).max() < full

@@ -2,9 +2,13 @@
 
 The acceptance figures come from the parameters documented in models/fuel-tank-2ch/README.md
 (tank and fuel dimensions and masses, buffer stiffness and spacing), not from the model's output.
+The buffer stiffness is the side-car's: the datasheet-typical ``mild`` 110 N/mm and the calibrated
+``thesis`` variant (the rig's default, issue 12); the modes of each follow from the same formula.
 """
 
 from __future__ import annotations
+
+import json
 
 import numpy as np
 import pytest
@@ -12,19 +16,36 @@ from scipy import signal
 
 import vrig
 from identification import band_limited_noise
+from vrig.rigs import rig_path
 
 G = 9.81
 # documented parameters (README.md)
 SHELL_MASS, FUEL_MASS = 22.0, 75.0  # kg
 L, W, H = 0.8, 0.5, 0.3  # tank outside dimensions [m]
 FILL = 0.225  # fuel depth [m]
-K_BUFFER = 1.1e5  # N/m, one buffer; four buffers, two at x = +A, two at x = -A
+K_BUFFER = 1.1e5  # N/m, one buffer (mild); four buffers, two at x = +A, two at x = -A
 A = 0.33  # m
 ACC_X = 0.35  # accelerometers at x = +-0.35 m on the top face
+SPEC = json.loads(rig_path("fuel-tank-2ch").read_text())
+VARIANTS = ["mild", "thesis"]
 
 
-def _tank_modes_hz():
-    """Bounce and pitch frequencies of the tank on its buffers, cradle held by the actuators."""
+def _buffer_stiffness(variant):
+    """One buffer's stiffness [N/m] of ``variant``, from the side-car."""
+    values = SPEC.get("variants", {}).get(variant, {}).get("parameters", {})
+    return float(values.get("buffer_stiffness", SPEC["parameters"]["buffer_stiffness"]["value"]))
+
+
+def test_the_documented_buffer_stiffness():
+    assert _buffer_stiffness("mild") == K_BUFFER
+    lo = SPEC["parameters"]["buffer_stiffness"]["minimum"]
+    hi = SPEC["parameters"]["buffer_stiffness"]["maximum"]
+    assert lo <= _buffer_stiffness("thesis") <= hi  # README: within the manufacturer range
+
+
+def _tank_modes_hz(k_buffer=K_BUFFER):
+    """Bounce and pitch frequencies of the tank on its buffers (``k_buffer`` [N/m] each), cradle
+    held by the actuators."""
     m = SHELL_MASS + FUEL_MASS
     z_shell, z_fuel = H / 2, FILL / 2  # CG heights above the buffer plane (tank bottom)
     zc = (SHELL_MASS * z_shell + FUEL_MASS * z_fuel) / m
@@ -39,16 +60,23 @@ def _tank_modes_hz():
     i_fuel = FUEL_MASS * (L**2 + FILL**2) / 12
     i_cg = i_shell + SHELL_MASS * (z_shell - zc) ** 2 + i_fuel + FUEL_MASS * (z_fuel - zc) ** 2
     # pitch about the buffer-plane centre: buffers 4 k a^2, gravity destabilises by m g zc
-    k_bounce = 4 * K_BUFFER
-    k_pitch = 4 * K_BUFFER * A**2 - m * G * zc
+    k_bounce = 4 * k_buffer
+    k_pitch = 4 * k_buffer * A**2 - m * G * zc
     f_bounce = np.sqrt(k_bounce / m) / (2 * np.pi)
     f_pitch = np.sqrt(k_pitch / (i_cg + m * zc**2)) / (2 * np.pi)
     return f_bounce, f_pitch
 
 
-@pytest.fixture(scope="module")
-def rig():
-    return vrig.load_rig("fuel-tank-2ch", seed=7)
+@pytest.fixture(scope="module", params=VARIANTS)
+def rig(request):
+    rig = vrig.load_rig("fuel-tank-2ch", seed=7, variant=request.param)
+    assert rig.variant == request.param
+    return rig
+
+
+def _modes(rig):
+    """The analytic modes of ``rig``'s variant (its documented buffer stiffness)."""
+    return _tank_modes_hz(_buffer_stiffness(rig.variant))
 
 
 def _ramped(x, fs, t_ramp=0.5):
@@ -69,15 +97,28 @@ def test_load_and_run_random_drive(rig):
     assert np.all(y.data[int(1.0 * fs) :].std(axis=0) > 0.1)  # the tank moves
 
 
-def test_documented_modes_lie_in_the_band_near_12_hz(rig):
-    f_bounce, f_pitch = _tank_modes_hz()
-    lo, hi = rig.bandwidth
+def test_documented_modes_lie_in_the_band_near_12_hz():
+    """The README's mild modes: 10.7 Hz (bounce), 12.5 Hz (pitch), around the text's 12 Hz split."""
+    f_bounce, f_pitch = _tank_modes_hz(_buffer_stiffness("mild"))
+    lo, hi = SPEC["bandwidth_hz"]
     for f in (f_bounce, f_pitch):
         assert lo < f < hi
         assert abs(f - 12.0) < 2.0
     # the README states 10.7 Hz (bounce) and 12.5 Hz (pitch)
     assert f_bounce == pytest.approx(10.7, abs=0.05)
     assert f_pitch == pytest.approx(12.5, abs=0.05)
+
+
+def test_thesis_modes_follow_from_the_calibrated_buffer_stiffness():
+    """The calibrated buffers are stiffer: the bounce mode moves up by sqrt(k_thesis / k_mild)
+    (no gravity term), the pitch mode by a little more (the same gravity term on a larger
+    stiffness); both stay inside the test band."""
+    mild, thesis = _tank_modes_hz(K_BUFFER), _tank_modes_hz(_buffer_stiffness("thesis"))
+    ratio = np.sqrt(_buffer_stiffness("thesis") / K_BUFFER)
+    assert thesis[0] == pytest.approx(mild[0] * ratio, rel=1e-12)
+    assert thesis[1] > mild[1] * ratio
+    lo, hi = SPEC["bandwidth_hz"]
+    assert all(lo < f < hi for f in thesis)
 
 
 def test_h1_frf_peaks_match_the_documented_modes(rig):
@@ -108,7 +149,7 @@ def test_h1_frf_peaks_match_the_documented_modes(rig):
         # parabolic interpolation of the log magnitude around the peak line
         a, b, c = np.log(mag[i - 1 : i + 2])
         measured.append(fb[i] + 0.5 * (a - c) / (a - 2 * b + c) * (fb[1] - fb[0]))
-    f_bounce, f_pitch = _tank_modes_hz()
+    f_bounce, f_pitch = _modes(rig)
     assert measured[0] == pytest.approx(f_bounce, rel=0.05)
     assert measured[1] == pytest.approx(f_pitch, rel=0.05)
     # the resonance is real: the bounce FRF at its peak is far above the rigid-body level
@@ -130,7 +171,7 @@ def test_actuator_tracks_the_drive_at_low_frequency(rig):
     coef, *_ = np.linalg.lstsq(basis, y, rcond=None)
     gain = np.hypot(*coef) / amp
     # base-excited SDOF below resonance: |T| = 1 / (1 - r^2) (light damping), r = f0 / f_bounce
-    r = f0 / _tank_modes_hz()[0]
+    r = f0 / _modes(rig)[0]
     expected = (2 * np.pi * f0) ** 2 / (1 - r**2)
     np.testing.assert_allclose(gain, expected, rtol=0.1)
 

@@ -1,5 +1,8 @@
 """Radiator rig: linear modes against the documented eigen-analysis, play (rattle above 1 g),
-interlocks. Documented values: models/radiator/README.md."""
+interlocks. Documented values: models/radiator/README.md; each physics test runs on the
+datasheet-typical ``mild`` set and on the calibrated ``thesis`` variant (the rig's default, issue
+12: twice the mount plays). The plays do not enter the linear modes (gravity closes them at rest)
+nor the 1 g lift-off threshold; the modes follow from the variant's documented stiffnesses."""
 
 from __future__ import annotations
 
@@ -20,6 +23,7 @@ M_PISTON, C_PISTON = 0.5, 200.0  # piston armature [kg], piston viscous damping 
 README_MODES = {"bounce": 70.0, "pitch": 151.2, "oil_column": 171.0}
 WIDE_BAND = (0.0, 200.0)  # the band of the wide-band (identification) test [Hz]
 NO_PLAY = {"radial_play": 0.0, "vertical_play": 0.0}
+VARIANTS = ["mild", "thesis"]
 
 
 def _linear_model(p, h):
@@ -105,8 +109,10 @@ def test_loads_and_runs_two_seconds_of_random_drive():
     assert np.all(np.abs(out.data[FS:].mean(axis=0)) < 0.5)
 
 
-def test_documented_modes_follow_from_the_documented_parameters():
-    rig = vrig.load_rig("radiator")
+@pytest.mark.parametrize("variant", VARIANTS)
+def test_documented_modes_follow_from_the_documented_parameters(variant):
+    rig = vrig.load_rig("radiator", variant=variant)
+    assert rig.variant == variant
     a, _ = _linear_model(rig.parameters, rig.input_defs[0].hydraulic)
     f, zeta, shapes = _modes(a)
     assert np.all(zeta > 0.02)  # the closed loop is stable and every mode damped
@@ -180,31 +186,33 @@ def test_measured_frf_matches_the_linear_model(wide_band_frfs):
         assert np.percentile(np.abs(20 * np.log10(ratio)), 90) < 2.5
 
 
-def _rattle_ratio(g_level):
-    """High-frequency (> 100 Hz) top-tank energy with play / without, for a 20 Hz sine whose
-    base acceleration is ``g_level`` g."""
+def _rattle_ratio(g_level, variant):
+    """High-frequency (> 100 Hz) top-tank energy with the play of ``variant`` / without, for a
+    20 Hz sine whose base acceleration is ``g_level`` g."""
     fs = FS
     t = np.arange(3 * fs) / fs
     w = 2 * np.pi * 20.0
     drive = g_level * 9.81 / w**2 * np.sin(w * t)
     hf = []
     for kw in ({}, NO_PLAY):
-        y = vrig.load_rig("radiator", **kw).run(drive, seed=1).channel("toptank_acc")[fs:]
+        y = vrig.load_rig("radiator", variant=variant, **kw).run(drive, seed=1).channel("toptank_acc")[fs:]
         f, p = signal.welch(y, fs=fs, nperseg=625)
         hf.append(p[f > 100].sum())
     return hf[0] / hf[1]
 
 
-def test_play_opens_when_the_radiator_acceleration_exceeds_one_g():
+@pytest.mark.parametrize("variant", VARIANTS)
+def test_play_opens_when_the_radiator_acceleration_exceeds_one_g(variant):
     # gravity closes the vertical play and, through the CoM offset, preloads the fore-aft play in
-    # proportion to (g + a): below 1 g the mounts stay engaged (no rattle) ...
-    assert _rattle_ratio(0.8) < 1.5
+    # proportion to (g + a): below 1 g the mounts stay engaged (no rattle), whatever the play ...
+    assert _rattle_ratio(0.8, variant) < 1.5
     # ... above 1 g the pins lift off and hit their stops: broadband impact content
-    assert _rattle_ratio(1.25) > 20.0
+    assert _rattle_ratio(1.25, variant) > 20.0
 
 
-def test_drive_beyond_the_valve_capability_trips_an_interlock():
-    rig = vrig.load_rig("radiator")
+@pytest.mark.parametrize("variant", VARIANTS)
+def test_drive_beyond_the_valve_capability_trips_an_interlock(variant):
+    rig = vrig.load_rig("radiator", variant=variant)
     t = np.arange(FS) / rig.fs
     # 60 Hz, 5 mm: 1.9 m/s demanded against the valve's 0.53 m/s
     with pytest.raises(vrig.RigLimitError):

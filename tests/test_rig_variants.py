@@ -17,7 +17,7 @@ import pytest
 import vrig
 from vrig.errors import RigModelError, RigParameterError
 from vrig.rigs import rig_path
-from vrig.rigs.spec import MILD
+from vrig.rigs.spec import MILD, read_description
 
 SPEC = rig_path("elastomeric-damper")
 
@@ -26,6 +26,7 @@ def _sidecar(tmp_path, variants):
     d = json.loads(SPEC.read_text())
     d["mjcf"] = str((SPEC.parent / d["mjcf"]).resolve())
     d["variants"] = variants
+    d.pop("default_variant", None)  # the shipped default (thesis) is not among these variants
     path = tmp_path / "damper-variants.rig.json"
     path.write_text(json.dumps(d))
     return path
@@ -102,14 +103,42 @@ def test_mild_cannot_change_parameters(tmp_path):
         vrig.load_rig(path)
 
 
-def test_mild_equals_the_default_bit_for_bit():
-    a = vrig.load_rig("elastomeric-damper", seed=3)
-    b = vrig.load_rig("elastomeric-damper", seed=3, variant="mild")
+def test_mild_equals_the_default_bit_for_bit(tmp_path):
+    """A side-car without ``default_variant`` loads ``"mild"``: the documented values."""
+    path = _sidecar(tmp_path, {"stiff": STIFF})
+    a = vrig.load_rig(path, seed=3)
+    b = vrig.load_rig(path, seed=3, variant="mild")
     assert a.variant == b.variant == "mild"
     assert a.parameters == b.parameters
+    documented = vrig.load_rig(path).description.parameters
+    assert all(a.parameters[k] == p.value for k, p in documented.items())
     drive = _short_drive(a)
     ya, yb = a.run(drive, seed=5), b.run(drive, seed=5)
     assert np.array_equal(ya.data, yb.data)
+
+
+def test_default_variant_names_the_variant_load_rig_gives(tmp_path):
+    path = _sidecar(tmp_path, {"stiff": STIFF})
+    d = json.loads(path.read_text())
+    d["default_variant"] = "stiff"
+    path.write_text(json.dumps(d))
+    rig = vrig.load_rig(path, seed=3)
+    assert rig.variant == "stiff" and rig.parameters["cubic_stiffness"] == 1e11
+    mild = vrig.load_rig(path, seed=3, variant="mild")
+    assert mild.variant == "mild" and mild.parameters["cubic_stiffness"] == 2e10
+    drive = _short_drive(rig)
+    same = vrig.load_rig(path, seed=3, variant="stiff").run(drive, seed=5).data
+    assert np.array_equal(rig.run(drive, seed=5).data, same)
+
+
+def test_default_variant_must_be_a_variant(tmp_path):
+    path = _sidecar(tmp_path, {"stiff": STIFF})
+    d = json.loads(path.read_text())
+    d["default_variant"] = "thesis"
+    path.write_text(json.dumps(d))
+    with pytest.raises(RigParameterError, match="default_variant") as exc:
+        vrig.load_rig(path)
+    assert "stiff" in str(exc.value)
 
 
 # ---------------------------------------------------------------- the shipped calibration
@@ -134,7 +163,37 @@ def test_thesis_variant_values_inside_their_declared_ranges(name, target):
     rig = vrig.load_rig(name, variant="thesis")
     for k, v in thesis.values.items():
         assert rig.parameters[k] == v
-    assert vrig.load_rig(name).variant == "mild"  # the default is unchanged
+    # the calibrated twin is the default (issue 12); the datasheet-typical set stays loadable
+    assert desc.default_variant == "thesis"
+    default = vrig.load_rig(name)
+    assert default.variant == "thesis" and default.parameters == rig.parameters
+    mild = vrig.load_rig(name, variant="mild")
+    assert mild.variant == "mild"
+    assert all(mild.parameters[k] == p.value for k, p in desc.parameters.items())
+    assert any(mild.parameters[k] != v for k, v in thesis.values.items())
+
+
+def test_the_uncalibrated_rigs_default_to_mild():
+    calibrated = {n for n, _ in CALIBRATED}
+    others = [n for n in vrig.list_rigs() if n not in calibrated]
+    assert others
+    for name in others:
+        desc = read_description(rig_path(name))
+        assert desc.default_variant == "mild" and "thesis" not in desc.variants, name
+    assert vrig.load_rig("shaker").variant == "mild"
+
+
+def test_the_default_calibrated_rig_runs_the_thesis_values_bit_for_bit():
+    a = vrig.load_rig("shock-absorber", seed=3)
+    b = vrig.load_rig("shock-absorber", seed=3, variant="thesis")
+    c = vrig.load_rig("shock-absorber", seed=3, variant="mild")
+    n = round(1.0 * a.fs)
+    t = np.arange(n) / a.fs
+    x = 3e-3 * np.sin(2 * np.pi * 2 * t) * np.sin(np.pi * t) ** 2
+    drive = vrig.TimeHistory(x[:, None], a.fs, ["actuator_disp"], ["m"])
+    ya, yb, yc = (r.run(drive, seed=5).data for r in (a, b, c))
+    assert np.array_equal(ya, yb)
+    assert not np.array_equal(ya, yc)
 
 
 @pytest.mark.parametrize("name", [n for n, _ in CALIBRATED])

@@ -47,6 +47,7 @@ __all__ = ["main"]
 
 _METHODS = ("arx", "narx", "split", "frf")
 _DEMO_SAMPLES = (2000, 100_000)  # = vrig.demo's MIN/MAX_SAMPLES (454 terms per output)
+DEFAULT_GAIN = 0.8  # reconstruct's iteration gain unless the rig's side-car names its own
 _MAX_SECONDS = 3600.0  # longest record a command plays or reconstructs (--seconds, --desired)
 
 
@@ -151,7 +152,10 @@ def _parser() -> argparse.ArgumentParser:
     )
     rec.add_argument("--iterations", type=int, default=5, help="iterations after IT00 (default 5)")
     rec.add_argument(
-        "--gain", type=float, default=0.8, help="iteration gain in (0, 2] (default 0.8)"
+        "--gain",
+        type=float,
+        help=f"iteration gain in (0, 2] (default: the rig side-car's reconstruction.gain, else "
+        f"{DEFAULT_GAIN:g})",
     )
     rec.add_argument(
         "--band",
@@ -430,7 +434,7 @@ def _read_field(args, rig, band):
 def _check_reconstruct_args(args) -> None:
     if args.iterations < 0 or args.iterations > 99:
         raise _UsageError(f"--iterations must be 0..99, got {args.iterations}")
-    if not 0 < args.gain <= 2:
+    if args.gain is not None and not 0 < args.gain <= 2:
         raise _UsageError(f"--gain must lie in (0, 2], got {args.gain:g}")
     if args.seconds is not None and not (
         np.isfinite(args.seconds) and 2 <= args.seconds <= _MAX_SECONDS
@@ -448,6 +452,8 @@ def _cmd_reconstruct(args) -> int:
     t_start = time.perf_counter()
     _check_reconstruct_args(args)
     rig = _load_rig(args.rig, seed=args.seed)
+    if args.gain is None:  # the rig's own default (side-car "reconstruction"), else the global one
+        args.gain = rig.description.reconstruction.get("gain", DEFAULT_GAIN)
     band = _band(rig, args.band)
     method, method_text = _method(args, band)
     out = _out_dir(args.out, f"{Path(rig.name).stem}-{args.method}", args.overwrite)
@@ -456,13 +462,14 @@ def _cmd_reconstruct(args) -> int:
     _check_writable(out)  # before the run, not after it
     if args.desired is None:  # a pseudo-field response: a rig run
         field, source, records = _read_field(args, rig, band)
-    print(f"rig       {rig.name}: {rig.description.title}")
+    print(f"rig       {rig.name} (variant {rig.variant}): {rig.description.title}")
     print(f"method    {method_text}, gain {args.gain:g}, {args.iterations} iterations")
     print(f"band      {band[0]:g}-{band[1]:g} Hz (simulation bandwidth)")
     print(f"desired   {source}")
     settings = {
         "command": "vrig reconstruct",
         "argv": args.argv,
+        "variant": rig.variant,
         "method": method_text,
         "gain": args.gain,
         "iterations": args.iterations,

@@ -19,7 +19,7 @@ from ..timehistory import TimeHistory
 from .physics import FAILURES, IterationPhysics
 from .task import IterationTask, band_edges
 
-__all__ = ["DEFAULT_TOLERANCE", "ActionLayout", "DriveIterationEnv"]
+__all__ = ["DEFAULT_TOLERANCE", "FIELD_REDRAWS", "ActionLayout", "DriveIterationEnv"]
 
 DEFAULT_TOLERANCE = {
     "shock-absorber": 0.5,
@@ -29,6 +29,11 @@ DEFAULT_TOLERANCE = {
 }
 """Default tolerance [% η0, every channel] per rig: reachable, but only after several iterations
 (measured with the fixed gain 0.8 on pseudo-field targets); other rigs get 2 %."""
+
+FIELD_REDRAWS = 4
+"""How often ``reset`` redraws a pseudo-field target whose IT00 drive trips the rig or exceeds
+its full scale (a drawn target only; an explicit ``desired``/``field_seed`` or a desired set
+raises the :class:`vrig.RigLimitError`)."""
 
 FAST_SECONDS = 4.0
 """Length of the desired segments of the ``fast`` option [s] (the default is 20 s; the
@@ -122,7 +127,10 @@ class DriveIterationEnv(gym.Env):
 
     **Randomness**: only ``reset(seed=...)`` / ``self.np_random``: each reset draws the
     pseudo-field seed (or the index into ``desired``) and the run seed (rig noise of the
-    iteration runs: ``run_seed + 1 + n``). ``options`` may fix ``"desired"`` (a TimeHistory or
+    iteration runs: ``run_seed + 1 + n``); a drawn pseudo-field target whose IT00 drive trips
+    the rig or exceeds its full scale (the linear inverse overshoots a hardening rig: on the
+    calibrated elastomeric damper about 1 target in 24) is redrawn from ``self.np_random`` up to
+    :data:`FIELD_REDRAWS` times (``info["field_seed"]`` is the one played). ``options`` may fix ``"desired"`` (a TimeHistory or
     file), ``"field_seed"``, ``"run_seed"``: with ``model_seed=s`` and ``options={"desired": d,
     "run_seed": s}`` a fixed gain g reproduces ``vrig.reconstruct(rig, d, gain=g, seed=s)``.
 
@@ -319,18 +327,29 @@ class DriveIterationEnv(gym.Env):
         self.field_seed = int(options.get("field_seed", draw[0]))
         self.run_seed = int(options.get("run_seed", draw[1]))
         ph = self.physics
-        if "desired" in options:
-            desired = self._load(options["desired"])
-        elif self.desired_set is not None:
-            desired = self.desired_set[self.field_seed % len(self.desired_set)]
-        else:
-            desired = ph.pseudo_field(self.field_seed)
-        self.desired = desired
-        self.engine = ph.start(desired, self.run_seed)
-        self.iteration = 0
-        drive = self.engine.first_drive()
-        # IT00 cannot be refused quietly: there is no previous drive to fall back on
-        self.drive_th, self.raw, self.response, self.scores = self.engine.play(drive, 0)
+        drawn = not ("desired" in options or "field_seed" in options or self.desired_set)
+        for attempt in range(FIELD_REDRAWS + 1):
+            if "desired" in options:
+                desired = self._load(options["desired"])
+            elif self.desired_set is not None:
+                desired = self.desired_set[self.field_seed % len(self.desired_set)]
+            else:
+                desired = ph.pseudo_field(self.field_seed)
+            self.desired = desired
+            self.engine = ph.start(desired, self.run_seed)
+            self.iteration = 0
+            drive = self.engine.first_drive()
+            # IT00 cannot be refused quietly: there is no previous drive to fall back on. A
+            # drawn pseudo-field target the linear inverse cannot start on (its IT00 drive trips
+            # or exceeds the full scale: a hardening rig, e.g. the calibrated damper) is redrawn
+            try:
+                self.drive_th, self.raw, self.response, self.scores = self.engine.play(drive, 0)
+            except RigLimitError:
+                if not drawn or attempt == FIELD_REDRAWS:
+                    raise
+                self.field_seed = int(self.np_random.integers(0, 2**31 - 1))
+            else:
+                break
         self.drive = drive
         self.log_band_error = self.task.measure(self.engine.desres.data, self.response.data, ph.fs)
         self.errors = [np.asarray(self.scores[0], dtype=float)]

@@ -186,6 +186,7 @@ class RigDescription:
     default_variant: str = "mild"  # the variant load_rig(name) gives (variant=None)
     severity: Severity | None = None  # the non-linearity severity axis; None: a linear rig
     air_springs: tuple = ()  # AirSpring elements (vrig.rigs.gas_spring), side-car "air_springs"
+    reconstruction: dict = field(default_factory=dict)  # the CLI's per-rig defaults ("gain")
 
 
 MILD = "mild"
@@ -584,6 +585,9 @@ def read_description(path) -> RigDescription:
         default_variant=default_variant,
         severity=_read_severity(raw.get("severity"), params, where),
         air_springs=_read_air_springs(raw.get("air_springs", []), where),
+        reconstruction={
+            k: float(v) for k, v in raw.get("reconstruction", {}).items() if k != "description"
+        },  # ranges: schema
     )
 
 
