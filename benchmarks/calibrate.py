@@ -1,6 +1,7 @@
 """Calibrate a virtual rig's documented parameters on ONE observable the reference text reports.
 
     python -m benchmarks.calibrate RIG [--quick] [--write] [--predict]
+    python -m benchmarks.calibrate --check [RIG]     # the committed calibration vs the text
 
 Issue 12: the virtual rigs are milder than the real ones the text measured. A twin is
 calibrated on the **linear baseline** only — the text's own linear procedure (inverse ARX, IT00,
@@ -51,6 +52,7 @@ from pathlib import Path
 __all__ = [
     "CALIBRATIONS",
     "calibrate",
+    "check",
     "evaluate",
     "linear_baseline",
     "predict",
@@ -478,11 +480,53 @@ def write_variant(rig_name: str, result: dict, name: str = "thesis") -> Path:
     return path
 
 
+def check(rig_name: str, variant: str = "thesis", log=print) -> bool:
+    """The committed calibration: the text's linear procedure on ``variant`` (quick settings)
+    beside the text's figure per objective channel, and every calibrated value against its
+    documented range. True if every channel lies within ±25 % and every value in its range."""
+    import vrig
+
+    cal = _cal(rig_name)
+    rig = vrig.load_rig(rig_name, seed=0, variant=variant)
+    desc = rig.description
+    ok = True
+    log(f"{rig_name} ({cal['table']}, variant {variant!r}):")
+    for k, v in desc.variants[variant].values.items():
+        p = desc.parameters[k]
+        try:
+            p.check(v)
+            inside = True
+        except ValueError:
+            inside = False
+        ok &= inside
+        log(f"  {k} = {v!r} {p.unit}: {'inside' if inside else 'OUTSIDE'} {p.allowed}")
+    t0 = time.perf_counter()
+    per = linear_baseline_channels(rig, rig_name)
+    lo, hi = cal["target"] * (1 - TOLERANCE), cal["target"] * (1 + TOLERANCE)
+    for channel, eta in per.items():
+        within = lo <= eta <= hi
+        ok &= within
+        log(
+            f"  {_arx_label(cal)} on {channel}: vrig {eta:.1f} % vs text {cal['target']:g} % "
+            f"({'within' if within else 'OUTSIDE'} ±{TOLERANCE:.0%}: {lo:.1f}-{hi:.1f} %)"
+            f"  [{time.perf_counter() - t0:.1f} s]"
+        )
+    return ok
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(
         prog="python -m benchmarks.calibrate", description=__doc__.split("\n")[0]
     )
-    ap.add_argument("rig", choices=sorted(CALIBRATIONS))
+    ap.add_argument(
+        "rig", nargs="?", choices=sorted(CALIBRATIONS), help="(with --check: default all four)"
+    )
+    ap.add_argument(
+        "--check",
+        action="store_true",
+        help="no search: the committed 'thesis' values' linear baseline vs the text (±25 %%) "
+        "and their documented ranges; exit 1 if any fails",
+    )
     ap.add_argument("--quick", action="store_true", help="a coarser grid, fewer refinements")
     ap.add_argument("--write", action="store_true", help="store the result as variant 'thesis'")
     ap.add_argument(
@@ -491,6 +535,12 @@ def main(argv=None) -> int:
         help="then run the rows it was not calibrated on, on the 'thesis' variant (not tuned)",
     )
     args = ap.parse_args(argv)
+    if args.check:
+        results = [check(r) for r in ([args.rig] if args.rig else sorted(CALIBRATIONS))]
+        print("calibration check: " + ("ok" if all(results) else "FAILED"))
+        return 0 if all(results) else 1
+    if args.rig is None:
+        ap.error("name a rig to calibrate (or --check)")
     result = calibrate(args.rig, quick=args.quick)
     if args.write:
         if not result["ok"]:

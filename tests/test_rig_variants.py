@@ -208,3 +208,19 @@ def test_thesis_variant_linear_baseline_near_the_text(name):
     assert per and set(per) == set(CALIBRATIONS[name].get("channels", per))
     for channel, eta in per.items():
         assert target * (1 - TOLERANCE) <= eta <= target * (1 + TOLERANCE), (channel, eta)
+
+
+def test_calibrate_check_prints_the_baseline_beside_the_text_and_fails_outside(monkeypatch):
+    """``python -m benchmarks.calibrate --check RIG``: the committed values inside their ranges
+    and the linear baseline within ±25 % of the text -> exit 0; the same baseline against a
+    target it misses by far -> exit 1 naming the miss."""
+    from benchmarks import calibrate
+
+    lines = []
+    assert calibrate.check("elastomeric-damper", log=lines.append)
+    text = "\n".join(lines)
+    assert "vs text 57 %" in text and "within" in text and "OUTSIDE" not in text
+    moved = {**calibrate.CALIBRATIONS["elastomeric-damper"], "target": 10.0}
+    monkeypatch.setitem(calibrate.CALIBRATIONS, "elastomeric-damper", moved)
+    lines.clear()
+    assert calibrate.main(["elastomeric-damper", "--check"]) == 1
