@@ -209,6 +209,13 @@ def _register_builtins() -> None:
         linear=False,
     )
     register_method(
+        "narx-sim",
+        lambda: InverseNarx(4, 2, kind="full", focus="simulation", selection="simulation"),
+        description="inverse NARX(4), quadratic, terms chosen and refined by free-run error "
+        "(SEMP, simulation focus)",
+        linear=False,
+    )
+    register_method(
         "split",
         _split,
         description="split spectra at the band's geometric mean, inverse ARX(4) per band",
