@@ -98,6 +98,25 @@ def test_inverse_model_bad_input():
         InverseModel(Arx(order=2)).simulate(np.ones(10))
     with pytest.raises(IdentificationError, match="samples"):
         estimate_delay(np.ones(20), np.ones(20), max_lag=10)
+    with pytest.raises(IdentificationError, match="lead_domain"):
+        InverseModel(Arx(order=2), lead_domain="frequency")
+
+
+@pytest.mark.filterwarnings("ignore::identification.errors.RankDeficiencyWarning")
+def test_auto_lead_judged_in_the_response_domain_for_a_non_square_rig():
+    """Two drives, three responses (one a mix of both), pure delay 3 on every path: the
+    response-domain ranking runs (forward model drive -> response) and finds the delay, and
+    the inverse reproduces a fresh drive."""
+    def rig(u):
+        y1, y2 = _plant(u[:, 0]), _plant(u[:, 1])
+        return np.column_stack([y1, y2, 0.5 * y1 + 0.3 * y2])
+
+    drive_id = band_limited_noise(6000, 2, cutoff=0.5, seed=5)
+    inv = InverseModel(Arx(order=4), lead="auto").fit(drive_id, rig(drive_id))
+    assert inv.lead_score_domain_ == "response"
+    assert inv.lead_ == DELAY
+    drive = band_limited_noise(4000, 2, cutoff=0.4, seed=6)
+    assert np.all(metrics.qantim_fit_dc(drive, inv.simulate(rig(drive))) < 1.0)
 
 
 # --- pole contraction (inverse models with near-integrator poles)
