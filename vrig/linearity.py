@@ -305,17 +305,18 @@ class LinearityResult:
         ax_c.legend(fontsize=7)
 
         labels, values = [], []
-        tests = [("mean level", self.mean_z, Z_MEAN)]
-        tests += [(f"scaling {key}", s["ratio"], K_NOISE) for key, s in self.scaling.items()]
-        tests += [("coherence", self.coherence_ratio, K_NOISE)]
-        if self.arx_order is not None:
-            gain = (self.eta_arx - self.eta_narx) / np.maximum(self.eta_noise, 1e-12)
-            tests += [("NARX gain", gain, K_NOISE)]
-        for name, ratio, limit in tests:
+        tests = [("mean level", self.mean_z / Z_MEAN)]
+        tests += [(f"scaling {key}", sc["ratio"] / K_NOISE) for key, sc in self.scaling.items()]
+        tests += [("coherence", self.coherence_ratio / K_NOISE)]
+        if self.arx_order is not None:  # both NARX criteria: the smaller decides
+            gain = (self.eta_arx - self.eta_narx) / np.maximum(K_NOISE * self.eta_noise, 1e-12)
+            rel = (1 - self.eta_narx / self.eta_arx) / NARX_GAIN
+            tests += [("NARX gain", np.minimum(gain, rel))]
+        for name, ratio in tests:
             for k, n in enumerate(self.names):
                 if np.isfinite(ratio[k]):
                     labels.append(f"{name}\n{n}" if len(self.names) > 1 else name)
-                    values.append(max(ratio[k], 1e-3) / limit)
+                    values.append(max(ratio[k], 1e-3))
         y = np.arange(len(values))
         ax_r.barh(y, values, color=["C3" if v > 1 else "C0" for v in values])
         ax_r.axvline(1.0, color="k", lw=1.0)
@@ -645,6 +646,8 @@ def check_linearity(
     eta_noise = np.full(ny, np.nan)
     if models:
         arx_order, eta_arx, eta_narx, kind, heldout = _fit_models(u, yt, fs, notes)
+        if heldout:
+            heldout["t"] = heldout["t"] + s0 / fs
         if arx_order is not None:
             split = round((1 - _HOLDOUT) * n)
             yv = yt[split:][_MAX_ORDER + 1 :]
