@@ -14,6 +14,7 @@ from .errors import (
     SimulationInstabilityError,
 )
 from .field import pseudo_field
+from .linearity import LinearityResult, check_linearity, check_rig_linearity
 from .reconstruction import ReconstructionResult, reconstruct
 from .rigs import ChannelSpec, FileRig, MujocoRig, list_rigs, load_rig, rig_path, severity_rigs
 from .testfolder import TestFolder
@@ -25,6 +26,7 @@ __all__ = [
     "ChannelSpec",
     "FileFormatError",
     "FileRig",
+    "LinearityResult",
     "MujocoRig",
     "ReconstructionError",
     "ReconstructionResult",
@@ -35,6 +37,8 @@ __all__ = [
     "TestFolder",
     "TimeHistory",
     "__version__",
+    "check_linearity",
+    "check_rig_linearity",
     "list_rigs",
     "load_rig",
     "pseudo_field",

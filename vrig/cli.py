@@ -6,6 +6,7 @@
     vrig describe shock-absorber                # channels, limits, parameters
     vrig reconstruct --rig shock-absorber --method arx
     vrig repeatability --rig shock-absorber
+    vrig check-linearity --rig elastomeric-damper --plot   # is NARX worth it? (§5.8)
     vrig demo                                   # identify a generated non-linear MIMO system
     vrig bench run --quick                      # the benchmark runner (= python -m benchmarks)
 
@@ -208,6 +209,37 @@ def _parser() -> argparse.ArgumentParser:
     )
     rep.add_argument("--seed", type=int, default=0, help="random seed, an integer >= 0 (default 0)")
     rep.add_argument("--out", help="folder of the plot (default ./results/<rig>-repeatability)")
+
+    lin = sub.add_parser(
+        "check-linearity",
+        help="is the rig non-linear? mean-level, scaling, coherence and ARX-vs-NARX tests",
+        description="Play a band-limited random drive u on the rig (and 2u, -u, u again, zero, "
+        "an offset b and u + b), judge each test against the measured noise floor and print "
+        "the evidence; the last line is 'verdict: linear' or 'verdict: non-linear' (exit 0 "
+        "either way). The rule is in vrig.linearity's documentation.",
+        epilog=_EXIT_CODES,
+    )
+    lin.add_argument("--rig", required=True, help="rig name (see `vrig rigs`) or rig file")
+    lin.add_argument(
+        "--level",
+        type=float,
+        default=0.10,
+        help="random drive rms as a fraction of each drive's full scale, in (0, 0.5] "
+        "(default 0.10; halved on an interlock trip)",
+    )
+    lin.add_argument(
+        "--seconds", type=float, default=8.0, help="analysed length of each record (default 8 s)"
+    )
+    lin.add_argument(
+        "--band",
+        type=float,
+        nargs=2,
+        metavar=("LOW", "HIGH"),
+        help="drive band [Hz] (default as for reconstruct)",
+    )
+    lin.add_argument("--seed", type=int, default=0, help="random seed, an integer >= 0 (default 0)")
+    lin.add_argument("--plot", action="store_true", help="write linearity.png into --out")
+    lin.add_argument("--out", help="folder of the plot (default ./results/<rig>-linearity)")
     return p
 
 
@@ -608,6 +640,35 @@ def _cmd_repeatability(args) -> int:
     return 0
 
 
+def _cmd_check_linearity(args) -> int:
+    from .linearity import check_rig_linearity
+
+    if not (np.isfinite(args.level) and 0 < args.level <= 0.5):
+        raise _UsageError(f"--level must be a fraction of full scale in (0, 0.5], got {args.level:g}")
+    if not (np.isfinite(args.seconds) and 2 <= args.seconds <= _MAX_SECONDS):
+        raise _UsageError(f"--seconds must be 2..{_MAX_SECONDS:g}, got {args.seconds:g}")
+    _check_seed(args.seed)
+    if args.out is not None and not args.plot:
+        raise _UsageError("--out is the folder of the plot: pass --plot too")
+    rig = _load_rig(args.rig, seed=args.seed)
+    band = _band(rig, args.band)
+    out = Path(args.out) if args.out else Path("results") / f"{Path(rig.name).stem}-linearity"
+    if args.plot:
+        if out.exists() and not out.is_dir():
+            raise _UsageError(f"--out {out} is a file, not a folder")
+        _check_writable(out)  # before the runs, not after them
+    result = check_rig_linearity(
+        rig, level=args.level, seconds=args.seconds, band=band, seed=args.seed, progress=True
+    )
+    lines = result.table().splitlines()
+    print("\n".join(lines[:-1]))
+    if args.plot:
+        out.mkdir(parents=True, exist_ok=True)
+        print(f"plot       {result.plot(out / 'linearity.png')}")
+    print(lines[-1])
+    return 0
+
+
 def _cmd_demo(args) -> int:
     from identification.errors import SimulationDivergedError, UnstableModelError
 
@@ -635,6 +696,7 @@ _COMMANDS = {
     "describe": _cmd_describe,
     "reconstruct": _cmd_reconstruct,
     "repeatability": _cmd_repeatability,
+    "check-linearity": _cmd_check_linearity,
 }
 
 
