@@ -450,12 +450,13 @@ def test_rig_specific_psds_model_the_seven_channel_rig_better():
     "proved effective for the vertical channels" (Sec. 3.3.1), i.e. a lower inverse modelling
     error over the four vertical channels (mean of channels 1-4) than the triangular PSD.
 
-    The former claim (lower error on at least 5 of 7 channels) was never robust: with equal
-    inverse leads the twin gives 3 of 7 (vertical 45/57/47/43 % vs 47/52/52/55 %; the lateral
-    and longitudinal channels 83/100/57 % vs 66/66/56 %, worse), and the 5 of 7 it showed
-    before the chunked-run commit came from the triangular inverse's automatic lead falling on
-    13 samples instead of 12 (channels 5-7 at 88/87/70 %), a flip a change of the noise
-    realisation alone undid. The noise itself moves every error by ~0.1 %-points."""
+    The former claim (lower error on at least 5 of 7 channels) was never robust: it hangs on
+    the inverses' automatic lead. Both at 12 samples: 3 of 7 (vertical 45/57/47/43 % vs
+    47/52/52/55 %; lateral and longitudinal 83/100/57 % vs 66/66/56 %); both at 13: 6 of 7; the
+    5 of 7 before the chunked-run commit was triangular at 13, rig-specific at 12, and a new
+    noise realisation alone moved the triangular lead to 12. The noise itself moves every
+    error by ~0.1 %-points. The vertical mean is lower at either lead (48.0 vs 51.5 % at 12,
+    47.4 vs 51.5 % at 13)."""
     from benchmarks.thesis_tables import table_3_7
 
     _names, out = table_3_7(seconds=30.0, log=lambda *a: None)
