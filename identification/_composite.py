@@ -80,7 +80,7 @@ def load_composite(path, class_name: str, part_names: tuple) -> tuple[dict, dict
     if meta.get("class") != class_name:
         raise ModelFileError(
             path,
-            f"it holds a {meta.get('class')!r} model, not a {class_name} "
+            f"it holds a {meta.get('class')!r} model; expected {class_name} "
             "(load it with that class's load)",
         )
     if meta.get("parts") != list(part_names):
