@@ -25,6 +25,7 @@ from .models import Arx, Narx
 from .order_selection import OrderScan, order_scan
 from .regression import regression_matrix
 from .selection import ForwardSelection, forward_regression
+from .split_spectra import SplitSpectraModel
 from .structure import ChannelStructure, term_count, term_count_combinatorial
 from .synthetic import band_limited_noise, random_narx
 from .validation import (
@@ -54,6 +55,7 @@ __all__ = [
     "PressResult",
     "RankDeficiencyWarning",
     "SimulationDivergedError",
+    "SplitSpectraModel",
     "StabilityWarning",
     "UnstableModelError",
     "band_limited_noise",

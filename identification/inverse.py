@@ -16,6 +16,7 @@ import numpy as np
 
 from . import metrics
 from ._validation import as_signal, check_same_length
+from .error_model import ErrorSignalModel
 from .errors import (
     IdentificationError,
     SimulationDivergedError,
@@ -85,8 +86,10 @@ class InverseModel:
 
     Parameters
     ----------
-    model : Narx or Arx (unfitted)
+    model : Narx, Arx or ErrorSignalModel (unfitted)
         The structure of the inverse model (its inputs are the responses, its outputs the drives).
+        An :class:`~identification.ErrorSignalModel` gives an inverse ARX plus a NARX model of
+        its drive error; ``max_radius`` then applies to both of its parts.
     lead : int, "delay" or "auto"
         Time shift in samples: the drive at t is modelled from responses up to t + lead.
         ``"delay"`` uses the rig delay from :func:`estimate_delay`. ``"auto"`` (default) tries
@@ -141,9 +144,10 @@ class InverseModel:
         holdout: float = 0.25,
         lead_domain: str = "drive",
     ):
-        if not isinstance(model, Narx):
+        if not isinstance(model, (Narx, ErrorSignalModel)):
             raise IdentificationError(
-                f"model must be a Narx or Arx instance, got {type(model).__name__}"
+                "model must be a Narx or Arx (or an ErrorSignalModel) instance, got "
+                f"{type(model).__name__}"
             )
         if lead not in ("auto", "delay") and (not isinstance(lead, (int, np.integer)) or lead < 0):
             raise IdentificationError(

@@ -892,11 +892,15 @@ class Narx:
         ``fsync``, rename): a kill during the save leaves the previous file or the new one.
         """
         self._check_fitted()
-        path = Path(path)
-        if path.suffix != ".npz":
-            path = (
-                path.with_suffix(path.suffix + ".npz") if path.suffix else path.with_suffix(".npz")
-            )
+        path = npz_path(path)
+        with atomic_write(path) as f:  # a kill leaves the old file or the new one
+            np.savez(f, **self._file_arrays())
+        return path
+
+    def _file_arrays(self) -> dict[str, np.ndarray]:
+        """The arrays of the model file (``meta`` and one set per output channel): what
+        :meth:`save` writes and composite models (split spectra, error signal) embed."""
+        self._check_fitted()
         meta = {
             "format": "vrig-identification-model",
             "version": _FORMAT_VERSION,
@@ -920,9 +924,7 @@ class Narx:
                 arrays[f"err_{k}"] = self.err_[k]
             if getattr(self, "coef_std_", None) is not None:
                 arrays[f"coef_std_{k}"] = self.coef_std_[k]
-        with atomic_write(path) as f:  # a kill leaves the old file or the new one
-            np.savez(f, **arrays)
-        return path
+        return arrays
 
     @classmethod
     def load(cls, path):
@@ -948,20 +950,7 @@ class Narx:
         arrays = read_npz(
             path, limit=MAX_MODEL_FILE_BYTES, error=lambda detail: ModelFileError(path, detail)
         )
-        meta = _model_meta(arrays, path)
-        target = {"Narx": Narx, "Arx": Arx}[meta["class"]]
-        params = dict(meta["params"])
-        if target is Arx:
-            params.pop("degree", None)
-            params.pop("kind", None)
-        try:
-            model = target(**params)
-            _install_loaded(model, arrays, meta)
-        except (IdentificationError, TypeError, ValueError) as exc:
-            if isinstance(exc, ModelFileError):
-                raise
-            raise ModelFileError(path, f"{type(exc).__name__}: {exc}") from None
-        return model
+        return model_from_arrays(arrays, path)
 
     def __repr__(self) -> str:
         p = self._params()
@@ -971,6 +960,33 @@ class Narx:
 
 MAX_MODEL_FILE_BYTES = 2**30
 """Largest model file :meth:`Narx.load` reads (1 GiB)."""
+
+
+def npz_path(path) -> Path:
+    """``path`` with the ``.npz`` suffix model files carry (added when missing)."""
+    path = Path(path)
+    if path.suffix != ".npz":
+        path = path.with_suffix(path.suffix + ".npz") if path.suffix else path.with_suffix(".npz")
+    return path
+
+
+def model_from_arrays(arrays: dict, path: Path):
+    """The Narx/Arx stored in ``arrays`` (a model file's, or one part of a composite model
+    file's), checked (see :meth:`Narx.load`); raises :class:`ModelFileError` naming ``path``."""
+    meta = _model_meta(arrays, path)
+    target = {"Narx": Narx, "Arx": Arx}[meta["class"]]
+    params = dict(meta["params"])
+    if target is Arx:
+        params.pop("degree", None)
+        params.pop("kind", None)
+    try:
+        model = target(**params)
+        _install_loaded(model, arrays, meta)
+    except (IdentificationError, TypeError, ValueError) as exc:
+        if isinstance(exc, ModelFileError):
+            raise
+        raise ModelFileError(path, f"{type(exc).__name__}: {exc}") from None
+    return model
 
 
 def _model_meta(arrays: dict, path: Path) -> dict:

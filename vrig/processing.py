@@ -13,6 +13,8 @@ from collections.abc import Callable
 import numpy as np
 from scipy import signal
 
+from identification import split_spectra
+
 from .timehistory import TimeHistory
 
 __all__ = ["band_split", "decimate", "f2d", "gprepro", "identification_band"]
@@ -93,16 +95,17 @@ def band_split(
     """Split a record at ``split_hz`` into complementary low and high bands (split spectra, §3.2).
 
     The low band is a zero-phase low-pass; the high band is the remainder, so
-    ``low + high == th`` exactly.
+    ``low + high == th`` exactly. The split is :func:`identification.split_spectra.band_split`,
+    the one the forward :class:`identification.SplitSpectraModel` uses (its docstring says why
+    the split is complementary).
     """
     _check(th)
     if not 0 < split_hz < th.fs / 2:
         raise ValueError(
             f"split frequency must lie in (0, fs/2 = {th.fs / 2:g}) Hz, got {split_hz}"
         )
-    sos = signal.butter(order, split_hz, btype="lowpass", fs=th.fs, output="sos")
-    low = signal.sosfiltfilt(sos, th.data, axis=0)
-    return th.with_data(low), th.with_data(th.data - low)
+    low, high = split_spectra.band_split(th.data, split_hz, th.fs, order=order)
+    return th.with_data(low), th.with_data(high)
 
 
 def decimate(th: TimeHistory, factor: int) -> TimeHistory:

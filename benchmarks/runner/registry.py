@@ -192,7 +192,7 @@ class ForwardFrf:
 
 
 def _register_builtins() -> None:
-    from vrig.reconstruction import InverseArx, InverseFrf, InverseNarx
+    from vrig.reconstruction import InverseArx, InverseErrorSignal, InverseFrf, InverseNarx
 
     register_method("arx", lambda: InverseArx(4), description="inverse ARX(4), QanTiM", linear=True)
     register_method(
@@ -213,6 +213,14 @@ def _register_builtins() -> None:
         lambda: InverseNarx(4, 2, kind="full", focus="simulation", selection="simulation"),
         description="inverse NARX(4), quadratic, terms chosen and refined by free-run error "
         "(SEMP, simulation focus)",
+        linear=False,
+    )
+    register_method(
+        "error-signal",
+        lambda: InverseErrorSignal(3, 2, 2),
+        description="inverse ARX(3) plus a quadratic input-polynomial NARX(2) of its drive "
+        "error (§5.5.4, Table 6.5)",
+        quick=False,
         linear=False,
     )
     register_method(

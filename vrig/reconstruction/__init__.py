@@ -7,12 +7,21 @@ from .iteration import (
     pseudo_damage,
     reconstruct,
 )
-from .methods import METHODS, InverseArx, InverseFrf, InverseNarx, SplitSpectra, make_method
+from .methods import (
+    METHODS,
+    InverseArx,
+    InverseErrorSignal,
+    InverseFrf,
+    InverseNarx,
+    SplitSpectra,
+    make_method,
+)
 
 __all__ = [
     "METHODS",
     "DriveIteration",
     "InverseArx",
+    "InverseErrorSignal",
     "InverseFrf",
     "InverseNarx",
     "ReconstructionResult",

@@ -9,7 +9,8 @@ The iteration (:func:`vrig.reconstruction.reconstruct`) computes ``IT00DRV = dri
 corrects with ``ITn+1DRV = ITnDRV + gain * (drive(DESRES) - drive(ITnRES))``, which for a
 linear inverse equals ``gain * drive(DESRES - ITnRES)`` and stays meaningful for a non-linear one.
 
-Methods: :class:`InverseArx` (QanTiM), :class:`InverseNarx`, :class:`SplitSpectra` (two bands,
+Methods: :class:`InverseArx` (QanTiM), :class:`InverseNarx`, :class:`InverseErrorSignal` (an
+inverse ARX plus a NARX model of its drive error, §5.5.4), :class:`SplitSpectra` (two bands,
 each its own inverse model) and :class:`InverseFrf` (H1 estimate, inverse by truncated SVD /
 Tikhonov per frequency line: the MTS RPC / Simcenter TWR baseline).
 """
@@ -19,12 +20,20 @@ from __future__ import annotations
 import numpy as np
 from scipy import signal
 
-from identification import Arx, InverseModel, Narx
+from identification import Arx, ErrorSignalModel, InverseModel, Narx
 
 from ..processing import band_split
 from ..timehistory import TimeHistory
 
-__all__ = ["METHODS", "InverseArx", "InverseFrf", "InverseNarx", "SplitSpectra", "make_method"]
+__all__ = [
+    "METHODS",
+    "InverseArx",
+    "InverseErrorSignal",
+    "InverseFrf",
+    "InverseNarx",
+    "SplitSpectra",
+    "make_method",
+]
 
 
 class _InverseTimeDomain:
@@ -167,12 +176,60 @@ class InverseNarx(_InverseTimeDomain):
         )
 
 
+class InverseErrorSignal(_InverseTimeDomain):
+    """Inverse non-linear error-signal model (§5.5.4, Table 6.5): an inverse ARX
+    (``linear_order``) plus a NARX (``nonlinear_order``, ``degree``) of the drive error the ARX
+    leaves, fitted from the response to it (:class:`identification.ErrorSignalModel` inside
+    :class:`identification.InverseModel`: same lead, run-in and pole contraction as the other
+    time-domain inverses; ``max_radius`` applies to both parts).
+
+    ``kind`` (default ``"input-polynomial"``) is the error NARX's term set; the default keeps
+    the past drive errors linear for the reason :class:`InverseNarx` gives (the inverse runs
+    free, and products of past drives make its free run escape); ``"full"`` is the text's
+    condensed NARX. ``stability_margin`` (default 3) as for :class:`InverseNarx`.
+    """
+
+    name = "error-signal"
+
+    def __init__(
+        self,
+        linear_order: int = 3,
+        nonlinear_order: int = 2,
+        degree: int = 2,
+        *,
+        kind: str = "input-polynomial",
+        focus: str = "prediction",
+        stability_margin: float = 3.0,
+        **kw,
+    ):
+        super().__init__(**kw)
+        self.linear_order, self.nonlinear_order, self.degree = linear_order, nonlinear_order, degree
+        self.kind, self.focus, self.stability_margin = kind, focus, stability_margin
+        self._model()  # validate the options now, not at identification
+
+    def _model(self):
+        return ErrorSignalModel(
+            Arx(order=self.linear_order),
+            Narx(
+                order=self.nonlinear_order,
+                degree=self.degree,
+                kind=self.kind,
+                focus=self.focus,
+                stability_margin=self.stability_margin,
+            ),
+        )
+
+
 class SplitSpectra:
     """Split-spectra modelling (§3.2, §5.5.3): one inverse model per band, drives superposed.
 
     ``low`` and ``high`` are methods (e.g. a non-linear low band and a linear high band); the
     identification and response records are split at ``split_hz`` with complementary zero-phase
-    filters. ``low_responses`` / ``high_responses`` (response channel names) let each band's
+    filters (:func:`vrig.processing.band_split`, which is the split of the forward
+    :class:`identification.SplitSpectraModel`). The forward model object itself is not reused:
+    each band here is a reconstruction *method* (an inverse with its own lead, run-in and
+    response channel selection, working on TimeHistories), not a forward Narx the model object
+    holds, so the two share the splitting function rather than the model. ``low_responses`` / ``high_responses`` (response channel names) let each band's
     inverse use its own transducers: the multiple-transducer split spectra of §3.2.2 (the
     motorcycle's coil-spring strain gauge below the split, its spindle accelerometer above).
     """
@@ -306,11 +363,18 @@ def _cross(a, b, fs, nperseg):
     return f, np.array(out).transpose(2, 0, 1)
 
 
-METHODS = {"arx": InverseArx, "narx": InverseNarx, "split": SplitSpectra, "frf": InverseFrf}
+METHODS = {
+    "arx": InverseArx,
+    "narx": InverseNarx,
+    "error-signal": InverseErrorSignal,
+    "split": SplitSpectra,
+    "frf": InverseFrf,
+}
 
 
 def make_method(method, **options):
-    """A method object from a name (``"arx"``, ``"narx"``, ``"split"``, ``"frf"``) and options,
+    """A method object from a name (``"arx"``, ``"narx"``, ``"error-signal"``, ``"split"``,
+    ``"frf"``) and options,
     or the given object if it already has ``identify`` and ``drive``."""
     if hasattr(method, "identify") and hasattr(method, "drive"):
         if options:
