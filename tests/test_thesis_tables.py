@@ -59,9 +59,16 @@ def test_severity_only_reaches_the_rigs_with_a_severity_axis():
         assert resolve_severity(rig, None) is None
 
 
+class _Calls(list):
+    def __init__(self):
+        super().__init__()
+        self.normal = []
+
+
 def _fake_runs(monkeypatch):
-    """thesis_report with the rig work replaced: records (rig, variant, severity) per run."""
-    calls = []
+    """thesis_report with the rig work replaced: records (rig, variant, severity) per run
+    (the normal tables' runs, also with the drive level, in ``calls.normal``)."""
+    calls = _Calls()
 
     def run_table(table, *, variant, severity, **_kw):
         calls.append((table.rig, variant, severity))
@@ -75,6 +82,13 @@ def _fake_runs(monkeypatch):
     )
     monkeypatch.setattr(thesis_tables, "_markdown_3_7", lambda names, out, setting: setting)
     monkeypatch.setattr(thesis_tables, "belgian_road_example", lambda **_kw: "")
+
+    def run_normal_table(table, *, level, variant, severity, **_kw):
+        calls.normal.append((table.name.split(":")[0], variant, severity, level))
+        vals = [[20.0 - k] * len(table.channels) for k in range(len(table.rows))]
+        return vals, [""] * len(table.rows), "1 m"
+
+    monkeypatch.setattr(thesis_tables, "run_normal_table", run_normal_table)
     return calls
 
 
@@ -271,3 +285,110 @@ def test_a_loss_the_text_also_has_is_as_the_texts():
     assert len(verdicts) == 4 and all(v.endswith("as the text's") for v in verdicts)
     vals[1] = [40.0, 31.0]  # better than the strain gauge: the opposite of the text
     assert gain_verdicts(table, vals, 0)[0].endswith("opposite to the text's")
+
+
+# ------------------------------------------------- normal (forward) models: Tables 6.5-6.10
+
+
+def _normal(prefix):
+    return next(t for t in thesis_tables.NORMAL_TABLES if t.name.startswith(prefix))
+
+
+def test_the_normal_tables_carry_the_texts_channels_and_figures():
+    """Tables 6.4-6.10 of the text: inputs, outputs and modelling errors (6.10: plots only)."""
+    t65, t67 = _normal("Table 6.5"), _normal("Table 6.7")
+    t69, t610 = _normal("Table 6.9"), _normal("Table 6.10")
+    assert (t65.rig, t65.inputs, t65.channels) == (
+        "elastomeric-damper", ["actuator_disp"], ["damper_load"]
+    )
+    assert [r.thesis for r in t65.verdict_rows()] == [(67,), (35,)]
+    assert (t67.rig, t67.inputs, t67.channels) == (
+        "pneumatic-trailer", ["air_pressure"], ["arm_strain"]
+    )
+    assert [r.thesis for r in t67.verdict_rows()] == [(95,), (34,)]
+    forces = ["Fx", "Fy", "Fz", "Mx", "My", "Mz"]
+    assert (t69.rig, t69.inputs, t69.channels) == (
+        "light-truck-front", forces, ["ubj_longitudinal"]
+    )
+    assert [r.thesis for r in t69.verdict_rows()] == [(46,), (34,)]
+    assert t610.inputs == forces and len(t610.channels) == 9
+    assert all(t is None for r in t610.rows for t in r.thesis)
+    for t in (t65, t67, t69, t610):
+        assert tuple(t.band) == (0.0, 25.0)  # every system summary: 0 Hz to 25 Hz
+
+
+@pytest.mark.parametrize("prefix", ["Table 6.5", "Table 6.7", "Table 6.9", "Table 6.10"])
+def test_the_normal_tables_channels_exist_on_their_rigs(prefix):
+    table = _normal(prefix)
+    raw = _raw(table.rig)
+    names = {c["name"] for c in raw["inputs"]} | {c["name"] for c in raw["outputs"]}
+    assert set(table.inputs) <= names and set(table.channels) <= names
+
+
+def test_the_normal_models_are_the_texts_structures():
+    from identification import Arx, ErrorSignalModel, Narx
+
+    esm = _normal("Table 6.5").rows[1].model(250.0)
+    assert isinstance(esm, ErrorSignalModel)
+    assert type(esm.linear) is Arx and esm.linear.order == 3
+    assert (esm.nonlinear.order, esm.nonlinear.degree) == (2, 2)
+    arx, narx = (r.model(250.0) for r in _normal("Table 6.7").verdict_rows())
+    assert type(arx) is Arx and arx.order == 5
+    assert type(narx) is Narx and (narx.order, narx.degree) == (3, 2)
+    for prefix in ("Table 6.9", "Table 6.10"):
+        split = _normal(prefix).rows[1].model(200.0)
+        assert split.split_hz == 2.0
+        assert (split.low.order, split.low.degree) == (0, 2)  # static quadratic
+        assert type(split.high) is Arx and split.high.order == 2
+
+
+@pytest.mark.filterwarnings("ignore::identification.RankDeficiencyWarning")
+def test_the_local_split_is_exact_on_a_static_linear_gain():
+    """y = 2 u1 - u2 (static, linear): each band's model is exact, so the sum is."""
+    import numpy as np
+
+    rng = np.random.default_rng(0)
+    u = rng.standard_normal((2000, 2))
+    y = (2 * u[:, 0] - u[:, 1])[:, None]
+    model = _normal("Table 6.9").rows[1].model(200.0).fit(u, y)
+    v = rng.standard_normal((1000, 2))
+    assert np.allclose(model.simulate(v), (2 * v[:, 0] - v[:, 1])[:, None], atol=1e-8)
+
+
+def test_the_normal_verdicts_on_synthetic_numbers():
+    t67, t610 = _normal("Table 6.7"), _normal("Table 6.10")
+    assert "same ordering" in thesis_tables._verdict(t67, [[95.0], [34.0], [50.0]])
+    assert "different ordering" in thesis_tables._verdict(t67, [[30.0], [34.0], [50.0]])
+    assert "not comparable" in thesis_tables._verdict(t67, [[95.0], "UnstableModelError: x", [1.0]])
+    arx9, split9 = [10.0] * 9, [9.0] * 8 + [15.0]  # mean 9.67 < 10
+    assert "same ordering" in thesis_tables._verdict(t610, [arx9, split9])
+    assert "different ordering" in thesis_tables._verdict(t610, [arx9, [9.0] * 8 + [30.0]])
+    (gain,) = gain_verdicts(t67, [[95.0], [34.0], [20.0]], 0)
+    assert gain.endswith("as the text's")
+
+
+def test_the_report_has_the_normal_tables_per_variant_and_level(tmp_path, monkeypatch):
+    calls = _fake_runs(monkeypatch)
+    text = thesis_tables.thesis_report(tmp_path, True, log=lambda *_: None)
+    for prefix in ("Table 6.5", "Table 6.7", "Table 6.9", "Table 6.10"):
+        assert f"### {prefix}:" in text
+        levels = [lv for name, _v, _s, lv in calls.normal if name == prefix]
+        assert levels == list(_normal(prefix).levels)
+    assert "| QanTiM 5th order (normal) | arm_strain | 20.0 | 20.0 | 95 |" in text
+
+
+# ------------------------------------------------------------- physics claims (rig runs)
+
+
+@pytest.mark.slow
+def test_narx_beats_arx_on_the_pneumatic_pressure_to_strain():
+    """The text's Table 6.7 ordering, on the twin, both models fitted for simulation (a fair
+    comparison: the least-squares ARX's 90 % is a fitting artefact): the air spring's gas law
+    and the buffer make pressure -> strain non-linear."""
+    table = _normal("Table 6.7")
+    for level in table.levels:
+        values, _notes, _rms = thesis_tables.run_normal_table(
+            table, seconds=30.0, level=level, log=lambda *_: None
+        )
+        arx_ls, narx, arx_sim = (v[0] for v in values)
+        assert narx < arx_sim and narx < arx_ls
