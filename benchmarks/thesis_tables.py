@@ -307,37 +307,6 @@ class NormalTable:
         return [r for r in self.rows if not r.label.startswith("vrig:")]
 
 
-class LocalSplitModel:
-    """Forward split-spectra model (§5.5.3, §6.3; Table 6.9): inputs and outputs split at
-    ``split_hz`` by a 4th-order zero-phase Butterworth low-pass (``sosfiltfilt``; the text: "a
-    4th order digital filter"), high = x - low; one model per band, both at the record's rate;
-    the simulated bands are summed. A local stand-in for ``identification.SplitSpectraModel``
-    (branch split-model, not on main when this table was written)."""
-
-    def __init__(self, split_hz: float, fs: float, low, high):
-        if not 0 < split_hz < fs / 2:
-            raise ValueError(
-                f"split frequency must lie in (0, fs/2 = {fs / 2:g}) Hz, got {split_hz}"
-            )
-        self.split_hz, self.fs, self.low, self.high = float(split_hz), float(fs), low, high
-
-    def _lp(self, x):
-        from scipy import signal
-
-        sos = signal.butter(4, self.split_hz, btype="lowpass", fs=self.fs, output="sos")
-        return signal.sosfiltfilt(sos, np.asarray(x, float), axis=0)
-
-    def fit(self, u, y):
-        ul, yl = self._lp(u), self._lp(y)
-        self.low.fit(ul, yl)
-        self.high.fit(np.asarray(u) - ul, np.asarray(y) - yl)
-        return self
-
-    def simulate(self, u, **kw):
-        ul = self._lp(u)
-        return self.low.simulate(ul, **kw) + self.high.simulate(np.asarray(u) - ul, **kw)
-
-
 def _fwd_arx(order, **kw):
     from identification import Arx
 
@@ -379,9 +348,13 @@ def _fwd_arx_per_output(order, **kw):
 
 
 def _fwd_split(split_hz, low_order, low_degree, high_order):
-    from identification import Arx, Narx
+    """Forward split-spectra model (§5.5.3, §6.3; Table 6.9): ``identification.SplitSpectraModel``
+    — inputs and outputs split at ``split_hz`` by a 4th-order zero-phase Butterworth low-pass
+    (the text: "a 4th order digital filter"), high = x - low, one model per band at the
+    record's rate, the simulated bands summed."""
+    from identification import Arx, Narx, SplitSpectraModel
 
-    return lambda fs: LocalSplitModel(
+    return lambda fs: SplitSpectraModel(
         split_hz, fs, Narx(order=low_order, degree=low_degree), Arx(order=high_order)
     )
 

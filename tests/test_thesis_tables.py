@@ -343,7 +343,7 @@ def test_the_normal_models_are_the_texts_structures():
 
 
 @pytest.mark.filterwarnings("ignore::identification.RankDeficiencyWarning")
-def test_the_local_split_is_exact_on_a_static_linear_gain():
+def test_the_forward_split_is_exact_on_a_static_linear_gain():
     """y = 2 u1 - u2 (static, linear): each band's model is exact, so the sum is."""
     import numpy as np
 
