@@ -80,3 +80,23 @@ def per_channel_int(value, n: int, name: str, *, minimum: int) -> tuple[int, ...
         if v < minimum:
             raise IdentificationError(f"{name} must be >= {minimum}, got {v}")
     return values
+
+
+def check_initial_outputs(y0, u: np.ndarray, max_lag: int, n_outputs: int) -> np.ndarray:
+    """``y0`` (the first ``max_lag`` outputs a free run starts from) as a float array of shape
+    (max_lag, n_outputs), finite, with ``u`` at least that long; else IdentificationError."""
+    y0 = np.asarray(y0, dtype=np.float64)
+    if y0.ndim == 1 and n_outputs == 1:
+        y0 = y0[:, None]
+    if y0.shape != (max_lag, n_outputs):
+        raise IdentificationError(
+            f"y0 must have shape (max_lag_, ny) = {(max_lag, n_outputs)}, got {y0.shape}"
+        )
+    if not np.all(np.isfinite(y0)):
+        raise IdentificationError("y0 contains NaN or inf")
+    if u.shape[0] < max_lag:
+        raise IdentificationError(
+            f"u has {u.shape[0]} samples, fewer than the {max_lag} initial outputs y0"
+        )
+    return y0
+

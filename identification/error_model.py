@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from ._composite import load_composite, save_composite
-from ._validation import as_signal, check_same_length
+from ._validation import as_signal, check_initial_outputs, check_same_length
 from .errors import IdentificationError, ModelFileError, SimulationDivergedError
 from .models import Arx, Narx
 
@@ -133,18 +133,7 @@ class ErrorSignalModel:
         if y0 is None:
             out = self.linear.simulate(u, bound=bound) + self.nonlinear.simulate(u, bound=bound)
         else:
-            y0 = np.asarray(y0, dtype=np.float64)
-            if y0.ndim == 1 and self.n_outputs_ == 1:
-                y0 = y0[:, None]
-            if y0.shape != (self.max_lag_, self.n_outputs_):
-                raise IdentificationError(
-                    f"y0 must have shape (max_lag_, ny) = {(self.max_lag_, self.n_outputs_)}, "
-                    f"got {y0.shape}"
-                )
-            if u.shape[0] < self.max_lag_:
-                raise IdentificationError(
-                    f"u has {u.shape[0]} samples, fewer than the {self.max_lag_} initial outputs y0"
-                )
+            y0 = check_initial_outputs(y0, u, self.max_lag_, self.n_outputs_)
             e0 = np.zeros((self.nonlinear.max_lag_, self.n_outputs_))
             out = self.linear.simulate(
                 u, y0=y0[: self.linear.max_lag_], bound=bound

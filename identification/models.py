@@ -17,7 +17,7 @@ import numpy as np
 
 from ._files import atomic_write, read_npz
 from ._transforms import FUNCTIONS
-from ._validation import as_signal, check_same_length, per_channel_int
+from ._validation import as_signal, check_initial_outputs, check_same_length, per_channel_int
 from .budget import check_allocation, product
 from .errors import (
     IdentificationError,
@@ -757,20 +757,7 @@ class Narx:
         self._check_fitted()
         u = as_signal(u, "u", n_channels=self.n_inputs_)
         if y0 is not None:
-            y0 = np.asarray(y0, dtype=np.float64)
-            if y0.ndim == 1 and self.n_outputs_ == 1:
-                y0 = y0[:, None]
-            if y0.shape != (self.max_lag_, self.n_outputs_):
-                raise IdentificationError(
-                    f"y0 must have shape (max_lag_, ny) = {(self.max_lag_, self.n_outputs_)}, "
-                    f"got {y0.shape}"
-                )
-            if not np.all(np.isfinite(y0)):
-                raise IdentificationError("y0 contains NaN or inf")
-            if u.shape[0] < self.max_lag_:
-                raise IdentificationError(
-                    f"u has {u.shape[0]} samples, fewer than the {self.max_lag_} initial outputs y0"
-                )
+            y0 = check_initial_outputs(y0, u, self.max_lag_, self.n_outputs_)
         if bound is None:
             bound = self.bound_
         bound = np.broadcast_to(np.asarray(bound, dtype=np.float64), (self.n_outputs_,)).copy()
