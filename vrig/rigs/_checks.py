@@ -10,7 +10,7 @@ import numbers
 
 from ..errors import RigParameterError
 
-__all__ = ["check_number", "describe_range"]
+__all__ = ["check_number", "describe_range", "replace_fields"]
 
 
 def describe_range(
@@ -67,3 +67,20 @@ def check_number(key: str, value, *, where: str = "", **bounds):
             f"{prefix}{key} must be {allowed}, got {value!r}", key=key, value=value, allowed=allowed
         )
     return int(value) if integer else value
+
+
+def replace_fields(obj, changes: dict, what: str):
+    """A copy of the dataclass ``obj`` with ``changes``; an unknown field name is a
+    RigParameterError naming ``what`` and the known fields (the copy's own checks run)."""
+    from dataclasses import asdict, fields
+
+    names = {f.name for f in fields(obj)}
+    unknown = set(changes) - names
+    if unknown:
+        raise RigParameterError(
+            f"unknown {what}(s) {sorted(unknown)}; known: {sorted(names)}",
+            key=", ".join(sorted(unknown)),
+            allowed=", ".join(sorted(names)),
+        )
+    return type(obj)(**{**asdict(obj), **changes})
+

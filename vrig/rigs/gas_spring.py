@@ -39,15 +39,14 @@ damping); give the air spring's plates sites and the tendon ``<spatial>`` betwee
 from __future__ import annotations
 
 import math
-from dataclasses import asdict, dataclass, fields
+from dataclasses import dataclass
 
 import mujoco
 import numba as nb
 import numpy as np
 from numba import types
 
-from ..errors import RigParameterError
-from ._checks import check_number
+from ._checks import check_number, replace_fields
 from .hydraulics import _as_pointer
 
 __all__ = ["MAX_AIR_SPRINGS", "AirSpring", "install", "uninstall"]
@@ -123,15 +122,8 @@ class AirSpring:
     """The numeric fields a side-car parameter may set (``{"air_spring": NAME, "field": F}``)."""
 
     def replace(self, **changes) -> AirSpring:
-        names = {f.name for f in fields(self)}
-        unknown = set(changes) - names
-        if unknown:
-            raise RigParameterError(
-                f"unknown air-spring field(s) {sorted(unknown)}; known: {sorted(names)}",
-                key=", ".join(sorted(unknown)),
-                allowed=", ".join(sorted(names)),
-            )
-        return AirSpring(**{**asdict(self), **changes})
+        """A copy with ``changes`` (unknown names refused, the values checked)."""
+        return replace_fields(self, changes, "air-spring field")
 
     # the law in NumPy (the compiled callback evaluates the same expressions)
     def effective_area_at(self, h):

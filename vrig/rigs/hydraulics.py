@@ -34,7 +34,7 @@ force), ``NAME_noise`` (valve-noise input, no force) and ``NAME_force`` (a motor
 
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass, fields
+from dataclasses import dataclass, fields
 
 import mujoco
 import numba as nb
@@ -43,8 +43,7 @@ from numba import types
 from numba.core import cgutils
 from numba.extending import intrinsic
 
-from ..errors import RigParameterError
-from ._checks import check_number
+from ._checks import check_number, replace_fields
 
 __all__ = ["MAX_CHANNELS", "TRIP_KINDS", "HydraulicActuator", "install", "trip_record"]
 
@@ -102,15 +101,8 @@ class HydraulicActuator:
         return 4.0 * self.bulk_modulus * self.area**2 / self.oil_volume
 
     def replace(self, **changes) -> HydraulicActuator:
-        names = {f.name for f in fields(self)}
-        unknown = set(changes) - names
-        if unknown:
-            raise RigParameterError(
-                f"unknown hydraulic parameter(s) {sorted(unknown)}; known: {sorted(names)}",
-                key=", ".join(sorted(unknown)),
-                allowed=", ".join(sorted(names)),
-            )
-        return HydraulicActuator(**{**asdict(self), **changes})
+        """A copy with ``changes`` (unknown names refused, the values checked)."""
+        return replace_fields(self, changes, "hydraulic parameter")
 
     def as_row(self, dt: float) -> np.ndarray:
         row = np.zeros(_NPAR)
