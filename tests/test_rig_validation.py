@@ -145,7 +145,12 @@ SIDE_CAR_CASES = {
     "anti-alias cutoff at Nyquist": (
         _set("anti_alias", "cutoff", 0.5),
         "anti_alias.cutoff",
-        "a finite number in (0, 0.5)",
+        "a finite number in [0.05, 0.5)",
+    ),
+    "anti-alias cutoff far below Nyquist (a singular filter; found by the fuzz test)": (
+        _set("anti_alias", "cutoff", 4e-10),
+        "anti_alias.cutoff",
+        "a finite number in [0.05, 0.5)",
     ),
 }
 

@@ -65,10 +65,12 @@ class AntiAliasFilter:
     cutoff: float = 0.4  # fraction of the DAQ sample rate fs (0.4 fs: 80 % of Nyquist)
 
     def __post_init__(self):
-        """Validate: ``order`` an integer in [1, 20], ``cutoff`` in (0, 0.5) of fs."""
+        """Validate: ``order`` an integer in [1, 20], ``cutoff`` in [0.05, 0.5) of fs (a DAQ's
+        anti-alias filter sits near Nyquist; far below, the filter designed at the physics rate
+        is numerically singular)."""
         order = check_number("anti_alias.order", self.order, integer=True, minimum=1, maximum=20)
         object.__setattr__(self, "order", order)
-        check_number("anti_alias.cutoff", self.cutoff, exclusive_minimum=0, exclusive_maximum=0.5)
+        check_number("anti_alias.cutoff", self.cutoff, minimum=0.05, exclusive_maximum=0.5)
 
     def sos(self, fs: float, physics_rate: float) -> np.ndarray:
         wn = self.cutoff * fs / (physics_rate / 2.0)
