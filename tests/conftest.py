@@ -1,11 +1,24 @@
-"""Shared fixtures: seeded data from known generating systems."""
+"""Shared fixtures: seeded data from known generating systems.
+
+Property-based (hypothesis) tests run derandomized by default, so the README's test command
+gives the same verdict on every machine; ``HYPOTHESIS_PROFILE=explore python -m pytest ...``
+draws fresh random examples (and keeps a failing one in ``.hypothesis/`` to replay): that is how
+to hunt for new bad inputs.
+"""
 
 from __future__ import annotations
 
+import os
+
 import numpy as np
 import pytest
+from hypothesis import settings
 
 from identification import band_limited_noise, random_narx
+
+settings.register_profile("deterministic", derandomize=True, database=None, print_blob=True)
+settings.register_profile("explore", print_blob=True)
+settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE", "deterministic"))
 
 
 @pytest.fixture(scope="session")
