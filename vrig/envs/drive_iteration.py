@@ -22,13 +22,23 @@ from .task import IterationTask, band_edges
 __all__ = ["DEFAULT_TOLERANCE", "FIELD_REDRAWS", "ActionLayout", "DriveIterationEnv"]
 
 DEFAULT_TOLERANCE = {
-    "shock-absorber": 0.5,
-    "elastomeric-damper": 1.3,
+    "shock-absorber": 1.7,
+    "elastomeric-damper": 0.91,
     "shaker": 0.5,
     "radiator": 3.0,
+    "light-truck-front": 4.1,
 }
-"""Default tolerance [% η0, every channel] per rig: reachable, but only after several iterations
-(measured with the fixed gain 0.8 on pseudo-field targets); other rigs get 2 %."""
+"""Default tolerance [% η0, every channel] per rig: reachable, but only after several iterations.
+
+The rule: the largest max-channel η0 at IT07 over the pseudo-field targets of ``reset(seed=0..2)``
+of the full-fidelity env (20 s targets) at a fixed gain (0.8, or the rig side-car's
+``"reconstruction"`` gain: 0.5 on the elastomeric damper), rounded up to two significant
+figures, on the rig's default variant. Measured (issue 12/13): shock-absorber ``thesis`` 1.61 %
+(``mild`` 0.52 %, where 0.5 % was set), elastomeric-damper ``thesis`` at gain 0.5 0.91 %
+(``mild`` at 0.8: 0.64 %; 1.3 % was set), light-truck-front 4.04 %. The radiator keeps 3 %,
+measured on an earlier ``mild`` twin: on ``thesis`` the top tank stalls at 10-14 % (the rule
+would give 14 %, a stall level, not convergence), so on the calibrated radiator no target meets
+3 % in the budget. Other rigs get 2 %."""
 
 FIELD_REDRAWS = 4
 """How often ``reset`` redraws a pseudo-field target whose IT00 drive trips the rig or exceeds
