@@ -521,6 +521,75 @@ def check_linearity(
         Every figure, :meth:`~LinearityResult.table`, :meth:`~LinearityResult.plot` and the
         ``verdict``.
     """
+    d, y, (_, yu_th), s0 = _analysis_windows(records, skip)
+    u, fs, names, units = d["u"], yu_th.fs, yu_th.names, yu_th.units
+    ny, n = len(names), d["u"].shape[0]
+    notes: list[str] = []
+    floor = _NoiseFloor(d, y)
+    evidence: dict[str, np.ndarray] = {}
+
+    mean_delta, mean_se, mean_z, offset = _mean_level_test(d, y, floor, notes)
+    if "b" in d:
+        evidence["mean level"] = mean_z > Z_MEAN
+    scaling = _scaling_test(d, floor)
+    if scaling:
+        evidence["scaling"] = np.max([s["ratio"] for s in scaling.values()], axis=0) > K_NOISE
+    coh = _coherence_test(u, floor, fs, band)
+    band = coh["band"]
+    evidence["coherence"] = coh["ratio"] > K_NOISE
+
+    arx_order, eta_arx, eta_narx, kind, heldout = None, np.full(ny, np.nan), np.full(ny, np.nan), "", {}
+    eta_noise = np.full(ny, np.nan)
+    if models:
+        arx_order, eta_arx, eta_narx, kind, heldout = _fit_models(u, floor.yt, fs, notes)
+        if heldout:
+            heldout["t"] = heldout["t"] + s0 / fs
+        if arx_order is not None:
+            eta_noise = _model_noise(floor, n)
+            gain = eta_arx - eta_narx
+            evidence["narx"] = (eta_narx <= (1 - NARX_GAIN) * eta_arx) & (gain > K_NOISE * eta_noise)
+    if scaling and "scaling" in evidence:
+        heldout = dict(heldout)
+        heldout["scaling"] = _scaling_example(scaling, floor, n, fs, s0)
+
+    channel_verdict = _channel_verdicts(evidence, scaling, ny)
+    if not scaling and len(evidence) < 2:
+        notes.append("fewer than two tests could be run: the verdict 'linear' is weak")
+    verdict = "non-linear" if "non-linear" in channel_verdict else "linear"
+    return LinearityResult(
+        names=tuple(names),
+        units=tuple(units),
+        fs=fs,
+        band=band,
+        window_s=n / fs,
+        repeat_error=floor.repeat_error,
+        noise_rms=floor.sigma,
+        mean_delta=mean_delta,
+        mean_se=mean_se,
+        mean_z=mean_z,
+        offset=offset,
+        scaling=scaling,
+        coherence_f=coh["f"],
+        coherence=coh["gamma"],
+        coherence_noise=coh["gamma_ref"],
+        coherence_mean=coh["mean"],
+        coherence_ratio=coh["ratio"],
+        arx_order=arx_order,
+        eta_arx=eta_arx,
+        eta_narx=eta_narx,
+        eta_noise=eta_noise,
+        narx_kind=kind,
+        evidence=evidence,
+        channel_verdict=channel_verdict,
+        verdict=verdict,
+        notes=notes,
+        heldout=heldout,
+    )
+
+
+def _analysis_windows(records, skip: float):
+    """The validated records cut to the analysed window: drives ``d`` and responses ``y`` by
+    name, the ``u`` pair as given, and the first analysed sample ``s0``."""
     if not isinstance(records, Mapping):
         raise ValueError("records must be a mapping name -> (drive, response)")
     unknown = sorted(set(records) - set(_KEYS))
@@ -552,64 +621,75 @@ def check_linearity(
         if key in records:
             dd, yy = _pair(key, records[key], (du, yu_th))
             d[key], y[key] = dd[s0:], yy[s0:]
-    u = d["u"]
-    if np.max(_rms(u)) == 0:
+    if np.max(_rms(d["u"])) == 0:
         raise ValueError("records['u'] has a zero drive")
-    notes: list[str] = []
-    _factor(d["repeat"], u, "repeat")
-    names, units = yu_th.names, yu_th.units
-    ny = len(names)
-    has0 = "0" in d
-    if has0 and np.max(np.abs(d["0"])) > 1e-9 * np.max(np.abs(u)):
+    _factor(d["repeat"], d["u"], "repeat")
+    if "0" in d and np.max(np.abs(d["0"])) > 1e-9 * np.max(np.abs(d["u"])):
         raise ValueError("records['0'] must have a zero drive")
-    base = y["0"] if has0 else None
+    return d, y, (du, yu_th), s0
 
-    def tilde(key):
-        return y[key] - base if has0 else y[key] - y[key].mean(axis=0)
 
-    yt = tilde("u")
-    sig = np.maximum(_rms(yt), 1e-300)
-    diff = y["u"] - y["repeat"]
-    sigma = _rms(diff - diff.mean(axis=0)) / math.sqrt(2)
-    if has0:  # a zero-drive record is a noise realisation whose variance does not depend on
-        # the phases of a periodic disturbance (mains hum), unlike a difference of two runs
-        sigma = np.maximum(sigma, _rms(base - base.mean(axis=0)))
-    sigma = np.maximum(sigma, 1e-12 * sig)
-    repeat_error = 100 * _rms(diff) / sig
-    c0 = 2.0 if has0 else 1.0  # noise variance of ỹ in units of the per-run noise variance
-    evidence: dict[str, np.ndarray] = {}
+class _NoiseFloor:
+    """The responses with the drive-independent part removed (``tilde``) and the per-run noise
+    the tests are judged against, from the repeat (and the zero-drive record, if any)."""
 
-    # (a) mean level
-    mean_delta = mean_se = mean_z = np.full(ny, np.nan)
-    offset = None
-    if "b" in d:
-        db, dub = d["b"], d["u+b"]
-        offset = db.mean(axis=0)
-        if np.any(np.ptp(db, axis=0) > 1e-6 * np.maximum(np.abs(offset), 1e-300)):
-            raise ValueError("records['b'] must hold a constant drive over the analysed window")
-        if np.any(offset == 0):
-            raise ValueError("records['b']: the offset b must be non-zero on every drive (§5.8)")
-        rand = dub - db
-        if np.any(np.abs(rand.mean(axis=0)) > 0.01 * _rms(rand)):
-            notes.append(
-                "the random part of 'u+b' has a mean above 1 % of its rms over the window: the "
-                "mean-level test is biased by the static gain times that mean"
-            )
-        mean_delta = y["u+b"].mean(axis=0) - y["b"].mean(axis=0)
-        blocks = np.array_split(diff, _BLOCKS)
-        bm = np.array([blk.mean(axis=0) for blk in blocks])
-        mean_se = np.maximum(bm.std(axis=0, ddof=1) / math.sqrt(_BLOCKS), 1e-12 * sig)
-        mean_z = np.abs(mean_delta) / mean_se
-        evidence["mean level"] = mean_z > Z_MEAN
+    def __init__(self, d: dict, y: dict):
+        self.y = y
+        self.has0 = "0" in d
+        self.base = y["0"] if self.has0 else None
+        self.yt = self.tilde("u")
+        self.sig = np.maximum(_rms(self.yt), 1e-300)
+        self.diff = y["u"] - y["repeat"]
+        sigma = _rms(self.diff - self.diff.mean(axis=0)) / math.sqrt(2)
+        if self.has0:  # a zero-drive record is a noise realisation whose variance does not
+            # depend on the phases of a periodic disturbance (mains hum), unlike a difference
+            sigma = np.maximum(sigma, _rms(self.base - self.base.mean(axis=0)))
+        self.sigma = np.maximum(sigma, 1e-12 * self.sig)
+        self.repeat_error = 100 * _rms(self.diff) / self.sig
+        self.c0 = 2.0 if self.has0 else 1.0  # noise variance of ỹ per run's noise variance
 
-    # (b) scaling
+    def tilde(self, key):
+        y = self.y[key]
+        return y - self.base if self.has0 else y - y.mean(axis=0)
+
+
+def _mean_level_test(d, y, floor: _NoiseFloor, notes: list):
+    """(a) §5.8: the mean response to u + b minus the mean response to b, against the standard
+    error of a mean from block means of the repeat difference."""
+    ny = floor.yt.shape[1]
+    nan = np.full(ny, np.nan)
+    if "b" not in d:
+        return nan, nan, nan, None
+    db, dub = d["b"], d["u+b"]
+    offset = db.mean(axis=0)
+    if np.any(np.ptp(db, axis=0) > 1e-6 * np.maximum(np.abs(offset), 1e-300)):
+        raise ValueError("records['b'] must hold a constant drive over the analysed window")
+    if np.any(offset == 0):
+        raise ValueError("records['b']: the offset b must be non-zero on every drive (§5.8)")
+    rand = dub - db
+    if np.any(np.abs(rand.mean(axis=0)) > 0.01 * _rms(rand)):
+        notes.append(
+            "the random part of 'u+b' has a mean above 1 % of its rms over the window: the "
+            "mean-level test is biased by the static gain times that mean"
+        )
+    mean_delta = y["u+b"].mean(axis=0) - y["b"].mean(axis=0)
+    blocks = np.array_split(floor.diff, _BLOCKS)
+    bm = np.array([blk.mean(axis=0) for blk in blocks])
+    mean_se = np.maximum(bm.std(axis=0, ddof=1) / math.sqrt(_BLOCKS), 1e-12 * floor.sig)
+    return mean_delta, mean_se, np.abs(mean_delta) / mean_se, offset
+
+
+def _scaling_test(d, floor: _NoiseFloor) -> dict:
+    """(b) superposition: the response to a u against a x the response to u, per scaled record,
+    against the noise that many runs put into the residual."""
     scaling = {}
+    u, yt = d["u"], floor.yt
     for key in ("2u", "-u"):
         if key in d:
             a = _factor(d[key], u, key)
-            r = tilde(key) - a * yt
-            nvar = (1 + a * a + (1 - a) ** 2) if has0 else (1 + a * a)
-            noise = sigma * math.sqrt(nvar)
+            r = floor.tilde(key) - a * yt
+            nvar = (1 + a * a + (1 - a) ** 2) if floor.has0 else (1 + a * a)
+            noise = floor.sigma * math.sqrt(nvar)
             ref = np.maximum(_rms(a * yt), 1e-300)
             scaling[key] = {
                 "factor": a,
@@ -617,11 +697,14 @@ def check_linearity(
                 "noise": 100 * noise / ref,
                 "ratio": _rms(r) / noise,
             }
-    if scaling:
-        evidence["scaling"] = np.max([s["ratio"] for s in scaling.values()], axis=0) > K_NOISE
+    return scaling
 
-    # (c) coherence
-    n = u.shape[0]
+
+def _coherence_test(u, floor: _NoiseFloor, fs: float, band) -> dict:
+    """(c) the incoherent power in the band against a linear reference's: the best linear (H1)
+    response to u plus the measured noise, through the same estimator (Welch's finite segments
+    bias γ² low on any system with memory)."""
+    yt, n, ny = floor.yt, u.shape[0], floor.yt.shape[1]
     nperseg = int(min(2 ** round(math.log2(fs)), n // 4))
     f, suu, suy, _ = _csd_matrix(u, yt, fs, nperseg)
     f, gamma, pyy = _multiple_coherence(u, yt, fs, nperseg)
@@ -635,8 +718,6 @@ def check_linearity(
     inb = (f >= band[0]) & (f <= band[1]) & (f > 0)
     if not np.any(inb):
         raise ValueError(f"no spectral line in the band {band} Hz: use a longer record")
-    # the linear reference: the best linear (H1) response to u plus the measured noise, through
-    # the same estimator (Welch's finite segments bias γ² low on any system with memory)
     h1 = np.zeros_like(suy)
     for i in np.flatnonzero(inb):
         h1[i] = np.linalg.pinv(suu[i]) @ suy[i]
@@ -645,45 +726,47 @@ def check_linearity(
     for j in range(ny):
         for i in range(u.shape[1]):
             y_lin[:, j] += signal.fftconvolve(u[:, i], h[:, i, j])[nperseg // 2 : nperseg // 2 + n]
-    y_ref = y_lin + diff * math.sqrt(c0 / 2)
+    y_ref = y_lin + floor.diff * math.sqrt(floor.c0 / 2)
     _, gamma_ref, pyy_ref = _multiple_coherence(u, y_ref, fs, nperseg)
     inc = np.sum(((1 - gamma) * pyy)[inb], axis=0)
     inc_ref = np.sum(((1 - gamma_ref) * pyy_ref)[inb], axis=0)
-    coherence_ratio = np.sqrt(inc / np.maximum(inc_ref, 1e-300 + 1e-24 * inc))
-    coherence_noise = gamma_ref
-    coherence_mean = gamma[inb].mean(axis=0)
-    evidence["coherence"] = coherence_ratio > K_NOISE
+    return {
+        "band": band,
+        "f": f,
+        "gamma": gamma,
+        "gamma_ref": gamma_ref,
+        "mean": gamma[inb].mean(axis=0),
+        "ratio": np.sqrt(inc / np.maximum(inc_ref, 1e-300 + 1e-24 * inc)),
+    }
 
-    # (d) ARX vs NARX
-    arx_order, eta_arx, eta_narx, kind, heldout = None, np.full(ny, np.nan), np.full(ny, np.nan), "", {}
-    eta_noise = np.full(ny, np.nan)
-    if models:
-        arx_order, eta_arx, eta_narx, kind, heldout = _fit_models(u, yt, fs, notes)
-        if heldout:
-            heldout["t"] = heldout["t"] + s0 / fs
-        if arx_order is not None:
-            split = round((1 - _HOLDOUT) * n)
-            yv = yt[split:][_MAX_ORDER + 1 :]
-            nv = (diff[split:][_MAX_ORDER + 1 :]) * math.sqrt(c0 / 2)
-            nv = nv - nv.mean(axis=0)
-            eta_noise = 100 * np.abs(nv).sum(axis=0) / np.abs(yv - yv.mean(axis=0)).sum(axis=0)
-            gain = eta_arx - eta_narx
-            evidence["narx"] = (eta_narx <= (1 - NARX_GAIN) * eta_arx) & (gain > K_NOISE * eta_noise)
-    if scaling and "scaling" in evidence:
-        key = "2u" if "2u" in scaling else "-u"
-        m = min(n, round(fs))
-        t = (s0 + np.arange(m)) / fs
-        heldout = dict(heldout)
-        heldout["scaling"] = {
-            "key": key,
-            "factor": scaling[key]["factor"],
-            "t": t,
-            "expected": scaling[key]["factor"] * yt[:m, 0],
-            "measured": tilde(key)[:m, 0],
-        }
 
+def _model_noise(floor: _NoiseFloor, n: int) -> np.ndarray:
+    """(d)'s noise floor: the η0 [%] the noise alone gives on the held-out part."""
+    split = round((1 - _HOLDOUT) * n)
+    yv = floor.yt[split:][_MAX_ORDER + 1 :]
+    nv = (floor.diff[split:][_MAX_ORDER + 1 :]) * math.sqrt(floor.c0 / 2)
+    nv = nv - nv.mean(axis=0)
+    return 100 * np.abs(nv).sum(axis=0) / np.abs(yv - yv.mean(axis=0)).sum(axis=0)
+
+
+def _scaling_example(scaling: dict, floor: _NoiseFloor, n: int, fs: float, s0: int) -> dict:
+    """The first second of the scaling evidence on channel 0, for the plot."""
+    key = "2u" if "2u" in scaling else "-u"
+    m = min(n, round(fs))
+    return {
+        "key": key,
+        "factor": scaling[key]["factor"],
+        "t": (s0 + np.arange(m)) / fs,
+        "expected": scaling[key]["factor"] * floor.yt[:m, 0],
+        "measured": floor.tilde(key)[:m, 0],
+    }
+
+
+def _channel_verdicts(evidence: dict, scaling: dict, ny: int) -> list:
+    """The rule: non-linear when the scaling test and one other agree, or the scaling ratio
+    alone exceeds K_NOISE²; without a scaling test, two tests must agree."""
     others = [k for k in evidence if k != "scaling"]
-    channel_verdict = []
+    out = []
     for k in range(ny):
         count = sum(bool(evidence[t][k]) for t in others)
         if scaling:
@@ -691,39 +774,8 @@ def check_linearity(
             nl = bool(evidence["scaling"][k]) and (count >= 1 or worst > K_NOISE**2)
         else:
             nl = count >= 2
-        channel_verdict.append("non-linear" if nl else "linear")
-    if not scaling and len(evidence) < 2:
-        notes.append("fewer than two tests could be run: the verdict 'linear' is weak")
-    verdict = "non-linear" if "non-linear" in channel_verdict else "linear"
-    return LinearityResult(
-        names=tuple(names),
-        units=tuple(units),
-        fs=fs,
-        band=band,
-        window_s=n / fs,
-        repeat_error=repeat_error,
-        noise_rms=sigma,
-        mean_delta=mean_delta,
-        mean_se=mean_se,
-        mean_z=mean_z,
-        offset=offset,
-        scaling=scaling,
-        coherence_f=f,
-        coherence=gamma,
-        coherence_noise=coherence_noise,
-        coherence_mean=coherence_mean,
-        coherence_ratio=coherence_ratio,
-        arx_order=arx_order,
-        eta_arx=eta_arx,
-        eta_narx=eta_narx,
-        eta_noise=eta_noise,
-        narx_kind=kind,
-        evidence=evidence,
-        channel_verdict=channel_verdict,
-        verdict=verdict,
-        notes=notes,
-        heldout=heldout,
-    )
+        out.append("non-linear" if nl else "linear")
+    return out
 
 
 # ---------------------------------------------------------------------------------------------
