@@ -1,4 +1,10 @@
-"""Exceptions and warnings raised by the identification package."""
+"""Exceptions and warnings raised by the identification package.
+
+Every exception the package raises on purpose derives from :class:`IdentificationError`, the
+package's root. It is a ``ValueError`` (bad input is what most of them report), so all of them
+are ``ValueError`` too, including :class:`SimulationDivergedError`, which also stays an
+``ArithmeticError`` as it always was. The warnings derive from ``UserWarning`` only.
+"""
 
 from __future__ import annotations
 
@@ -15,7 +21,8 @@ __all__ = [
 
 
 class IdentificationError(ValueError):
-    """Bad input to an identification function (shape, values, structure or option)."""
+    """The root of every exception the identification package raises on purpose; raised itself
+    for bad input to an identification function (shape, values, structure or option)."""
 
 
 class InsufficientDataError(IdentificationError):
@@ -68,9 +75,11 @@ class IllConditionedWarning(UserWarning):
     """The normal equations are ill-conditioned; accuracy is lost (use a QR-type solver)."""
 
 
-class SimulationDivergedError(ArithmeticError):
+class SimulationDivergedError(IdentificationError, ArithmeticError):
     """A free-run simulation left the bounded region or produced a non-finite value, or a
     one-step prediction was not finite.
+
+    An :class:`IdentificationError` (hence also a ``ValueError``) and an ``ArithmeticError``.
 
     Attributes
     ----------

@@ -6,12 +6,14 @@ signals, processing, reconstruction workflow, gymnasium environments and CLI liv
 
 from . import envs as _envs  # noqa: F401  (registers the vrig/ gymnasium environments)
 from .errors import (
+    ERRORS,
     FileFormatError,
     ReconstructionError,
     RigLimitError,
     RigModelError,
     RigParameterError,
     SimulationInstabilityError,
+    VrigError,
 )
 from .field import pseudo_field
 from .linearity import LinearityResult, check_linearity, check_rig_linearity
@@ -23,6 +25,7 @@ from .timehistory import TimeHistory
 __version__ = "0.1.0"
 
 __all__ = [
+    "ERRORS",
     "ChannelSpec",
     "FileFormatError",
     "FileRig",
@@ -36,6 +39,7 @@ __all__ = [
     "SimulationInstabilityError",
     "TestFolder",
     "TimeHistory",
+    "VrigError",
     "__version__",
     "check_linearity",
     "check_rig_linearity",

@@ -722,29 +722,14 @@ def _say(command: str, text: str) -> None:
 
 def _run(command: str, func, arg) -> int:
     """Run a command; map every error to one line on stderr and an exit code (module doc)."""
-    from identification.errors import IdentificationError, SimulationDivergedError
+    from .errors import ERRORS, RigModelError
 
-    from .errors import (
-        ReconstructionError,
-        RigLimitError,
-        RigModelError,
-        SimulationInstabilityError,
-    )
-
-    failures = (
-        _Failure,
-        ReconstructionError,
-        RigLimitError,
-        SimulationInstabilityError,
-        IdentificationError,
-        SimulationDivergedError,
-    )
     try:
         return func(arg)
     except (_UsageError, RigModelError) as exc:
         _say(command, exc)
         return EXIT_USAGE
-    except failures as exc:
+    except (_Failure, *ERRORS) as exc:  # any other vrig or identification error: the run failed
         hint = (
             ""
             if isinstance(exc, _Failure)

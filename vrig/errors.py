@@ -1,18 +1,38 @@
-"""Exceptions raised by vrig."""
+"""Exceptions raised by vrig.
+
+Every exception vrig raises on purpose derives from :class:`VrigError`, and also from the
+built-in it derived from before the root existed (``RuntimeError`` for a failed run,
+``ValueError`` for bad input), so ``except RuntimeError`` / ``except ValueError`` code keeps
+working. Failures of the identification library propagate as
+:class:`identification.IdentificationError` (that package does not import vrig), so
+``except ERRORS`` (``(VrigError, IdentificationError)``) catches anything either raised.
+"""
 
 from __future__ import annotations
 
+from identification.errors import IdentificationError
+
 __all__ = [
+    "ERRORS",
     "FileFormatError",
     "ReconstructionError",
     "RigLimitError",
     "RigModelError",
     "RigParameterError",
     "SimulationInstabilityError",
+    "VrigError",
 ]
 
 
-class RigLimitError(RuntimeError):
+class VrigError(Exception):
+    """The root of every exception vrig raises on purpose (each also keeps its built-in base)."""
+
+
+ERRORS = (VrigError, IdentificationError)
+"""``except ERRORS:`` catches anything vrig or the identification library raised on purpose."""
+
+
+class RigLimitError(VrigError, RuntimeError):
     """An interlock tripped: the rig stopped, as a real controller would.
 
     Attributes
@@ -49,11 +69,11 @@ class RigLimitError(RuntimeError):
         )
 
 
-class SimulationInstabilityError(RuntimeError):
+class SimulationInstabilityError(VrigError, RuntimeError):
     """MuJoCo reported a warning or the simulation became non-finite."""
 
 
-class RigModelError(ValueError):
+class RigModelError(VrigError, ValueError):
     """A rig model (MJCF or its side-car description) is inconsistent or incomplete."""
 
 
@@ -76,7 +96,7 @@ class RigParameterError(RigModelError):
         self.key, self.value, self.allowed = key, value, allowed
 
 
-class ReconstructionError(RuntimeError):
+class ReconstructionError(VrigError, RuntimeError):
     """A reconstruction failed before any iteration was played (identification or IT00).
 
     Raised by :func:`vrig.reconstruct` ``from`` the original exception (a
@@ -108,7 +128,7 @@ class ReconstructionError(RuntimeError):
         self.stage = stage
 
 
-class FileFormatError(ValueError):
+class FileFormatError(VrigError, ValueError):
     """A file is not what its name or reader expects: truncated, corrupt, foreign, of another
     encoding or version, not a regular file, or too large.
 
