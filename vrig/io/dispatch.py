@@ -33,7 +33,7 @@ def read(path, **kwargs) -> TimeHistory:
     path : str or Path
         ``.rsp``/``.drv``/``.tim`` (RPC III), ``.csv``, ``.mat`` or ``.npz`` (case-insensitive).
     **kwargs
-        Passed to the format's reader (e.g. ``fs`` for :func:`read_csv`).
+        Passed to the format's reader (e.g. ``fs`` for :func:`~vrig.io.read_csv`).
 
     Raises
     ------
@@ -64,7 +64,7 @@ def write(path, history: TimeHistory, **kwargs) -> Path:
     path : str or Path
     history : TimeHistory
     **kwargs
-        Passed to the format's writer (e.g. ``data_type`` for :func:`write_rpc3`).
+        Passed to the format's writer (e.g. ``data_type`` for :func:`~vrig.io.write_rpc3`).
 
     Returns
     -------
