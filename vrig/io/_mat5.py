@@ -24,7 +24,7 @@ import math
 import struct
 import zlib
 
-from .errors import FileFormatError
+from ..errors import FileFormatError
 
 __all__ = ["check"]
 
