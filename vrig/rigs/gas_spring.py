@@ -47,19 +47,36 @@ import numpy as np
 from numba import types
 
 from ._checks import check_number, replace_fields
-from .hydraulics import _as_pointer
+from .hydraulics import Hook, _as_pointer, _call_generic, _call_sensor, _lookup, _record_pointer
 
-__all__ = ["MAX_AIR_SPRINGS", "AirSpring", "install", "uninstall"]
+__all__ = ["MAX_AIR_SPRINGS", "PASSIVE", "SENSOR", "AirSpring", "install", "uninstall"]
 
 MAX_AIR_SPRINGS = 8
-_NPAR = 12
 _MIN_VOLUME = 0.01  # fraction of the design volume
 
-# Process-wide context read by the callbacks: pointers of the arrays of the rig being run.
-# MuJoCo's passive and sensor callbacks are global; a rig installs its context right before
-# each rollout (n = 0: the callbacks return at once).
-_CTX = np.zeros(16, dtype=np.int64)
-_CTX_ADDR = _CTX.ctypes.data
+# One air spring as the compiled callbacks read it.
+PARAM_DTYPE = np.dtype(
+    [
+        ("tendon", np.int64),  # tendon id (its length is the height h)
+        ("sensor", np.int64),  # sensordata address of the pressure sensor, -1 for none
+        ("design_height", np.float64),  # h_d [m]
+        ("p0", np.float64),  # absolute pressure at the design height p_d + p_a [Pa]
+        ("volume", np.float64),  # V_d [m^3]
+        ("area", np.float64),  # A_d [m^2]
+        ("area_slope", np.float64),  # A' [m^2/m]
+        ("index", np.float64),  # polytropic index n [-]
+        ("ambient", np.float64),  # p_a [Pa]
+    ],
+    align=True,
+)
+# Per-MjData context: raw addresses and sizes of the arrays the callbacks work on.
+CONTEXT_DTYPE = np.dtype(
+    [(k, np.int64) for k in ("n", "params", "ten_length", "ten_J", "qfrc_passive", "sensordata",
+                             "rownnz", "rowadr", "colind", "ntendon", "njac", "nv",
+                             "nsensordata")]
+)  # fmt: skip
+_as_params = _record_pointer(nb.from_dtype(PARAM_DTYPE))
+_as_context = _record_pointer(nb.from_dtype(CONTEXT_DTYPE))
 
 
 @dataclass(frozen=True)
@@ -153,121 +170,127 @@ class AirSpring:
             p - self.ambient_pressure
         ) * self.area_slope
 
-    def row(self, tendon_id: int, sensor_adr: int) -> np.ndarray:
-        r = np.zeros(_NPAR)
-        r[:9] = [
-            tendon_id,
-            sensor_adr,
-            self.design_height,
-            self.design_pressure + self.ambient_pressure,
-            self.volume,
-            self.effective_area,
-            self.area_slope,
-            self.polytropic_index,
-            self.ambient_pressure,
-        ]
+    def record(self, tendon_id: int, sensor_adr: int) -> np.ndarray:
+        """This air spring as one :data:`PARAM_DTYPE` record."""
+        r = np.zeros((), dtype=PARAM_DTYPE)
+        r["tendon"], r["sensor"] = tendon_id, sensor_adr
+        r["design_height"] = self.design_height
+        r["p0"] = self.design_pressure + self.ambient_pressure
+        r["volume"] = self.volume
+        r["area"] = self.effective_area
+        r["area_slope"] = self.area_slope
+        r["index"] = self.polytropic_index
+        r["ambient"] = self.ambient_pressure
         return r
 
 
 @nb.njit(cache=False)
 def _law(p, h):  # pragma: no cover - compiled
-    """(gauge pressure [Pa], force [N]) of the air spring with parameter row ``p`` at ``h``."""
-    d = h - p[2]
-    area = p[5] + p[6] * d
+    """(gauge pressure [Pa], force [N]) of the air spring with parameter record ``p`` at ``h``."""
+    d = h - p.design_height
+    area = p.area + p.area_slope * d
     if area < 0.0:
         area = 0.0
-    vol = p[4] + p[5] * d + 0.5 * p[6] * d * d
-    vmin = _MIN_VOLUME * p[4]
+    vol = p.volume + p.area * d + 0.5 * p.area_slope * d * d
+    vmin = _MIN_VOLUME * p.volume
     if vol < vmin:
         vol = vmin
-    gauge = p[3] * math.pow(p[4] / vol, p[7]) - p[8]
+    gauge = p.p0 * math.pow(p.volume / vol, p.index) - p.ambient
     return gauge, gauge * area
 
 
-def _build_callbacks():
-    """Compile the passive-force and sensor callbacks (once per process, on first use)."""
+def _build_passive(table_address: int):
+    """Compile the passive-force callback (once per process, on first use)."""
 
     @nb.cfunc(types.void(types.voidptr, types.voidptr), nopython=True, cache=False)
     def _passive(m, d):  # pragma: no cover - compiled, runs inside mj_step
-        ctx = nb.carray(_as_pointer(_CTX_ADDR), (16,), dtype=np.int64)
-        n = ctx[0]
-        if n == 0:
+        address = _lookup(table_address, d)
+        if address == 0:
+            previous = nb.carray(_as_pointer(table_address), (1,), dtype=np.int64)[0]
+            if previous != 0:
+                _call_generic(previous, m, d)
             return
-        par = nb.carray(_as_pointer(ctx[1]), (MAX_AIR_SPRINGS, _NPAR), dtype=np.float64)
-        length = nb.carray(_as_pointer(ctx[2]), (ctx[9],), dtype=np.float64)
-        jac = nb.carray(_as_pointer(ctx[3]), (ctx[10],), dtype=np.float64)
-        qfrc = nb.carray(_as_pointer(ctx[4]), (ctx[11],), dtype=np.float64)
-        rownnz = nb.carray(_as_pointer(ctx[6]), (ctx[9],), dtype=np.int32)
-        rowadr = nb.carray(_as_pointer(ctx[7]), (ctx[9],), dtype=np.int32)
-        colind = nb.carray(_as_pointer(ctx[8]), (ctx[10],), dtype=np.int32)
-        for c in range(n):
+        ctx = nb.carray(_as_context(address), (1,))[0]
+        par = nb.carray(_as_params(ctx.params), (MAX_AIR_SPRINGS,))
+        length = nb.carray(_as_pointer(ctx.ten_length), (ctx.ntendon,), dtype=np.float64)
+        jac = nb.carray(_as_pointer(ctx.ten_J), (ctx.njac,), dtype=np.float64)
+        qfrc = nb.carray(_as_pointer(ctx.qfrc_passive), (ctx.nv,), dtype=np.float64)
+        rownnz = nb.carray(_as_pointer(ctx.rownnz), (ctx.ntendon,), dtype=np.int32)
+        rowadr = nb.carray(_as_pointer(ctx.rowadr), (ctx.ntendon,), dtype=np.int32)
+        colind = nb.carray(_as_pointer(ctx.colind), (ctx.njac,), dtype=np.int32)
+        for c in range(ctx.n):
             p = par[c]
-            t = int(p[0])
+            t = p.tendon
             _, force = _law(p, length[t])
             a = rowadr[t]
             for k in range(rownnz[t]):
                 qfrc[colind[a + k]] += jac[a + k] * force
 
+    return _passive
+
+
+def _build_sensor(table_address: int):
+    """Compile the sensor callback (the pressure transducers; once per process, on first use)."""
+
     @nb.cfunc(types.void(types.voidptr, types.voidptr, types.intc), nopython=True, cache=False)
     def _sensor(m, d, stage):  # pragma: no cover - compiled, runs inside mj_step
-        ctx = nb.carray(_as_pointer(_CTX_ADDR), (16,), dtype=np.int64)
-        n = ctx[0]
-        if n == 0 or stage != 1:  # mjSTAGE_POS
+        address = _lookup(table_address, d)
+        if address == 0:
+            previous = nb.carray(_as_pointer(table_address), (1,), dtype=np.int64)[0]
+            if previous != 0:
+                _call_sensor(previous, m, d, stage)
             return
-        par = nb.carray(_as_pointer(ctx[1]), (MAX_AIR_SPRINGS, _NPAR), dtype=np.float64)
-        length = nb.carray(_as_pointer(ctx[2]), (ctx[9],), dtype=np.float64)
-        sens = nb.carray(_as_pointer(ctx[5]), (ctx[12],), dtype=np.float64)
-        for c in range(n):
+        if stage != 1:  # mjSTAGE_POS
+            return
+        ctx = nb.carray(_as_context(address), (1,))[0]
+        par = nb.carray(_as_params(ctx.params), (MAX_AIR_SPRINGS,))
+        length = nb.carray(_as_pointer(ctx.ten_length), (ctx.ntendon,), dtype=np.float64)
+        sens = nb.carray(_as_pointer(ctx.sensordata), (ctx.nsensordata,), dtype=np.float64)
+        for c in range(ctx.n):
             p = par[c]
-            adr = int(p[1])
-            if adr >= 0:
-                gauge, _ = _law(p, length[int(p[0])])
-                sens[adr] = gauge
+            if p.sensor >= 0:
+                gauge, _ = _law(p, length[p.tendon])
+                sens[p.sensor] = gauge
 
-    return _passive, _sensor
+    return _sensor
 
 
-_CALLBACKS = None
-_LIVE = None
+PASSIVE = Hook("passive", _build_passive)
+"""vrig's ``mjcb_passive`` hook (the air-spring forces of each live rig)."""
+SENSOR = Hook("sensor", _build_sensor)
+"""vrig's ``mjcb_sensor`` hook (the air-spring pressure sensors of each live rig)."""
 
 
 def install(model: mujoco.MjModel, data: mujoco.MjData, springs) -> np.ndarray | None:
-    """Point the global passive and sensor callbacks at ``data`` for ``springs``.
+    """Register ``data``'s context with the passive and sensor callbacks for ``springs``
+    (installing them if they are not, see :class:`~vrig.rigs.hydraulics.Hook`).
 
-    ``springs``: sequence of (AirSpring, tendon id, sensor address or -1). Nothing to do (and
-    the callbacks stay idle) for none. Returns the parameter buffer (kept alive here too).
+    ``springs``: sequence of (AirSpring, tendon id, sensor address or -1). Nothing to do for
+    none (``data`` gets no context: the callbacks leave it alone). Returns the context record
+    (kept alive until :func:`uninstall`). Other MjData are unaffected.
     """
-    global _CALLBACKS, _LIVE
     n = len(springs)
     if n == 0:
-        _CTX[0] = 0
+        uninstall(data)
         return None
     if n > MAX_AIR_SPRINGS:
         raise ValueError(f"at most {MAX_AIR_SPRINGS} air springs are supported, got {n}")
-    params = np.zeros((MAX_AIR_SPRINGS, _NPAR))
+    params = np.zeros(MAX_AIR_SPRINGS, dtype=PARAM_DTYPE)
     for c, (spring, tendon_id, sensor_adr) in enumerate(springs):
-        params[c] = spring.row(tendon_id, sensor_adr)
-    _CTX[:] = 0
-    _CTX[1:9] = [
-        params.ctypes.data,
-        data.ten_length.ctypes.data,
-        data.ten_J.ctypes.data,
-        data.qfrc_passive.ctypes.data,
-        data.sensordata.ctypes.data,
-        model.ten_J_rownnz.ctypes.data,
-        model.ten_J_rowadr.ctypes.data,
-        model.ten_J_colind.ctypes.data,
-    ]
-    _CTX[9:13] = [model.ntendon, data.ten_J.size, model.nv, model.nsensordata]
-    _CTX[0] = n
-    if _CALLBACKS is None:
-        _CALLBACKS = _build_callbacks()
-        mujoco.set_mjcb_passive(_CALLBACKS[0].ctypes)
-        mujoco.set_mjcb_sensor(_CALLBACKS[1].ctypes)
-    _LIVE = params  # the callbacks read it through a raw pointer: keep it alive
-    return params
+        params[c] = spring.record(tendon_id, sensor_adr)
+    ctx = np.zeros(1, dtype=CONTEXT_DTYPE)
+    ctx[0] = (n, params.ctypes.data, data.ten_length.ctypes.data, data.ten_J.ctypes.data,
+              data.qfrc_passive.ctypes.data, data.sensordata.ctypes.data,
+              model.ten_J_rownnz.ctypes.data, model.ten_J_rowadr.ctypes.data,
+              model.ten_J_colind.ctypes.data, model.ntendon, data.ten_J.size, model.nv,
+              model.nsensordata)  # fmt: skip
+    PASSIVE.add(data, ctx, params, model)
+    SENSOR.add(data, ctx, params, model)
+    return ctx
 
 
-def uninstall() -> None:
-    """Disable the callbacks (they return at once while no air spring is installed)."""
-    _CTX[0] = 0
+def uninstall(data: mujoco.MjData | None = None) -> None:
+    """Remove ``data``'s context (every one for None) from both callbacks; the previous
+    callbacks are back once no context is left."""
+    PASSIVE.remove(data)
+    SENSOR.remove(data)

@@ -34,26 +34,82 @@ force), ``NAME_noise`` (valve-noise input, no force) and ``NAME_force`` (a motor
 
 from __future__ import annotations
 
+import ctypes
+import threading
 from dataclasses import dataclass, fields
 
 import mujoco
 import numba as nb
 import numpy as np
+from llvmlite import ir
 from numba import types
 from numba.core import cgutils
 from numba.extending import intrinsic
 
 from ._checks import check_number, replace_fields
 
-__all__ = ["MAX_CHANNELS", "TRIP_KINDS", "HydraulicActuator", "install", "trip_record"]
+__all__ = [
+    "CONTROL", "MAX_CHANNELS", "MAX_LIVE", "TRIP_KINDS", "Hook", "HydraulicActuator", "install",
+    "trip_record", "uninstall",
+]  # fmt: skip
 
 MAX_CHANNELS = 16
-_NPAR = 20
-_NINT = 8
-_UD_HEADER = 8
-_UD_PER_CHANNEL = 8
+MAX_LIVE = 64
+"""At most this many MjData may have a live vrig context at once (per callback kind)."""
 TRIP_KINDS = {1: "stroke", 2: "force", 3: "following error"}
 _NON_NEGATIVE = ("leakage", "kp", "ki", "kd", "pressure_feedback")
+
+# Layout of ``mjData.userdata`` (float64): a header, then ``_UD_PER_CHANNEL`` states per channel.
+_UD_HEADER = 8
+_UD_STEP = 0  # physics steps taken since install
+_UD_TRIP_CODE = 1  # first interlock trip: kind (TRIP_KINDS; 0 none), channel, step, value, limit
+_UD_TRIP_CHANNEL = 2
+_UD_TRIP_STEP = 3
+_UD_TRIP_VALUE = 4
+_UD_TRIP_LIMIT = 5
+_UD_PER_CHANNEL = 8
+_S_SPOOL = 0  # spool position x_v [-]
+_S_SPOOL_VEL = 1  # spool velocity [1/s]
+_S_LOAD_PRESSURE = 2  # load pressure p_L [Pa]
+_S_INTEGRAL = 3  # integral of the error [m s]
+_S_PREV_ERROR = 4  # error at the previous controller update [m]
+_S_VALVE_CMD = 5  # held valve command [-]
+
+# One channel's parameters as the compiled callback reads them (derived values precomputed).
+PARAM_DTYPE = np.dtype(
+    [
+        ("area", np.float64),  # A [m^2]
+        ("supply_pressure", np.float64),  # P_s [Pa]
+        ("max_flow", np.float64),  # Q_max [m^3/s]
+        ("valve_omega", np.float64),  # 2 pi f_v [rad/s]
+        ("valve_damping", np.float64),  # zeta_v [-]
+        ("oil_gain", np.float64),  # 4 beta / V_t [Pa/m^3]
+        ("leakage", np.float64),  # C_leak [m^3/(s Pa)]
+        ("kp", np.float64),
+        ("ki", np.float64),
+        ("kd", np.float64),
+        ("stroke", np.float64),  # [m]
+        ("force_limit", np.float64),  # [N]
+        ("error_limit", np.float64),  # [m]
+        ("period", np.int64),  # physics steps per controller update
+        ("controller_dt", np.float64),  # period * dt [s]
+        ("pressure_feedback", np.float64),
+        ("dt", np.float64),  # physics timestep [s]
+        ("i_cmd", np.int64),  # ctrl index of the displacement command
+        ("i_noise", np.int64),  # ctrl index of the valve noise
+        ("i_force", np.int64),  # ctrl index of the piston force
+        ("qpos", np.int64),  # qpos address of the piston joint
+        ("dof", np.int64),  # dof address of the piston joint
+    ],
+    align=True,
+)
+# Per-MjData context: raw addresses and sizes of the arrays the callback works on.
+CONTEXT_DTYPE = np.dtype(
+    [(k, np.int64) for k in ("nch", "ctrl", "qpos", "qvel", "userdata", "params", "nu", "nq",
+                             "nv", "nuserdata")]
+)  # fmt: skip
+_PARAM_NB = nb.from_dtype(PARAM_DTYPE)
+_CONTEXT_NB = nb.from_dtype(CONTEXT_DTYPE)
 
 
 @dataclass(frozen=True)
@@ -104,32 +160,33 @@ class HydraulicActuator:
         """A copy with ``changes`` (unknown names refused, the values checked)."""
         return replace_fields(self, changes, "hydraulic parameter")
 
-    def as_row(self, dt: float) -> np.ndarray:
-        row = np.zeros(_NPAR)
+    def record(self, dt: float, index=(0, 0, 0, 0, 0)) -> np.ndarray:
+        """This channel as one :data:`PARAM_DTYPE` record for a physics timestep ``dt`` [s];
+        ``index``: (cmd, noise, force ctrl index, qpos address, dof address)."""
+        r = np.zeros((), dtype=PARAM_DTYPE)
         steps = max(1, round(1.0 / (self.controller_rate * dt)))
-        row[:15] = [
-            self.area,
-            self.supply_pressure,
-            self.max_flow,
-            2 * np.pi * self.valve_frequency,
-            self.valve_damping,
-            4.0 * self.bulk_modulus / self.oil_volume,
-            self.leakage,
-            self.kp,
-            self.ki,
-            self.kd,
-            self.stroke,
-            self.force_limit,
-            self.error_limit,
-            float(steps),
-            steps * dt,
-        ]
-        row[15] = self.pressure_feedback
-        row[16] = dt
-
-        return row
+        r["area"] = self.area
+        r["supply_pressure"] = self.supply_pressure
+        r["max_flow"] = self.max_flow
+        r["valve_omega"] = 2 * np.pi * self.valve_frequency
+        r["valve_damping"] = self.valve_damping
+        r["oil_gain"] = 4.0 * self.bulk_modulus / self.oil_volume
+        r["leakage"] = self.leakage
+        r["kp"], r["ki"], r["kd"] = self.kp, self.ki, self.kd
+        r["stroke"] = self.stroke
+        r["force_limit"] = self.force_limit
+        r["error_limit"] = self.error_limit
+        r["period"] = steps
+        r["controller_dt"] = steps * dt
+        r["pressure_feedback"] = self.pressure_feedback
+        r["dt"] = dt
+        for key, value in zip(("i_cmd", "i_noise", "i_force", "qpos", "dof"), index, strict=True):
+            r[key] = value
+        return r
 
 
+# ---------------------------------------------------------------------------------------------
+# Compiled helpers: raw pointers and calls through a function pointer (the chained callback).
 @intrinsic
 def _as_pointer(typingctx, address):
     sig = types.voidptr(address)
@@ -140,113 +197,273 @@ def _as_pointer(typingctx, address):
     return sig, codegen
 
 
-# Process-wide context read by the callback: pointers of the MjData arrays of the rig being run.
-# MuJoCo's control callback is global; a rig installs its context right before each rollout.
-_CTX = np.zeros(16, dtype=np.int64)
-_CTX_ADDR = _CTX.ctypes.data
+def _record_pointer(record):
+    """A compiled ``f(address) -> record*`` for a numba record type (``nb.carray(f(a), n)`` is
+    then an array of those records)."""
+
+    @intrinsic
+    def _pointer(typingctx, address):
+        sig = types.CPointer(record)(address)
+
+        def codegen(context, builder, signature, args):
+            return builder.inttoptr(args[0], context.get_value_type(signature.return_type))
+
+        return sig, codegen
+
+    return _pointer
 
 
-def _build_callback():
+_as_params = _record_pointer(_PARAM_NB)
+_as_context = _record_pointer(_CONTEXT_NB)
+
+
+@intrinsic
+def _address(typingctx, pointer):
+    """The integer address of a ``void*``."""
+    sig = types.int64(pointer)
+
+    def codegen(context, builder, signature, args):
+        return builder.ptrtoint(args[0], ir.IntType(64))
+
+    return sig, codegen
+
+
+@intrinsic
+def _call_generic(typingctx, function, m, d):
+    """Call the C function at address ``function`` as ``void f(const mjModel*, mjData*)``."""
+    sig = types.void(function, m, d)
+
+    def codegen(context, builder, signature, args):
+        fnty = ir.FunctionType(ir.VoidType(), [cgutils.voidptr_t, cgutils.voidptr_t])
+        builder.call(builder.inttoptr(args[0], fnty.as_pointer()), [args[1], args[2]])
+        return context.get_dummy_value()
+
+    return sig, codegen
+
+
+@intrinsic
+def _call_sensor(typingctx, function, m, d, stage):
+    """Call the C function at address ``function`` as ``void f(const mjModel*, mjData*, int)``."""
+    sig = types.void(function, m, d, stage)
+
+    def codegen(context, builder, signature, args):
+        fnty = ir.FunctionType(
+            ir.VoidType(), [cgutils.voidptr_t, cgutils.voidptr_t, ir.IntType(32)]
+        )
+        builder.call(builder.inttoptr(args[0], fnty.as_pointer()), list(args[1:]))
+        return context.get_dummy_value()
+
+    return sig, codegen
+
+
+@nb.njit(inline="always")
+def _lookup(table_address, d):  # pragma: no cover - compiled
+    """The context address registered for the mjData ``d`` in a :class:`Hook` table, or 0."""
+    table = nb.carray(_as_pointer(table_address), (MAX_LIVE + 1, 2), dtype=np.int64)
+    key = _address(d)
+    for i in range(1, MAX_LIVE + 1):
+        if table[i, 0] == key:
+            return table[i, 1]
+    return 0
+
+
+class Hook:
+    """vrig's compiled callback on one of MuJoCo's global hooks (``mjcb_control``,
+    ``mjcb_passive``, ``mjcb_sensor``), with a per-mjData registry of contexts.
+
+    The compiled callback is built by ``build(table_address)``; it looks up the mjData it is
+    called with in a fixed table (row 0: the address of the previous C callback, 0 for none;
+    rows 1..MAX_LIVE: (mjData address, context address)) and, for an mjData that is not vrig's,
+    calls the previous callback (:func:`_call_generic`) or does nothing.
+
+    The hook is installed when the first context is added and the previous callback is restored
+    when the last one is removed, so a user's own callback is never clobbered between runs. The
+    previous callback is chained from compiled code when it is a C function (a ``ctypes``
+    function pointer, e.g. a numba ``cfunc``'s ``.ctypes``). A plain Python callable cannot be
+    called from compiled code without the binding's own MjModel/MjData wrappers: it is not
+    chained, i.e. it is suspended while a vrig context is live (in one thread nothing else steps
+    then; another thread stepping the user's model meanwhile would not see it) and restored
+    after. If the user replaces vrig's callback while a context is live, vrig leaves theirs in
+    place at removal.
+
+    Table writes happen under a lock; a slot is filled context-first and cleared key-first, so a
+    callback running in another thread (``mujoco.rollout`` releases the GIL) only ever matches
+    its own, stable, entry.
+    """
+
+    def __init__(self, name: str, build):
+        self.name = name
+        self._get = getattr(mujoco, f"get_mjcb_{name}")
+        self._set = getattr(mujoco, f"set_mjcb_{name}")
+        self._build = build
+        self.table = np.zeros((MAX_LIVE + 1, 2), dtype=np.int64)
+        self._callback = None  # the compiled cfunc (built on first use)
+        self._previous = None  # what was installed before vrig's callback
+        self._live = {}  # mjData address -> (slot, objects kept alive while registered)
+        self._lock = threading.Lock()
+
+    @property
+    def installed(self) -> bool:
+        """Whether vrig's callback is the one MuJoCo calls."""
+        return self._callback is not None and self._get() is self._callback.ctypes
+
+    def add(self, data: mujoco.MjData, context: np.ndarray, *keep) -> None:
+        """Register ``context`` (a structured array; its address is what the callback gets) for
+        ``data``, replacing an earlier one for it; ``keep``: more objects to keep alive."""
+        key = data._address
+        with self._lock:
+            if self._callback is None:
+                self._callback = self._build(self.table.ctypes.data)
+            if key in self._live:
+                slot = self._live[key][0]
+            else:
+                free = np.flatnonzero(self.table[1:, 0] == 0)
+                if free.size == 0:
+                    raise RuntimeError(
+                        f"more than {MAX_LIVE} MjData have a live vrig {self.name} callback "
+                        "context: remove some first"
+                    )
+                slot = int(free[0]) + 1
+            if not self._live and not self.installed:
+                self._previous = self._get()
+                self.table[0, 0] = _c_address(self._previous)
+                self._set(self._callback.ctypes)
+            self.table[slot, 1] = context.ctypes.data  # context first, then the key
+            self.table[slot, 0] = key
+            self._live[key] = (slot, data, context, keep)
+
+    def remove(self, data: mujoco.MjData | None = None) -> None:
+        """Remove the context of ``data`` (every context for None); with none left, restore
+        the previous callback (unless someone replaced vrig's meanwhile)."""
+        with self._lock:
+            keys = list(self._live) if data is None else [data._address]
+            for key in keys:
+                entry = self._live.pop(key, None)
+                if entry is not None:
+                    self.table[entry[0], 0] = 0  # the key first
+                    self.table[entry[0], 1] = 0
+            if not self._live and self._callback is not None:
+                if self.installed:
+                    self._set(self._previous)
+                self._previous = None
+                self.table[0, 0] = 0
+
+    def context_of(self, data: mujoco.MjData):
+        """The registered context of ``data``, or None."""
+        entry = self._live.get(data._address)
+        return None if entry is None else entry[2]
+
+
+def _c_address(callback) -> int:
+    """The C address of a callback ``mujoco.get_mjcb_*`` returned: a ctypes function pointer's;
+    0 for None or a Python callable (not chained, see :class:`Hook`)."""
+    if isinstance(callback, ctypes._CFuncPtr):
+        return int(ctypes.cast(callback, ctypes.c_void_p).value or 0)
+    return 0
+
+
+def _build_control(table_address: int):
     """Compile the control callback (once per process, on first use: ~1 s)."""
 
     @nb.cfunc(types.void(types.voidptr, types.voidptr), nopython=True, cache=False)
     def _control_callback(m, d):  # pragma: no cover - compiled, runs inside mj_step
-        ctx = nb.carray(_as_pointer(_CTX_ADDR), (16,), dtype=np.int64)
-        nch = ctx[0]
+        address = _lookup(table_address, d)
+        if address == 0:
+            previous = nb.carray(_as_pointer(table_address), (1,), dtype=np.int64)[0]
+            if previous != 0:
+                _call_generic(previous, m, d)
+            return
+        ctx = nb.carray(_as_context(address), (1,))[0]
+        nch = ctx.nch
         if nch == 0:
             return
-        ctrl = nb.carray(_as_pointer(ctx[1]), (ctx[7],), dtype=np.float64)
-        qpos = nb.carray(_as_pointer(ctx[2]), (ctx[8],), dtype=np.float64)
-        qvel = nb.carray(_as_pointer(ctx[3]), (ctx[9],), dtype=np.float64)
-        ud = nb.carray(_as_pointer(ctx[4]), (ctx[10],), dtype=np.float64)
-        par = nb.carray(_as_pointer(ctx[5]), (MAX_CHANNELS, _NPAR), dtype=np.float64)
-        idx = nb.carray(_as_pointer(ctx[6]), (MAX_CHANNELS, _NINT), dtype=np.int64)
-        dt = par[0, 16]
-        step = int(ud[0])
-        ud[0] = step + 1
+        ctrl = nb.carray(_as_pointer(ctx.ctrl), (ctx.nu,), dtype=np.float64)
+        qpos = nb.carray(_as_pointer(ctx.qpos), (ctx.nq,), dtype=np.float64)
+        qvel = nb.carray(_as_pointer(ctx.qvel), (ctx.nv,), dtype=np.float64)
+        ud = nb.carray(_as_pointer(ctx.userdata), (ctx.nuserdata,), dtype=np.float64)
+        par = nb.carray(_as_params(ctx.params), (MAX_CHANNELS,))
+        dt = par[0].dt
+        step = int(ud[_UD_STEP])
+        ud[_UD_STEP] = step + 1
         for c in range(nch):
             p = par[c]
             s = _UD_HEADER + _UD_PER_CHANNEL * c
-            x = qpos[idx[c, 3]]
-            v = qvel[idx[c, 4]]
-            err = ctrl[idx[c, 0]] - x
+            x = qpos[p.qpos]
+            v = qvel[p.dof]
+            err = ctrl[p.i_cmd] - x
             # controller, sample-and-hold at its own rate
-            per = int(p[13])
-            if step % per == 0:
-                tc = p[14]
-                deriv = (err - ud[s + 4]) / tc if step > 0 else 0.0
+            if step % p.period == 0:
+                tc = p.controller_dt
+                deriv = (err - ud[s + _S_PREV_ERROR]) / tc if step > 0 else 0.0
                 u = (
-                    p[7] * err
-                    + p[8] * ud[s + 3]
-                    + p[9] * deriv
-                    - p[15] * ud[s + 2] / p[1]
-                    + ctrl[idx[c, 1]]
+                    p.kp * err
+                    + p.ki * ud[s + _S_INTEGRAL]
+                    + p.kd * deriv
+                    - p.pressure_feedback * ud[s + _S_LOAD_PRESSURE] / p.supply_pressure
+                    + ctrl[p.i_noise]
                 )
                 if u > 1.0:
                     u = 1.0
                 elif u < -1.0:
                     u = -1.0
-                else:
-                    ud[s + 3] += err * tc  # integrate only while the valve is not saturated
-                ud[s + 5] = u
-                ud[s + 4] = err
+                else:  # integrate only while the valve is not saturated
+                    ud[s + _S_INTEGRAL] += err * tc
+                ud[s + _S_VALVE_CMD] = u
+                ud[s + _S_PREV_ERROR] = err
             # servo valve, second order (semi-implicit Euler)
-            wv = p[3]
-            acc = wv * wv * (ud[s + 5] - ud[s + 0]) - 2.0 * p[4] * wv * ud[s + 1]
-            ud[s + 1] += dt * acc
-            xv = ud[s + 0] + dt * ud[s + 1]
+            wv = p.valve_omega
+            acc = (
+                wv * wv * (ud[s + _S_VALVE_CMD] - ud[s + _S_SPOOL])
+                - 2.0 * p.valve_damping * wv * ud[s + _S_SPOOL_VEL]
+            )
+            ud[s + _S_SPOOL_VEL] += dt * acc
+            xv = ud[s + _S_SPOOL] + dt * ud[s + _S_SPOOL_VEL]
             if xv > 1.0:
                 xv = 1.0
-                ud[s + 1] = 0.0
+                ud[s + _S_SPOOL_VEL] = 0.0
             elif xv < -1.0:
                 xv = -1.0
-                ud[s + 1] = 0.0
-            ud[s + 0] = xv
+                ud[s + _S_SPOOL_VEL] = 0.0
+            ud[s + _S_SPOOL] = xv
             # load-dependent flow through the valve
-            ps = p[1]
-            pl = ud[s + 2]
+            ps = p.supply_pressure
+            pl = ud[s + _S_LOAD_PRESSURE]
             drop = ps - pl if xv >= 0.0 else ps + pl
             if drop < 0.0:
                 drop = 0.0
-            q = p[2] * xv * np.sqrt(drop / ps)
+            q = p.max_flow * xv * np.sqrt(drop / ps)
             # oil-column compliance
-            pl += dt * p[5] * (q - p[0] * v - p[6] * pl)
+            pl += dt * p.oil_gain * (q - p.area * v - p.leakage * pl)
             if pl > ps:
                 pl = ps
             elif pl < -ps:
                 pl = -ps
-            ud[s + 2] = pl
-            force = p[0] * pl
-            ctrl[idx[c, 2]] = force
+            ud[s + _S_LOAD_PRESSURE] = pl
+            force = p.area * pl
+            ctrl[p.i_force] = force
             # interlocks: record the first trip
-            if ud[1] == 0.0:
+            if ud[_UD_TRIP_CODE] == 0.0:
                 code = 0
                 value = 0.0
                 limit = 0.0
-                if abs(x) > p[10]:
-                    code, value, limit = 1, x, p[10]
-                elif abs(force) > p[11]:
-                    code, value, limit = 2, force, p[11]
-                elif abs(err) > p[12]:
-                    code, value, limit = 3, err, p[12]
+                if abs(x) > p.stroke:
+                    code, value, limit = 1, x, p.stroke
+                elif abs(force) > p.force_limit:
+                    code, value, limit = 2, force, p.force_limit
+                elif abs(err) > p.error_limit:
+                    code, value, limit = 3, err, p.error_limit
                 if code:
-                    ud[1] = code
-                    ud[2] = c
-                    ud[3] = step
-                    ud[4] = value
-                    ud[5] = limit
+                    ud[_UD_TRIP_CODE] = code
+                    ud[_UD_TRIP_CHANNEL] = c
+                    ud[_UD_TRIP_STEP] = step
+                    ud[_UD_TRIP_VALUE] = value
+                    ud[_UD_TRIP_LIMIT] = limit
 
     return _control_callback
 
 
-_CALLBACK = None
-_LIVE = None
-
-
-@dataclass
-class _Installed:
-    params: np.ndarray
-    index: np.ndarray
+CONTROL = Hook("control", _build_control)
+"""vrig's ``mjcb_control`` hook (the servo-hydraulic channels of each live rig)."""
 
 
 def install(
@@ -256,60 +473,54 @@ def install(
     dt: float,
     *,
     states: np.ndarray | None = None,
-) -> _Installed:
-    """Point the global control callback at ``data`` for the given hydraulic ``channels``.
+) -> np.ndarray:
+    """Register ``data``'s context with the control callback for the hydraulic ``channels``
+    (installing the callback if it is not, see :class:`Hook`).
 
     ``channels``: sequence of (HydraulicActuator, cmd ctrl index, noise ctrl index, force ctrl
-    index, qpos address, dof address). Returns the parameter/index buffers (keep a reference
-    while the rollout runs). Resets the callback's states in ``data.userdata`` to zero, or to
-    ``states`` (from :func:`channel_states`, e.g. of a settled rig).
+    index, qpos address, dof address). Returns the context record (kept alive until
+    :func:`uninstall`). Resets the callback's states in ``data.userdata`` to zero, or to
+    ``states`` (from :func:`channel_states`, e.g. of a settled rig). Other MjData (other rigs,
+    a user's own model) are unaffected.
     """
-    global _CALLBACK, _LIVE
     n = len(channels)
     if n > MAX_CHANNELS:
         raise ValueError(f"at most {MAX_CHANNELS} hydraulic channels are supported, got {n}")
     need = _UD_HEADER + _UD_PER_CHANNEL * n
     if model.nuserdata < need:
         raise ValueError(f"the model needs <size nuserdata='{need}'/> for {n} hydraulic channels")
-    params = np.zeros((MAX_CHANNELS, _NPAR))
-    index = np.zeros((MAX_CHANNELS, _NINT), dtype=np.int64)
-    for c, (act, i_cmd, i_noise, i_force, qadr, dadr) in enumerate(channels):
-        params[c] = act.as_row(dt)
-        index[c, :5] = [i_cmd, i_noise, i_force, qadr, dadr]
+    params = np.zeros(MAX_CHANNELS, dtype=PARAM_DTYPE)
+    for c, (act, *index) in enumerate(channels):
+        params[c] = act.record(dt, index)
     data.userdata[:] = 0.0
     if states is not None:
         data.userdata[_UD_HEADER : _UD_HEADER + states.size] = states
-    _CTX[:] = 0
-    _CTX[1:7] = [
-        data.ctrl.ctypes.data,
-        data.qpos.ctypes.data,
-        data.qvel.ctypes.data,
-        data.userdata.ctypes.data,
-        params.ctypes.data,
-        index.ctypes.data,
-    ]
-    _CTX[7:11] = [model.nu, model.nq, model.nv, model.nuserdata]
-    _CTX[0] = n
-    if _CALLBACK is None:
-        _CALLBACK = _build_callback()
-        mujoco.set_mjcb_control(_CALLBACK.ctypes)
-    # the callback reads these buffers through raw pointers: keep them alive until the next
-    # install, whatever the caller does with the return value
-    _LIVE = _Installed(params, index)
-    return _LIVE
+    ctx = np.zeros(1, dtype=CONTEXT_DTYPE)
+    ctx[0] = (n, data.ctrl.ctypes.data, data.qpos.ctypes.data, data.qvel.ctypes.data,
+              data.userdata.ctypes.data, params.ctypes.data, model.nu, model.nq, model.nv,
+              model.nuserdata)  # fmt: skip
+    CONTROL.add(data, ctx, params, model)
+    return ctx
 
 
-def uninstall() -> None:
-    """Disable the callback (it returns at once while no channel is installed)."""
-    _CTX[0] = 0
+def uninstall(data: mujoco.MjData | None = None) -> None:
+    """Remove ``data``'s context (every one for None); the callback ignores that mjData from
+    then on, and the previous callback is back once no context is left."""
+    CONTROL.remove(data)
 
 
 def trip_record(data: mujoco.MjData):
     """(kind, channel index, step, value, limit) of the first interlock trip, or None."""
     ud = data.userdata
-    if ud.size < _UD_HEADER or ud[1] == 0:
+    if ud.size < _UD_HEADER or ud[_UD_TRIP_CODE] == 0:
         return None
-    return TRIP_KINDS[int(ud[1])], int(ud[2]), int(ud[3]), float(ud[4]), float(ud[5])
+    return (
+        TRIP_KINDS[int(ud[_UD_TRIP_CODE])],
+        int(ud[_UD_TRIP_CHANNEL]),
+        int(ud[_UD_TRIP_STEP]),
+        float(ud[_UD_TRIP_VALUE]),
+        float(ud[_UD_TRIP_LIMIT]),
+    )
 
 
 def channel_states(data: mujoco.MjData, n: int) -> np.ndarray:

@@ -426,8 +426,8 @@ class MujocoRig:
         try:
             state, _ = rollout.rollout(m, d, self._state0[None, :], np.zeros((1, steps, m.nu)))
         finally:
-            hydraulics.uninstall()
-            gas_spring.uninstall()
+            hydraulics.uninstall(d)
+            gas_spring.uninstall(d)
         if hydraulics.trip_record(d) is not None or any(w.number for w in d.warning):
             raise RigModelError(f"{self.name}: the rig does not settle under gravity at rest")
         self._state0 = state[0, -1].copy()
@@ -678,8 +678,8 @@ class MujocoRig:
                 warm = d.qacc_warmstart[None, :].copy()
             trip = hydraulics.trip_record(d)
         finally:
-            hydraulics.uninstall()
-            gas_spring.uninstall()
+            hydraulics.uninstall(d)
+            gas_spring.uninstall(d)
         if trip is not None:
             raise self._trip_error(trip, settle * dec)
         if over:  # the transducer-range interlock: the first channel, at its first sample
