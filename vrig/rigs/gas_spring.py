@@ -46,8 +46,8 @@ import numba as nb
 import numpy as np
 from numba import types
 
+from ._callbacks import Hook, _as_pointer, _call_generic, _call_sensor, _lookup, _record_pointer
 from ._checks import check_number, replace_fields
-from .hydraulics import Hook, _as_pointer, _call_generic, _call_sensor, _lookup, _record_pointer
 
 __all__ = ["MAX_AIR_SPRINGS", "PASSIVE", "SENSOR", "AirSpring", "install", "uninstall"]
 
@@ -263,7 +263,7 @@ SENSOR = Hook("sensor", _build_sensor)
 
 def install(model: mujoco.MjModel, data: mujoco.MjData, springs) -> np.ndarray | None:
     """Register ``data``'s context with the passive and sensor callbacks for ``springs``
-    (installing them if they are not, see :class:`~vrig.rigs.hydraulics.Hook`).
+    (installing them if they are not, see :class:`~vrig.rigs._callbacks.Hook`).
 
     ``springs``: sequence of (AirSpring, tendon id, sensor address or -1). Nothing to do for
     none (``data`` gets no context: the callbacks leave it alone). Returns the context record
