@@ -30,9 +30,11 @@ channels):
   - ``normal_model_error``: the forward model — the method's factory (or the plugin's
     ``forward`` factory) identified with the roles of drive and response swapped — predicts
     the held-out response from the held-out drive in free run; mean η0 of that response;
-  - for vrig's time-domain methods (ARX, NARX, each band of split spectra) the fresh inverse
-    keeps the lead the reconstruction's model chose, and the forward model has lead 0 (causal,
-    the full-order structure of eq. 4-15): no lead search in these extra fits;
+  - for a method with a lead (:class:`vrig.reconstruction.protocol.InverseModelMethod`:
+    vrig's ARX, NARX and error-signal inverses, each band of split spectra) the fresh inverse
+    keeps the lead the reconstruction's model chose (``set_lead(fitted_lead())``), and the
+    forward model has lead 0 (``set_lead(0)``: causal, the full-order structure of eq. 4-15):
+    no lead search in these extra fits;
 
 * ``model_size`` (coefficients, see :func:`~.registry.model_size`) and the method's
   ``describe()``.
@@ -58,6 +60,8 @@ import time
 from dataclasses import asdict, dataclass
 
 import numpy as np
+
+from vrig.reconstruction.protocol import InverseModelMethod, Method
 
 from .registry import get_method, load_plugins, model_size
 
@@ -274,8 +278,9 @@ def _clean(x):
 
 
 class _Timed:
-    """Wraps a method object: times ``identify``/``drive`` and keeps the first identification
-    records it was given (the processed, decimated IDDRV/IDRES)."""
+    """Wraps a method object (a :class:`~vrig.reconstruction.protocol.Method`): times
+    ``identify``/``drive`` and keeps the first identification records it was given (the
+    processed, decimated IDDRV/IDRES). It is itself a ``Method``."""
 
     def __init__(self, method):
         self.wrapped = method
@@ -300,8 +305,9 @@ class _Timed:
             self.sim_s += time.perf_counter() - t
 
     def describe(self):
-        d = getattr(self.wrapped, "describe", None)
-        return d() if callable(d) else type(self.wrapped).__name__
+        if isinstance(self.wrapped, Method):
+            return self.wrapped.describe()
+        return type(self.wrapped).__name__  # a plugin object with identify and drive only
 
 
 def _load_rig(rig_name: str, seed: int, fidelity: str, severity: float | None):
@@ -347,18 +353,17 @@ def _split(th, holdout: float):
     return part(0, k), part(k, th.n_samples)
 
 
-def _set_leads(obj, fitted=None) -> None:
-    """Fix the lead of vrig's time-domain inverse methods (objects with ``lead`` and
-    ``max_lead``; split spectra: each band): to the lead ``fitted`` chose, or to 0 (a causal
-    forward model) when ``fitted`` is None. Skips the lead search of the extra fits."""
-    if hasattr(obj, "low") and hasattr(obj, "high"):
-        _set_leads(obj.low, getattr(fitted, "low", None) if fitted is not None else None)
-        _set_leads(obj.high, getattr(fitted, "high", None) if fitted is not None else None)
-    elif hasattr(obj, "lead") and hasattr(obj, "max_lead"):
-        if fitted is None:
-            obj.lead = 0
-        elif hasattr(getattr(fitted, "inverse", None), "lead_"):
-            obj.lead = int(fitted.inverse.lead_)
+def _keep_lead(method, fitted) -> None:
+    """Give a fresh inverse the lead(s) ``fitted`` chose (an
+    :class:`~vrig.reconstruction.protocol.InverseModelMethod`; other methods: nothing to do)."""
+    if isinstance(method, InverseModelMethod) and isinstance(fitted, InverseModelMethod):
+        method.set_lead(fitted.fitted_lead())
+
+
+def _causal(method) -> None:
+    """Make a forward model causal (lead 0, no lead search) if it has a lead."""
+    if isinstance(method, InverseModelMethod):
+        method.set_lead(0)
 
 
 def modelling_errors(plugin, rig, band, iddrv, idres, holdout: float, fitted=None) -> dict:
@@ -372,7 +377,7 @@ def modelling_errors(plugin, rig, band, iddrv, idres, holdout: float, fitted=Non
     try:
         inverse = plugin.make(rig, band)
         if fitted is not None:
-            _set_leads(inverse, fitted)
+            _keep_lead(inverse, fitted)
         inverse.identify(d_fit, r_fit)
         pred = np.asarray(inverse.drive(r_val), dtype=float).reshape(d_val.data.shape)
         out["inverse_model_error"] = float(np.mean(metrics.qantim_fit_dc(d_val.data, pred)))
@@ -380,7 +385,7 @@ def modelling_errors(plugin, rig, band, iddrv, idres, holdout: float, fitted=Non
         out["modelling_notes"].append(f"inverse: {type(exc).__name__}: {exc}")
     try:
         forward = plugin.make_forward(rig, band)
-        _set_leads(forward)
+        _causal(forward)
         # roles swapped: the "drive" of the swapped problem is the response and vice versa
         forward.identify(
             TimeHistory(r_fit.data, r_fit.fs, r_fit.names, r_fit.units),

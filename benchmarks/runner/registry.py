@@ -1,13 +1,16 @@
 """Reconstruction methods of the benchmark runner: the built-ins and the plugins.
 
-A *method* is any object with the interface of :mod:`vrig.reconstruction.methods`:
+A *method* is a :class:`vrig.reconstruction.protocol.Method`:
 
 * ``identify(iddrv, idres)`` — fit from processed identification records (``TimeHistory``,
   drive and response, at the model rate);
 * ``drive(response) -> ndarray (n_samples, n_drives)`` — the drive it predicts for a response;
-* ``describe() -> str`` — one line (optional);
-* ``model_size() -> int`` — number of model coefficients (optional; the runner knows the
-  built-ins).
+* ``describe() -> str`` — one line (optional: without it the record shows the class name);
+* ``model_size() -> int`` — number of model coefficients (optional:
+  :class:`~vrig.reconstruction.protocol.SizedMethod`; every vrig method has it);
+* ``fitted_lead()`` / ``set_lead(lead)`` (optional:
+  :class:`~vrig.reconstruction.protocol.InverseModelMethod`): the runner's extra modelling-error
+  fits keep the reconstruction's lead and make the forward model causal.
 
 A *plugin* registers a name and a factory ``factory(rig, band) -> method`` (``band`` is the
 simulation bandwidth (low, high) in Hz; a factory without parameters is called without them)::
@@ -34,6 +37,8 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
+
+from vrig.reconstruction.protocol import SizedMethod
 
 __all__ = [
     "MethodPlugin",
@@ -168,12 +173,12 @@ class ForwardFrf:
         self.nperseg = nperseg
 
     def identify(self, iddrv, idres) -> None:
-        from vrig.reconstruction.methods import _cross
+        from vrig.reconstruction import cross_spectra
 
         x, y = idres.data, iddrv.data  # input: the rig's drive, output: its response
         nper = min(self.nperseg, x.shape[0] // 4)
-        f, sxx = _cross(x, x, idres.fs, nper)
-        _, syx = _cross(y, x, idres.fs, nper)
+        f, sxx = cross_spectra(x, x, idres.fs, nper)
+        _, syx = cross_spectra(y, x, idres.fs, nper)
         self.f, self.fs = f, idres.fs
         self.H = np.einsum("fij,fjk->fik", syx, np.linalg.pinv(sxx))  # (F, n_out, n_in)
 
@@ -189,6 +194,14 @@ class ForwardFrf:
                     fr, self.f, self.H[:, i, j].imag
                 )
         return np.fft.irfft(np.einsum("fij,fj->fi", H, X), n=2 * n, axis=0)[:n]
+
+    def describe(self) -> str:
+        return f"forward H1 FRF with {self.f.size} lines"
+
+    def model_size(self) -> int | None:
+        """Real numbers in the FRF matrices; None before :meth:`identify`."""
+        h = getattr(self, "H", None)
+        return None if h is None else int(2 * np.asarray(h).size)
 
 
 def _register_builtins() -> None:
@@ -321,19 +334,10 @@ def load_plugins(specs) -> list[str]:
 def model_size(method) -> int | None:
     """Number of coefficients of a fitted method object (None if unknown).
 
-    ``method.model_size()`` if the object has it; inverse ARX/NARX: terms over all channels;
-    split spectra: the sum of its bands; FRF: real numbers in the inverse FRF matrices."""
-    own = getattr(method, "model_size", None)
-    if own is not None:
-        value = own() if callable(own) else own
-        return None if value is None else int(value)
-    inverse = getattr(method, "inverse", None)
-    if inverse is not None and hasattr(inverse, "model"):
-        return int(np.sum(inverse.model.n_terms_))
-    if hasattr(method, "low") and hasattr(method, "high"):
-        lo, hi = model_size(method.low), model_size(method.high)
-        return None if lo is None or hi is None else lo + hi
-    hinv = getattr(method, "Hinv", None)
-    if hinv is not None:
-        return int(2 * np.asarray(hinv).size)
-    return None
+    ``method.model_size()`` for a :class:`~vrig.reconstruction.protocol.SizedMethod` (every
+    vrig method: inverse ARX/NARX: terms over all channels; split spectra: the sum of its
+    bands; FRF: real numbers in the inverse FRF matrices); None for a method without one."""
+    if not isinstance(method, SizedMethod):
+        return None
+    value = method.model_size()
+    return None if value is None else int(value)

@@ -14,8 +14,10 @@ from .methods import (
     InverseFrf,
     InverseNarx,
     SplitSpectra,
+    cross_spectra,
     make_method,
 )
+from .protocol import InverseModelMethod, Method, SizedMethod
 
 __all__ = [
     "METHODS",
@@ -23,10 +25,14 @@ __all__ = [
     "InverseArx",
     "InverseErrorSignal",
     "InverseFrf",
+    "InverseModelMethod",
     "InverseNarx",
+    "Method",
     "ReconstructionResult",
+    "SizedMethod",
     "SplitSpectra",
     "band_gains",
+    "cross_spectra",
     "make_method",
     "pseudo_damage",
     "reconstruct",

@@ -1,9 +1,14 @@
 """Reconstruction methods: how a drive is computed from a (desired) response.
 
-Every method has the same small interface:
+Every method has the same small interface (:class:`vrig.reconstruction.protocol.Method`):
 
 * ``identify(iddrv, idres)`` — fit the inverse of the rig from processed identification records;
-* ``drive(response)`` — the drive the inverse model predicts for a response record.
+* ``drive(response)`` — the drive the inverse model predicts for a response record;
+* ``describe()`` — one line saying what was fitted.
+
+Optional capabilities (protocols in :mod:`vrig.reconstruction.protocol`): ``model_size()``
+(every method here) and ``fitted_lead()``/``set_lead()`` (the time-domain inverses and split
+spectra: :class:`~vrig.reconstruction.protocol.InverseModelMethod`).
 
 The iteration (:func:`vrig.reconstruction.reconstruct`) computes ``IT00DRV = drive(DESRES)`` and
 corrects with ``ITn+1DRV = ITnDRV + gain * (drive(DESRES) - drive(ITnRES))``, which for a
@@ -17,6 +22,8 @@ Tikhonov per frequency line: the MTS RPC / Simcenter TWR baseline).
 
 from __future__ import annotations
 
+from collections.abc import Mapping
+
 import numpy as np
 from scipy import signal
 
@@ -24,6 +31,7 @@ from identification import Arx, ErrorSignalModel, InverseModel, Narx
 
 from ..processing import band_split
 from ..timehistory import TimeHistory
+from .protocol import InverseModelMethod, SizedMethod
 
 __all__ = [
     "METHODS",
@@ -32,6 +40,7 @@ __all__ = [
     "InverseFrf",
     "InverseNarx",
     "SplitSpectra",
+    "cross_spectra",
     "make_method",
 ]
 
@@ -79,6 +88,25 @@ class _InverseTimeDomain:
         # inverse that diverges on the response is reported as such (SimulationDivergedError),
         # not passed on as a huge finite drive for the rig's drive limit to refuse
         return self.inverse.simulate(self._select(response).data, run_in="auto")
+
+    def fitted_lead(self) -> int | None:
+        """The lead [samples] the last :meth:`identify` chose; None before one."""
+        inverse = getattr(self, "inverse", None)
+        return None if inverse is None else int(inverse.lead_)
+
+    def set_lead(self, lead) -> None:
+        """Fix the lead for the next :meth:`identify`: samples >= 0 (0: a causal model, no lead
+        search) or ``"auto"``; None leaves it as it is."""
+        if lead is None:
+            return
+        if lead != "auto" and not _is_count(lead):
+            raise ValueError(f"lead must be 'auto' or a number of samples >= 0, got {lead!r}")
+        self.lead = lead
+
+    def model_size(self) -> int | None:
+        """Number of model terms over all drive channels; None before :meth:`identify`."""
+        inverse = getattr(self, "inverse", None)
+        return None if inverse is None else int(np.sum(inverse.model.n_terms_))
 
     def describe(self) -> str:
         m = self.inverse.model
@@ -263,6 +291,33 @@ class SplitSpectra:
             self._select(r_hi, self.high_responses)
         )
 
+    def fitted_lead(self) -> dict:
+        """``{"low": lead, "high": lead}`` of the bands (a band without a lead: None)."""
+        return {
+            part: band.fitted_lead() if isinstance(band, InverseModelMethod) else None
+            for part, band in (("low", self.low), ("high", self.high))
+        }
+
+    def set_lead(self, lead) -> None:
+        """Fix the bands' leads for the next :meth:`identify`: one value for both bands or
+        ``{"low": ..., "high": ...}`` (as :meth:`fitted_lead` returns); a band without a lead
+        (e.g. :class:`InverseFrf`) is left alone."""
+        parts = lead if isinstance(lead, Mapping) else {"low": lead, "high": lead}
+        unknown = set(parts) - {"low", "high"}
+        if unknown:
+            raise ValueError(f"split spectra has bands 'low' and 'high', not {sorted(unknown)}")
+        for part, value in parts.items():
+            band = getattr(self, part)
+            if isinstance(band, InverseModelMethod):
+                band.set_lead(value)
+
+    def model_size(self) -> int | None:
+        """Sum of the bands' model sizes; None if either band's is unknown."""
+        sizes = [
+            b.model_size() if isinstance(b, SizedMethod) else None for b in (self.low, self.high)
+        ]
+        return None if None in sizes else int(sum(sizes))
+
     def describe(self) -> str:
         lo = "" if self.low_responses is None else f" from {self.low_responses}"
         hi = "" if self.high_responses is None else f" from {self.high_responses}"
@@ -313,8 +368,8 @@ class InverseFrf:
     def identify(self, iddrv: TimeHistory, idres: TimeHistory) -> None:
         u, y, fs = iddrv.data, idres.data, iddrv.fs
         nper = min(self.nperseg, u.shape[0] // 4)
-        f, suu = _cross(u, u, fs, nper)
-        _, syu = _cross(y, u, fs, nper)
+        f, suu = cross_spectra(u, u, fs, nper)
+        _, syu = cross_spectra(y, u, fs, nper)
         self.f = f
         H = np.einsum("fij,fjk->fik", syu, np.linalg.pinv(suu))  # (F, ny, nu)
         U, s, Vh = np.linalg.svd(H, full_matrices=False)
@@ -322,7 +377,7 @@ class InverseFrf:
         lam = self.tikhonov * s[:, :1]
         sinv = np.where(keep, s / (s**2 + lam**2), 0.0)
         self.Hinv = np.einsum("fji,fj,fkj->fik", Vh.conj(), sinv, U.conj())  # (F, nu, ny)
-        _, syy = _cross(y, y, fs, nper)
+        _, syy = cross_spectra(y, y, fs, nper)
         self.coherence = np.real(
             np.einsum("fij,fjk,fki->fi", syu, np.linalg.pinv(suu), syu.conj().transpose(0, 2, 1))
             / np.maximum(np.real(np.einsum("fii->fi", syy)), 1e-300)
@@ -349,9 +404,32 @@ class InverseFrf:
     def describe(self) -> str:
         return f"frf: H1 with {self.f.size} lines, truncated-SVD/Tikhonov inverse"
 
+    def model_size(self) -> int | None:
+        """Real numbers in the inverse FRF matrices (2 per complex entry); None before
+        :meth:`identify`."""
+        hinv = getattr(self, "Hinv", None)
+        return None if hinv is None else int(2 * np.asarray(hinv).size)
 
-def _cross(a, b, fs, nperseg):
-    """Cross-spectral matrices S_ab(f) (F, na, nb) by Welch averaging."""
+
+def cross_spectra(a: np.ndarray, b: np.ndarray, fs: float, nperseg: int):
+    """Cross-spectral matrices by Welch averaging.
+
+    Parameters
+    ----------
+    a, b : ndarray (n_samples, na), (n_samples, nb)
+        Records sampled at ``fs`` [Hz].
+    fs : float
+        Sample rate [Hz].
+    nperseg : int
+        Welch segment length [samples].
+
+    Returns
+    -------
+    f : ndarray (F,)
+        Frequencies [Hz].
+    S : ndarray (F, na, nb), complex
+        ``S[f, i, j] = E[A_i(f) conj(B_j(f))]`` (units of a times units of b per Hz).
+    """
     f = None
     out = []
     for i in range(a.shape[1]):

@@ -15,6 +15,7 @@ from .daq import AntiAliasFilter, Transducer
 from .file_rig import FileRig
 from .hydraulics import HydraulicActuator
 from .mujoco_rig import FAST_MARGIN, MujocoRig, _models_dir
+from .protocol import DescribedRig, Rig
 from .spec import ChannelSpec, read_description
 from .subset import OutputSubset
 
@@ -23,10 +24,12 @@ __all__ = [
     "FAST_MARGIN",
     "AntiAliasFilter",
     "ChannelSpec",
+    "DescribedRig",
     "FileRig",
     "HydraulicActuator",
     "MujocoRig",
     "OutputSubset",
+    "Rig",
     "Transducer",
     "list_rigs",
     "load_rig",

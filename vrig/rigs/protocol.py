@@ -1,0 +1,72 @@
+"""The rig contract: what :func:`vrig.reconstruct`, the drive-iteration envs and the benchmark
+runner use from a rig.
+
+A rig is anything with these members (:class:`MujocoRig`, :class:`FileRig`, :class:`OutputSubset`
+and a user's own class alike); nothing else of a rig is read by the iteration::
+
+    name       str                        shown in progress bars and folders
+    fs         float                      sample rate of drives and responses [Hz]
+    inputs     tuple[ChannelSpec, ...]    the drive channels (names, units, full scales, limits)
+    outputs    tuple[ChannelSpec, ...]    the response channels
+    bandwidth  (low, high) [Hz]           the test band (the iteration's default band)
+    run(drive, *, seed=None) -> TimeHistory
+               plays a drive (ndarray (n_samples, n_inputs) or TimeHistory at ``fs``) and returns
+               the sampled responses, one column per output, at ``fs``
+
+``isinstance(obj, Rig)`` checks that the members exist (``typing.runtime_checkable``), not their
+signatures or types. :class:`DescribedRig` adds ``describe()`` (the CLI's ``vrig describe``).
+"""
+
+from __future__ import annotations
+
+from typing import Protocol, runtime_checkable
+
+import numpy as np
+
+from ..timehistory import TimeHistory
+from .spec import ChannelSpec
+
+__all__ = ["DescribedRig", "Rig"]
+
+
+@runtime_checkable
+class Rig(Protocol):
+    """What a rig must provide to be iterated on (see the module docstring)."""
+
+    @property
+    def name(self) -> str:
+        """The rig's name."""
+        ...
+
+    @property
+    def fs(self) -> float:
+        """Sample rate of drives and responses [Hz]."""
+        ...
+
+    @property
+    def inputs(self) -> tuple[ChannelSpec, ...]:
+        """The drive channels."""
+        ...
+
+    @property
+    def outputs(self) -> tuple[ChannelSpec, ...]:
+        """The response channels."""
+        ...
+
+    @property
+    def bandwidth(self) -> tuple[float, float]:
+        """The test band (low, high) [Hz]."""
+        ...
+
+    def run(self, drive: np.ndarray | TimeHistory, *, seed: int | None = None) -> TimeHistory:
+        """Play ``drive`` (n_samples x n_inputs at ``fs``) and return the responses."""
+        ...
+
+
+@runtime_checkable
+class DescribedRig(Rig, Protocol):
+    """A :class:`Rig` that also describes itself as text (channels, limits, parameters)."""
+
+    def describe(self) -> str:
+        """What the rig is, as text."""
+        ...
