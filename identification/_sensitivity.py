@@ -171,7 +171,9 @@ def simulate_with_sensitivity(
         for k in range(ny):
             r0 = reg_ptr[k]
             nr = reg_ptr[k + 1] - r0
-            _load_regressors(U, Yw, t, ny, r0, nr, reg_src, reg_lag, reg_fn, reg_bp, z, dz, is_out, g)
+            _load_regressors(
+                U, Yw, t, ny, r0, nr, reg_src, reg_lag, reg_fn, reg_bp, z, dz, is_out, g
+            )
             m0 = term_ptr[k]
             nm = term_ptr[k + 1] - m0
             acc = _channel_output(terms, m0, nm, theta, z, dz, is_out, phi, g, want_sens)

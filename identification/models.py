@@ -116,7 +116,7 @@ def _check_focus_options(focus, horizon, max_iter, stability_margin) -> None:
 
 
 def _check_structure_options(order, degree, na, nb, nk, kind, solver) -> None:
-    """The model structure: ``order`` xor explicit ``na``/``nb``/``nk``, degree, term kind, solver."""
+    """Model structure: ``order`` xor explicit ``na``/``nb``/``nk``, degree, term kind, solver."""
     explicit = na is not None or nb is not None or nk is not None
     if order is None and not explicit:
         raise IdentificationError(
