@@ -135,8 +135,17 @@ def _check_structure_options(order, degree, na, nb, nk, kind, solver) -> None:
 
 
 def _check_fit_options(
-    n_terms, err_tol, bound_factor, focus, horizon, max_iter, stability_margin,
-    selection, criterion, holdout, max_radius,
+    n_terms,
+    err_tol,
+    bound_factor,
+    focus,
+    horizon,
+    max_iter,
+    stability_margin,
+    selection,
+    criterion,
+    holdout,
+    max_radius,
 ) -> None:
     """Term count and ERR tolerance, divergence bound, focus options, selection and holdout."""
     if n_terms is not None and (not isinstance(n_terms, (int, np.integer)) or n_terms < 1):
@@ -321,8 +330,17 @@ class Narx:
     ):
         _check_structure_options(order, degree, na, nb, nk, kind, solver)
         _check_fit_options(
-            n_terms, err_tol, bound_factor, focus, horizon, max_iter, stability_margin,
-            selection, criterion, holdout, max_radius,
+            n_terms,
+            err_tol,
+            bound_factor,
+            focus,
+            horizon,
+            max_iter,
+            stability_margin,
+            selection,
+            criterion,
+            holdout,
+            max_radius,
         )
         specs = _function_options(functions, function_sources)
         self.order = order

@@ -116,8 +116,8 @@ def _package_definitions() -> dict[tuple[str, str], bool]:
 def test_public_definitions_are_found_and_private_ones_skipped():
     src = (
         'def f():\n    """Doc."""\n\ndef g():\n    pass\n\ndef _h():\n    pass\n\n'
-        'class C:\n    def __init__(self):\n        pass\n\n    @property\n'
-        '    def p(self):\n        return 1\n\n    def _q(self):\n        pass\n\n'
+        "class C:\n    def __init__(self):\n        pass\n\n    @property\n"
+        "    def p(self):\n        return 1\n\n    def _q(self):\n        pass\n\n"
         '    class D:\n        """ """\n'
     )
     expected = {"f": True, "g": False, "C": False, "C.p": False, "C.D": False}

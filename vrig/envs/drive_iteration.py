@@ -97,9 +97,7 @@ class ActionLayout:
         return flat.astype(np.float64)
 
 
-def _check_env_options(
-    render_mode, action_mode, max_iterations, gain_range
-) -> tuple[float, float]:
+def _check_env_options(render_mode, action_mode, max_iterations, gain_range) -> tuple[float, float]:
     """The options checked before the rig is built; returns the gain range ``(low, high)``."""
     if render_mode is not None:
         raise ValueError("DriveIterationEnv does not render (render_mode must be None)")
