@@ -115,6 +115,70 @@ def _check_focus_options(focus, horizon, max_iter, stability_margin) -> None:
         )
 
 
+def _check_structure_options(order, degree, na, nb, nk, kind, solver) -> None:
+    """Model structure: ``order`` xor explicit ``na``/``nb``/``nk``, degree, term kind, solver."""
+    explicit = na is not None or nb is not None or nk is not None
+    if order is None and not explicit:
+        raise IdentificationError(
+            "give the model order (e.g. Narx(order=4, degree=2)) or explicit na/nb/nk"
+        )
+    if order is not None and explicit:
+        raise IdentificationError("give either order or na/nb/nk, not both")
+    if explicit and (na is None or nb is None):
+        raise IdentificationError("explicit orders need both na and nb (nk defaults to 0)")
+    if order is not None:
+        per_channel_int(order, 1 if np.ndim(order) == 0 else len(order), "order", minimum=0)
+    per_channel_int(degree, 1 if np.ndim(degree) == 0 else len(degree), "degree", minimum=1)
+    if kind not in TERM_KINDS:
+        raise IdentificationError(f"unknown term kind {kind!r}; choose one of {TERM_KINDS}")
+    get_solver(solver)
+
+
+def _check_fit_options(
+    n_terms,
+    err_tol,
+    bound_factor,
+    focus,
+    horizon,
+    max_iter,
+    stability_margin,
+    selection,
+    criterion,
+    holdout,
+    max_radius,
+) -> None:
+    """Term count and ERR tolerance, divergence bound, focus options, selection and holdout."""
+    if n_terms is not None and (not isinstance(n_terms, (int, np.integer)) or n_terms < 1):
+        raise IdentificationError(f"n_terms must be a positive integer, got {n_terms!r}")
+    if err_tol is not None and not 0.0 <= err_tol < 1.0:
+        raise IdentificationError(f"err_tol must be in [0, 1), got {err_tol!r}")
+    if not bound_factor > 0:
+        raise IdentificationError(f"bound_factor must be > 0, got {bound_factor!r}")
+    _check_focus_options(focus, horizon, max_iter, stability_margin)
+    if selection not in ("frols", "simulation"):
+        raise IdentificationError(
+            f"selection must be 'frols' (one-step error reduction ratio) or 'simulation' "
+            f"(free-run error, SEMP), got {selection!r}"
+        )
+    check_criterion(criterion)
+    if not (isinstance(holdout, (int, float)) and 0.0 <= holdout < 0.5):
+        raise IdentificationError(
+            f"holdout must be a fraction in [0, 0.5) of the record, got {holdout!r}"
+        )
+    if max_radius is not None and not 0 < max_radius <= 1:
+        raise IdentificationError(f"max_radius must lie in (0, 1] or be None, got {max_radius!r}")
+
+
+def _function_options(functions, function_sources: str):
+    """The parsed non-polynomial function specs; ``function_sources`` checked."""
+    specs = function_specs(functions)
+    if function_sources not in FUNCTION_SOURCES:
+        raise IdentificationError(
+            f"function_sources must be one of {FUNCTION_SOURCES}, got {function_sources!r}"
+        )
+    return specs
+
+
 def _is_output_affine_term(ch: ChannelStructure, row, ny: int) -> bool:
     """True unless the term multiplies a past output by another factor (or transforms it)."""
     factors = [int(i) for i in row if i > 0]
@@ -264,47 +328,21 @@ class Narx:
         functions=None,
         function_sources: str = "inputs",
     ):
-        explicit = na is not None or nb is not None or nk is not None
-        if order is None and not explicit:
-            raise IdentificationError(
-                "give the model order (e.g. Narx(order=4, degree=2)) or explicit na/nb/nk"
-            )
-        if order is not None and explicit:
-            raise IdentificationError("give either order or na/nb/nk, not both")
-        if explicit and (na is None or nb is None):
-            raise IdentificationError("explicit orders need both na and nb (nk defaults to 0)")
-        if order is not None:
-            per_channel_int(order, 1 if np.ndim(order) == 0 else len(order), "order", minimum=0)
-        per_channel_int(degree, 1 if np.ndim(degree) == 0 else len(degree), "degree", minimum=1)
-        if kind not in TERM_KINDS:
-            raise IdentificationError(f"unknown term kind {kind!r}; choose one of {TERM_KINDS}")
-        get_solver(solver)
-        if n_terms is not None and (not isinstance(n_terms, (int, np.integer)) or n_terms < 1):
-            raise IdentificationError(f"n_terms must be a positive integer, got {n_terms!r}")
-        if err_tol is not None and not 0.0 <= err_tol < 1.0:
-            raise IdentificationError(f"err_tol must be in [0, 1), got {err_tol!r}")
-        if not bound_factor > 0:
-            raise IdentificationError(f"bound_factor must be > 0, got {bound_factor!r}")
-        _check_focus_options(focus, horizon, max_iter, stability_margin)
-        if selection not in ("frols", "simulation"):
-            raise IdentificationError(
-                f"selection must be 'frols' (one-step error reduction ratio) or 'simulation' "
-                f"(free-run error, SEMP), got {selection!r}"
-            )
-        check_criterion(criterion)
-        if not (isinstance(holdout, (int, float)) and 0.0 <= holdout < 0.5):
-            raise IdentificationError(
-                f"holdout must be a fraction in [0, 0.5) of the record, got {holdout!r}"
-            )
-        if max_radius is not None and not 0 < max_radius <= 1:
-            raise IdentificationError(
-                f"max_radius must lie in (0, 1] or be None, got {max_radius!r}"
-            )
-        specs = function_specs(functions)
-        if function_sources not in FUNCTION_SOURCES:
-            raise IdentificationError(
-                f"function_sources must be one of {FUNCTION_SOURCES}, got {function_sources!r}"
-            )
+        _check_structure_options(order, degree, na, nb, nk, kind, solver)
+        _check_fit_options(
+            n_terms,
+            err_tol,
+            bound_factor,
+            focus,
+            horizon,
+            max_iter,
+            stability_margin,
+            selection,
+            criterion,
+            holdout,
+            max_radius,
+        )
+        specs = _function_options(functions, function_sources)
         self.order = order
         self.degree = degree
         self.na, self.nb, self.nk = na, nb, nk

@@ -90,6 +90,17 @@ def _parser() -> argparse.ArgumentParser:
         epilog=_EXIT_CODES,
     )
     sub = p.add_subparsers(dest="command", required=True)
+    _add_demo_parser(sub)
+    _add_rig_info_parsers(sub)
+    _add_reconstruct_parser(sub)
+    _add_bench_parser(sub)
+    _add_repeatability_parser(sub)
+    _add_linearity_parser(sub)
+    return p
+
+
+def _add_demo_parser(sub) -> None:
+    """Add the `demo` subcommand: identify and simulate a generated NARX system."""
     demo = sub.add_parser(
         "demo", help="identify and simulate a generated non-linear MIMO system", epilog=_EXIT_CODES
     )
@@ -110,12 +121,18 @@ def _parser() -> argparse.ArgumentParser:
         help="output noise as a fraction of the output std (default 0.01)",
     )
 
+
+def _add_rig_info_parsers(sub) -> None:
+    """Add the `rigs` and `describe` subcommands."""
     sub.add_parser("rigs", help="list the shipped rigs")
     desc = sub.add_parser(
         "describe", help="a rig's channels, limits and parameters", epilog=_EXIT_CODES
     )
     desc.add_argument("rig", help="rig name (see `vrig rigs`) or a user rig's .rig.json/.xml")
 
+
+def _add_reconstruct_parser(sub) -> None:
+    """Add the `reconstruct` subcommand: drive iteration on a rig."""
     rec = sub.add_parser(
         "reconstruct",
         help="drive iteration: reproduce a desired response on a rig",
@@ -185,6 +202,9 @@ def _parser() -> argparse.ArgumentParser:
         "--overwrite", action="store_true", help="replace the records of an existing results folder"
     )
 
+
+def _add_bench_parser(sub) -> None:
+    """Add the `bench` subcommand: passes its arguments on to the benchmark runner."""
     bench = sub.add_parser(
         "bench",
         help="the reconstruction benchmark runner (= python -m benchmarks; source checkout)",
@@ -192,6 +212,9 @@ def _parser() -> argparse.ArgumentParser:
     )
     bench.add_argument("args", nargs=argparse.REMAINDER, help="run|report|list and options")
 
+
+def _add_repeatability_parser(sub) -> None:
+    """Add the `repeatability` subcommand."""
     rep = sub.add_parser(
         "repeatability",
         help="play one random drive several times: repeatability and SNR per channel",
@@ -210,6 +233,9 @@ def _parser() -> argparse.ArgumentParser:
     rep.add_argument("--seed", type=int, default=0, help="random seed, an integer >= 0 (default 0)")
     rep.add_argument("--out", help="folder of the plot (default ./results/<rig>-repeatability)")
 
+
+def _add_linearity_parser(sub) -> None:
+    """Add the `check-linearity` subcommand."""
     lin = sub.add_parser(
         "check-linearity",
         help="is the rig non-linear? mean-level, scaling, coherence and ARX-vs-NARX tests",
@@ -240,7 +266,6 @@ def _parser() -> argparse.ArgumentParser:
     lin.add_argument("--seed", type=int, default=0, help="random seed, an integer >= 0 (default 0)")
     lin.add_argument("--plot", action="store_true", help="write linearity.png into --out")
     lin.add_argument("--out", help="folder of the plot (default ./results/<rig>-linearity)")
-    return p
 
 
 # ---------------------------------------------------------------------------------------------

@@ -204,9 +204,27 @@ class LinearityResult:
     def table(self) -> str:
         """The evidence as a text table, one block per test, ending with the verdict line."""
         w = max(12, *(len(n) for n in self.names))
-        lines = []
-        for key, value in self.info.items():
-            lines.append(f"{key:<10} {value}")
+        lines = self._header_lines(w)
+        lines.append("")
+        lines += self._mean_level_lines(w)
+        lines.append("")
+        lines += self._scaling_lines(w)
+        lines.append("")
+        lines += self._coherence_lines(w)
+        lines.append("")
+        lines += self._narx_lines(w)
+        lines.append("")
+        lines += self._verdict_lines(w)
+        return "\n".join(lines)
+
+    def _flag(self, test: str, k: int) -> str:
+        """One test's verdict on channel ``k`` for the table."""
+        ev = self.evidence.get(test)
+        return "n/a" if ev is None else ("NON-LINEAR" if ev[k] else "linear")
+
+    def _header_lines(self, w: int) -> list[str]:
+        """Run info, analysis window and band, per-channel noise and repeatability."""
+        lines = [f"{key:<10} {value}" for key, value in self.info.items()]
         lines.append(
             f"window     {self.window_s:g} s analysed at {self.fs:g} Hz; band "
             f"{self.band[0]:g}-{self.band[1]:g} Hz"
@@ -217,72 +235,79 @@ class LinearityResult:
             lines.append(
                 f"{n:<{w}}  {self.noise_rms[k]:.4g} {self.units[k]}  {self.repeat_error[k]:.3g} %"
             )
+        return lines
 
-        def flag(test, k):
-            ev = self.evidence.get(test)
-            return "n/a" if ev is None else ("NON-LINEAR" if ev[k] else "linear")
+    def _mean_level_lines(self, w: int) -> list[str]:
+        """Test (a): the mean-level shift under ``u + b``."""
+        if self.offset is None:
+            return ["(a) mean level: not run (no 'b' and 'u+b' records)"]
+        b = ", ".join(f"{x:.4g}" for x in self.offset)
+        lines = [f"(a) mean level (§5.8), offset b = [{b}], evidence if z > {Z_MEAN:g}"]
+        for k, n in enumerate(self.names):
+            lines.append(
+                f"{n:<{w}}  Δ = {self.mean_delta[k]:+.4g} {self.units[k]} "
+                f"(se {self.mean_se[k]:.3g} {self.units[k]}), z = {self.mean_z[k]:.3g}  "
+                f"-> {self._flag('mean level', k)}"
+            )
+        return lines
 
-        lines.append("")
-        if self.offset is not None:
-            b = ", ".join(f"{x:.4g}" for x in self.offset)
-            lines.append(f"(a) mean level (§5.8), offset b = [{b}], evidence if z > {Z_MEAN:g}")
-            for k, n in enumerate(self.names):
-                lines.append(
-                    f"{n:<{w}}  Δ = {self.mean_delta[k]:+.4g} {self.units[k]} "
-                    f"(se {self.mean_se[k]:.3g} {self.units[k]}), z = {self.mean_z[k]:.3g}  "
-                    f"-> {flag('mean level', k)}"
-                )
-        else:
-            lines.append("(a) mean level: not run (no 'b' and 'u+b' records)")
-        lines.append("")
-        if self.scaling:
-            lines.append(f"(b) scaling, residual rms vs noise alone, evidence if ratio > {K_NOISE:g}")
-            for k, n in enumerate(self.names):
-                parts = [
-                    f"{key} (a = {s['factor']:.3g}): {s['error'][k]:.3g} % vs noise "
-                    f"{s['noise'][k]:.3g} %, ratio {s['ratio'][k]:.3g}"
-                    for key, s in self.scaling.items()
-                ]
-                lines.append(f"{n:<{w}}  " + "; ".join(parts) + f"  -> {flag('scaling', k)}")
-        else:
-            lines.append("(b) scaling: not run (no '2u' or '-u' record)")
-        lines.append("")
-        lines.append(
+    def _scaling_lines(self, w: int) -> list[str]:
+        """Test (b): the residual of the scaled runs against the noise alone."""
+        if not self.scaling:
+            return ["(b) scaling: not run (no '2u' or '-u' record)"]
+        lines = [f"(b) scaling, residual rms vs noise alone, evidence if ratio > {K_NOISE:g}"]
+        for k, n in enumerate(self.names):
+            parts = [
+                f"{key} (a = {s['factor']:.3g}): {s['error'][k]:.3g} % vs noise "
+                f"{s['noise'][k]:.3g} %, ratio {s['ratio'][k]:.3g}"
+                for key, s in self.scaling.items()
+            ]
+            lines.append(f"{n:<{w}}  " + "; ".join(parts) + f"  -> {self._flag('scaling', k)}")
+        return lines
+
+    def _coherence_lines(self, w: int) -> list[str]:
+        """Test (c): the incoherent power in band against the noise power."""
+        lines = [
             f"(c) coherence in band, incoherent vs noise power, evidence if ratio > {K_NOISE:g}"
-        )
+        ]
         for k, n in enumerate(self.names):
             lines.append(
                 f"{n:<{w}}  mean γ² {self.coherence_mean[k]:.4f}, ratio "
-                f"{self.coherence_ratio[k]:.3g}  -> {flag('coherence', k)}"
+                f"{self.coherence_ratio[k]:.3g}  -> {self._flag('coherence', k)}"
             )
-        lines.append("")
-        if self.arx_order is not None:
+        return lines
+
+    def _narx_lines(self, w: int) -> list[str]:
+        """Test (d): held-out free run of an ARX against a NARX of the same order."""
+        if self.arx_order is None:
+            return ["(d) ARX vs NARX: no ARX could be fitted (see notes)"]
+        lines = [
+            f"(d) held-out free run: ARX({self.arx_order}) vs NARX({self.arx_order}, "
+            f"{self.narx_kind}), evidence if NARX ≥ {100 * NARX_GAIN:g} % lower "
+            f"and better by > {K_NOISE:g} x noise η0"
+        ]
+        for k, n in enumerate(self.names):
             lines.append(
-                f"(d) held-out free run: ARX({self.arx_order}) vs NARX({self.arx_order}, "
-                f"{self.narx_kind}), evidence if NARX ≥ {100 * NARX_GAIN:g} % lower "
-                f"and better by > {K_NOISE:g} x noise η0"
+                f"{n:<{w}}  η0 ARX {self.eta_arx[k]:.3g} %, NARX {self.eta_narx[k]:.3g} %, "
+                f"noise {self.eta_noise[k]:.3g} %  -> {self._flag('narx', k)}"
             )
-            for k, n in enumerate(self.names):
-                lines.append(
-                    f"{n:<{w}}  η0 ARX {self.eta_arx[k]:.3g} %, NARX {self.eta_narx[k]:.3g} %, "
-                    f"noise {self.eta_noise[k]:.3g} %  -> {flag('narx', k)}"
-                )
-        else:
-            lines.append("(d) ARX vs NARX: no ARX could be fitted (see notes)")
-        lines.append("")
+        return lines
+
+    def _verdict_lines(self, w: int) -> list[str]:
+        """The decision rule, the per-channel verdicts, the notes and the overall verdict."""
         rule = (
             "non-linear if the scaling test and at least one other test show evidence, or the "
             f"scaling ratio alone exceeds {K_NOISE**2:g}"
             if self.scaling
             else "non-linear if at least two tests show evidence"
         )
-        lines.append(f"rule: {rule} (per channel)")
+        lines = [f"rule: {rule} (per channel)"]
         for k, n in enumerate(self.names):
             lines.append(f"{n:<{w}}  {self.channel_verdict[k]}")
         for note in self.notes:
             lines.append(f"note: {note}")
         lines.append(f"verdict: {self.verdict}")
-        return "\n".join(lines)
+        return lines
 
     def __str__(self) -> str:
         return self.table()

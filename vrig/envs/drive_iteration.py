@@ -97,6 +97,20 @@ class ActionLayout:
         return flat.astype(np.float64)
 
 
+def _check_env_options(render_mode, action_mode, max_iterations, gain_range) -> tuple[float, float]:
+    """The options checked before the rig is built; returns the gain range ``(low, high)``."""
+    if render_mode is not None:
+        raise ValueError("DriveIterationEnv does not render (render_mode must be None)")
+    if action_mode not in _ACTION_MODES:
+        raise ValueError(f"action_mode must be one of {_ACTION_MODES}, got {action_mode!r}")
+    if not isinstance(max_iterations, (int, np.integer)) or max_iterations < 1:
+        raise ValueError(f"max_iterations must be a positive integer, got {max_iterations!r}")
+    lo, hi = (float(g) for g in gain_range)
+    if not (np.isfinite(lo) and np.isfinite(hi) and 0 <= lo < hi):
+        raise ValueError(f"gain_range must satisfy 0 <= low < high, got {gain_range}")
+    return lo, hi
+
+
 class DriveIterationEnv(gym.Env):
     """Drive iteration (response reconstruction) on a virtual rig as a gymnasium environment.
 
@@ -200,15 +214,7 @@ class DriveIterationEnv(gym.Env):
         rig_options: dict | None = None,
         render_mode: str | None = None,
     ):
-        if render_mode is not None:
-            raise ValueError("DriveIterationEnv does not render (render_mode must be None)")
-        if action_mode not in _ACTION_MODES:
-            raise ValueError(f"action_mode must be one of {_ACTION_MODES}, got {action_mode!r}")
-        if not isinstance(max_iterations, (int, np.integer)) or max_iterations < 1:
-            raise ValueError(f"max_iterations must be a positive integer, got {max_iterations!r}")
-        lo, hi = (float(g) for g in gain_range)
-        if not (np.isfinite(lo) and np.isfinite(hi) and 0 <= lo < hi):
-            raise ValueError(f"gain_range must satisfy 0 <= low < high, got {gain_range}")
+        lo, hi = _check_env_options(render_mode, action_mode, max_iterations, gain_range)
         self.render_mode = None
         self.physics = IterationPhysics(
             rig,
@@ -243,14 +249,7 @@ class DriveIterationEnv(gym.Env):
         self.layout = ActionLayout(
             action_mode, ph.n_inputs, n_bands, bool(reidentify_action), lo, hi
         )
-        low = np.full(self.layout.size, lo)
-        high = np.full(self.layout.size, hi)
-        if self.layout.reidentify:
-            low[-1], high[-1] = 0.0, 1.0
-        self.action_space = spaces.Box(low, high, dtype=np.float64)
-        self.observation_space = self.task.observation_space(
-            ph.n_inputs, ph.n_outputs, self.max_iterations
-        )
+        self._build_spaces(lo, hi)
         self.desired_set = None if desired is None else [self._load(d) for d in desired]
         if self.desired_set is not None and not self.desired_set:
             raise ValueError("desired must hold at least one record")
@@ -258,6 +257,18 @@ class DriveIterationEnv(gym.Env):
         self._done = True
 
     # ------------------------------------------------------------------ helpers
+    def _build_spaces(self, lo: float, hi: float) -> None:
+        """Action space (gains in ``[lo, hi]``, plus the re-identify flag in [0, 1]) and
+        observation space of the task."""
+        low = np.full(self.layout.size, lo)
+        high = np.full(self.layout.size, hi)
+        if self.layout.reidentify:
+            low[-1], high[-1] = 0.0, 1.0
+        self.action_space = spaces.Box(low, high, dtype=np.float64)
+        self.observation_space = self.task.observation_space(
+            self.physics.n_inputs, self.physics.n_outputs, self.max_iterations
+        )
+
     def _load(self, item) -> TimeHistory:
         if isinstance(item, (str, Path)):
             from ..io import read
