@@ -58,8 +58,6 @@ UNDOCUMENTED = {
     ("vrig/reconstruction/methods.py", "InverseFrf.identify"),
     ("vrig/reconstruction/methods.py", "InverseFrf.describe"),
     ("vrig/rigs/daq.py", "AntiAliasFilter.sos"),
-    ("vrig/rigs/gas_spring.py", "AirSpring.row"),
-    ("vrig/rigs/hydraulics.py", "HydraulicActuator.as_row"),
     ("vrig/rigs/mujoco_rig.py", "MujocoRig.name"),
     ("vrig/rigs/mujoco_rig.py", "MujocoRig.inputs"),
     ("vrig/rigs/mujoco_rig.py", "MujocoRig.outputs"),

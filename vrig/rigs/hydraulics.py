@@ -182,6 +182,92 @@ class HydraulicActuator:
         return r
 
 
+@nb.njit(cache=False)
+def _controller(p, ud, s: int, err: float, noise: float, step: int) -> None:  # pragma: no cover
+    """The PID with delta-P feedback, sample-and-hold at the controller's own rate; integrates
+    only while the valve command is not saturated."""
+    if step % p.period != 0:
+        return
+    tc = p.controller_dt
+    deriv = (err - ud[s + _S_PREV_ERROR]) / tc if step > 0 else 0.0
+    u = (
+        p.kp * err
+        + p.ki * ud[s + _S_INTEGRAL]
+        + p.kd * deriv
+        - p.pressure_feedback * ud[s + _S_LOAD_PRESSURE] / p.supply_pressure
+        + noise
+    )
+    if u > 1.0:
+        u = 1.0
+    elif u < -1.0:
+        u = -1.0
+    else:
+        ud[s + _S_INTEGRAL] += err * tc
+    ud[s + _S_VALVE_CMD] = u
+    ud[s + _S_PREV_ERROR] = err
+
+
+@nb.njit(cache=False)
+def _servo_valve(p, ud, s: int, dt: float) -> float:  # pragma: no cover
+    """Second-order spool dynamics (semi-implicit Euler), the spool at its end stops: the new
+    spool position."""
+    wv = p.valve_omega
+    acc = (
+        wv * wv * (ud[s + _S_VALVE_CMD] - ud[s + _S_SPOOL])
+        - 2.0 * p.valve_damping * wv * ud[s + _S_SPOOL_VEL]
+    )
+    ud[s + _S_SPOOL_VEL] += dt * acc
+    xv = ud[s + _S_SPOOL] + dt * ud[s + _S_SPOOL_VEL]
+    if xv > 1.0:
+        xv = 1.0
+        ud[s + _S_SPOOL_VEL] = 0.0
+    elif xv < -1.0:
+        xv = -1.0
+        ud[s + _S_SPOOL_VEL] = 0.0
+    ud[s + _S_SPOOL] = xv
+    return xv
+
+
+@nb.njit(cache=False)
+def _oil_column(p, ud, s: int, xv: float, v: float, dt: float) -> float:  # pragma: no cover
+    """Load-dependent flow through the valve into the compliant oil column: the piston force."""
+    ps = p.supply_pressure
+    pl = ud[s + _S_LOAD_PRESSURE]
+    drop = ps - pl if xv >= 0.0 else ps + pl
+    if drop < 0.0:
+        drop = 0.0
+    q = p.max_flow * xv * np.sqrt(drop / ps)
+    pl += dt * p.oil_gain * (q - p.area * v - p.leakage * pl)
+    if pl > ps:
+        pl = ps
+    elif pl < -ps:
+        pl = -ps
+    ud[s + _S_LOAD_PRESSURE] = pl
+    return p.area * pl
+
+
+@nb.njit(cache=False)
+def _interlocks(p, ud, c: int, step: int, x: float, force: float, err: float) -> None:  # pragma: no cover
+    """Record the first interlock trip (stroke, force, following error) in the userdata."""
+    if ud[_UD_TRIP_CODE] != 0.0:
+        return
+    code = 0
+    value = 0.0
+    limit = 0.0
+    if abs(x) > p.stroke:
+        code, value, limit = 1, x, p.stroke
+    elif abs(force) > p.force_limit:
+        code, value, limit = 2, force, p.force_limit
+    elif abs(err) > p.error_limit:
+        code, value, limit = 3, err, p.error_limit
+    if code:
+        ud[_UD_TRIP_CODE] = code
+        ud[_UD_TRIP_CHANNEL] = c
+        ud[_UD_TRIP_STEP] = step
+        ud[_UD_TRIP_VALUE] = value
+        ud[_UD_TRIP_LIMIT] = limit
+
+
 def _build_control(table_address: int):
     """Compile the control callback (once per process, on first use: ~1 s)."""
 
@@ -209,75 +295,12 @@ def _build_control(table_address: int):
             p = par[c]
             s = _UD_HEADER + _UD_PER_CHANNEL * c
             x = qpos[p.qpos]
-            v = qvel[p.dof]
             err = ctrl[p.i_cmd] - x
-            # controller, sample-and-hold at its own rate
-            if step % p.period == 0:
-                tc = p.controller_dt
-                deriv = (err - ud[s + _S_PREV_ERROR]) / tc if step > 0 else 0.0
-                u = (
-                    p.kp * err
-                    + p.ki * ud[s + _S_INTEGRAL]
-                    + p.kd * deriv
-                    - p.pressure_feedback * ud[s + _S_LOAD_PRESSURE] / p.supply_pressure
-                    + ctrl[p.i_noise]
-                )
-                if u > 1.0:
-                    u = 1.0
-                elif u < -1.0:
-                    u = -1.0
-                else:  # integrate only while the valve is not saturated
-                    ud[s + _S_INTEGRAL] += err * tc
-                ud[s + _S_VALVE_CMD] = u
-                ud[s + _S_PREV_ERROR] = err
-            # servo valve, second order (semi-implicit Euler)
-            wv = p.valve_omega
-            acc = (
-                wv * wv * (ud[s + _S_VALVE_CMD] - ud[s + _S_SPOOL])
-                - 2.0 * p.valve_damping * wv * ud[s + _S_SPOOL_VEL]
-            )
-            ud[s + _S_SPOOL_VEL] += dt * acc
-            xv = ud[s + _S_SPOOL] + dt * ud[s + _S_SPOOL_VEL]
-            if xv > 1.0:
-                xv = 1.0
-                ud[s + _S_SPOOL_VEL] = 0.0
-            elif xv < -1.0:
-                xv = -1.0
-                ud[s + _S_SPOOL_VEL] = 0.0
-            ud[s + _S_SPOOL] = xv
-            # load-dependent flow through the valve
-            ps = p.supply_pressure
-            pl = ud[s + _S_LOAD_PRESSURE]
-            drop = ps - pl if xv >= 0.0 else ps + pl
-            if drop < 0.0:
-                drop = 0.0
-            q = p.max_flow * xv * np.sqrt(drop / ps)
-            # oil-column compliance
-            pl += dt * p.oil_gain * (q - p.area * v - p.leakage * pl)
-            if pl > ps:
-                pl = ps
-            elif pl < -ps:
-                pl = -ps
-            ud[s + _S_LOAD_PRESSURE] = pl
-            force = p.area * pl
+            _controller(p, ud, s, err, ctrl[p.i_noise], step)
+            xv = _servo_valve(p, ud, s, dt)
+            force = _oil_column(p, ud, s, xv, qvel[p.dof], dt)
             ctrl[p.i_force] = force
-            # interlocks: record the first trip
-            if ud[_UD_TRIP_CODE] == 0.0:
-                code = 0
-                value = 0.0
-                limit = 0.0
-                if abs(x) > p.stroke:
-                    code, value, limit = 1, x, p.stroke
-                elif abs(force) > p.force_limit:
-                    code, value, limit = 2, force, p.force_limit
-                elif abs(err) > p.error_limit:
-                    code, value, limit = 3, err, p.error_limit
-                if code:
-                    ud[_UD_TRIP_CODE] = code
-                    ud[_UD_TRIP_CHANNEL] = c
-                    ud[_UD_TRIP_STEP] = step
-                    ud[_UD_TRIP_VALUE] = value
-                    ud[_UD_TRIP_LIMIT] = limit
+            _interlocks(p, ud, c, step, x, force, err)
 
     return _control_callback
 
