@@ -106,6 +106,18 @@ def _lookup(table_address, d):  # pragma: no cover - compiled
     return 0
 
 
+@nb.njit(inline="always")
+def _context_or_chain(table_address, m, d):  # pragma: no cover - compiled
+    """The context address of ``d`` in a hook's table; 0 (after calling the callback that was
+    installed before vrig's, if any) for an mjData that is not vrig's."""
+    address = _lookup(table_address, d)
+    if address == 0:
+        previous = nb.carray(_as_pointer(table_address), (1,), dtype=np.int64)[0]
+        if previous != 0:
+            _call_generic(previous, m, d)
+    return address
+
+
 class Hook:
     """vrig's compiled callback on one of MuJoCo's global hooks (``mjcb_control``,
     ``mjcb_passive``, ``mjcb_sensor``), with a per-mjData registry of contexts.

@@ -46,7 +46,7 @@ import numba as nb
 import numpy as np
 from numba import types
 
-from ._callbacks import Hook, _as_pointer, _call_generic, _call_sensor, _lookup, _record_pointer
+from ._callbacks import Hook, _as_pointer, _call_sensor, _context_or_chain, _lookup, _record_pointer
 from ._checks import check_number, replace_fields
 
 __all__ = ["MAX_AIR_SPRINGS", "PASSIVE", "SENSOR", "AirSpring", "install", "uninstall"]
@@ -204,11 +204,8 @@ def _build_passive(table_address: int):
 
     @nb.cfunc(types.void(types.voidptr, types.voidptr), nopython=True, cache=False)
     def _passive(m, d):  # pragma: no cover - compiled, runs inside mj_step
-        address = _lookup(table_address, d)
+        address = _context_or_chain(table_address, m, d)
         if address == 0:
-            previous = nb.carray(_as_pointer(table_address), (1,), dtype=np.int64)[0]
-            if previous != 0:
-                _call_generic(previous, m, d)
             return
         ctx = nb.carray(_as_context(address), (1,))[0]
         par = nb.carray(_as_params(ctx.params), (MAX_AIR_SPRINGS,))

@@ -41,7 +41,7 @@ import numba as nb
 import numpy as np
 from numba import types
 
-from ._callbacks import MAX_LIVE, Hook, _as_pointer, _call_generic, _lookup, _record_pointer
+from ._callbacks import MAX_LIVE, Hook, _as_pointer, _context_or_chain, _record_pointer
 from ._checks import check_number, replace_fields
 
 __all__ = [
@@ -273,11 +273,8 @@ def _build_control(table_address: int):
 
     @nb.cfunc(types.void(types.voidptr, types.voidptr), nopython=True, cache=False)
     def _control_callback(m, d):  # pragma: no cover - compiled, runs inside mj_step
-        address = _lookup(table_address, d)
+        address = _context_or_chain(table_address, m, d)
         if address == 0:
-            previous = nb.carray(_as_pointer(table_address), (1,), dtype=np.int64)[0]
-            if previous != 0:
-                _call_generic(previous, m, d)
             return
         ctx = nb.carray(_as_context(address), (1,))[0]
         nch = ctx.nch
