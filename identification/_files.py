@@ -1,7 +1,7 @@
 """Model files (internal): atomic writes and a guarded ``.npz`` reader.
 
-The package never imports vrig, so it keeps its own copy of vrig's file safety
-(:mod:`vrig.files` documents the scheme):
+The package never imports vrig; vrig's file safety builds on these (:mod:`vrig.files` documents
+the scheme and adds staged folders and the recovery of interrupted ones):
 
 * :func:`atomic_write` writes a temporary ``.NAME.tmp-XXXXXXXX`` in the target's folder,
   ``fsync``-s it and renames it over the target (:func:`os.replace`): a kill leaves the old file
@@ -46,20 +46,80 @@ _BROKEN = (  # what zipfile and numpy raise on corrupt input (found by fuzzing)
 )
 
 
-@contextlib.contextmanager
-def atomic_write(path: Path) -> Iterator[IO[bytes]]:
-    """A binary file that replaces ``path`` when the ``with`` block ends without error."""
+def _prefix(path: Path, kind: str) -> str:
+    """``.NAME.kind-`` (NAME cut to 200 characters: the whole name stays under NAME_MAX)."""
+    return f".{path.name[:200]}.{kind}-"
+
+
+def _sibling(path: Path, kind: str) -> Path:
+    return path.with_name(_prefix(path, kind) + secrets.token_hex(4))
+
+
+def _fsync_dir(folder: Path) -> None:
+    """Make a rename in ``folder`` durable (no-op where directories cannot be opened)."""
+    try:
+        fd = os.open(folder, os.O_RDONLY)
+    except OSError:
+        return
+    try:
+        os.fsync(fd)
+    except OSError:
+        pass
+    finally:
+        os.close(fd)
+
+
+def _create_temporary(path: Path) -> tuple[Path, int]:
+    """A new temporary sibling of ``path`` (mode: the target's, else 0o666 less the umask)."""
     flags = os.O_WRONLY | os.O_CREAT | os.O_EXCL | getattr(os, "O_BINARY", 0)
+    flags |= getattr(os, "O_CLOEXEC", 0)
     while True:
-        tmp = path.with_name(f".{path.name[:200]}.tmp-{secrets.token_hex(4)}")
+        tmp = _sibling(path, "tmp")
         try:
             fd = os.open(tmp, flags, 0o666)
             break
-        except FileExistsError:
+        except FileExistsError:  # 1 in 4 billion: draw another name
             continue
     try:
+        os.chmod(tmp, stat.S_IMODE(os.stat(path).st_mode))  # keep an existing file's mode
+    except OSError:
+        pass
+    return tmp, fd
+
+
+@contextlib.contextmanager
+def atomic_write(path, mode: str = "wb", *, encoding: str | None = None) -> Iterator[IO]:
+    """Open a temporary file that replaces ``path`` when the ``with`` block ends without error.
+
+    Parameters
+    ----------
+    path : str or Path
+        The target file. Its directory must exist.
+    mode : {"wb", "w"}
+        Binary or text.
+    encoding : str, optional
+        Text mode only (default UTF-8). Lines are written as given (no newline translation).
+
+    Yields
+    ------
+    file object
+        The temporary file ``.NAME.tmp-XXXXXXXX`` beside the target (see the module docstring).
+
+    Examples
+    --------
+    >>> with atomic_write("summary.json", "w") as f:  # doctest: +SKIP
+    ...     f.write(text)
+    """
+    if mode not in ("wb", "w"):
+        raise ValueError(f"atomic_write mode must be 'wb' or 'w', got {mode!r}")
+    path = Path(path)
+    tmp, fd = _create_temporary(path)
+    try:
         try:
-            f = os.fdopen(fd, "wb")
+            if mode == "w":
+                f = os.fdopen(fd, "w", encoding=encoding or "utf-8", newline="")
+            else:
+                f = os.fdopen(fd, "wb")
         except BaseException:
             os.close(fd)
             raise
@@ -72,12 +132,7 @@ def atomic_write(path: Path) -> Iterator[IO[bytes]]:
         with contextlib.suppress(OSError):
             tmp.unlink()
         raise
-    with contextlib.suppress(OSError):
-        dir_fd = os.open(path.parent, os.O_RDONLY)
-        try:
-            os.fsync(dir_fd)
-        finally:
-            os.close(dir_fd)
+    _fsync_dir(path.parent)
 
 
 def _open_regular(path: Path, limit: int, error: Callable[[str], Exception]) -> IO[bytes]:

@@ -41,7 +41,6 @@ from __future__ import annotations
 import contextlib
 import os
 import re
-import secrets
 import shutil
 import stat
 from collections.abc import Callable, Iterator
@@ -50,6 +49,12 @@ from typing import IO
 
 import numpy as np
 
+from identification._files import (
+    _fsync_dir,
+    _prefix,
+    _sibling,
+    atomic_write,
+)
 from identification._files import read_npz as _guarded_npz
 
 from .errors import FileFormatError
@@ -77,95 +82,6 @@ def is_temporary(path) -> bool:
     """True for a name made by :func:`atomic_write` or :func:`staged_directory`
     (``.NAME.tmp-XXXXXXXX``, ``.NAME.old-XXXXXXXX``, ``.NAME.del-XXXXXXXX``)."""
     return bool(_TEMP.match(Path(path).name))
-
-
-def _prefix(path: Path, kind: str) -> str:
-    """``.NAME.kind-`` (NAME cut to 200 characters: the whole name stays under NAME_MAX)."""
-    return f".{path.name[:200]}.{kind}-"
-
-
-def _sibling(path: Path, kind: str) -> Path:
-    return path.with_name(_prefix(path, kind) + secrets.token_hex(4))
-
-
-def _fsync_dir(folder: Path) -> None:
-    """Make a rename in ``folder`` durable (no-op where directories cannot be opened)."""
-    try:
-        fd = os.open(folder, os.O_RDONLY)
-    except OSError:
-        return
-    try:
-        os.fsync(fd)
-    except OSError:
-        pass
-    finally:
-        os.close(fd)
-
-
-def _create_temporary(path: Path) -> tuple[Path, int]:
-    """A new temporary sibling of ``path`` (mode: the target's, else 0o666 less the umask)."""
-    flags = os.O_WRONLY | os.O_CREAT | os.O_EXCL | getattr(os, "O_BINARY", 0)
-    flags |= getattr(os, "O_CLOEXEC", 0)
-    while True:
-        tmp = _sibling(path, "tmp")
-        try:
-            fd = os.open(tmp, flags, 0o666)
-            break
-        except FileExistsError:  # 1 in 4 billion: draw another name
-            continue
-    try:
-        os.chmod(tmp, stat.S_IMODE(os.stat(path).st_mode))  # keep an existing file's mode
-    except OSError:
-        pass
-    return tmp, fd
-
-
-@contextlib.contextmanager
-def atomic_write(path, mode: str = "wb", *, encoding: str | None = None) -> Iterator[IO]:
-    """Open a temporary file that replaces ``path`` when the ``with`` block ends without error.
-
-    Parameters
-    ----------
-    path : str or Path
-        The target file. Its directory must exist.
-    mode : {"wb", "w"}
-        Binary or text.
-    encoding : str, optional
-        Text mode only (default UTF-8). Lines are written as given (no newline translation).
-
-    Yields
-    ------
-    file object
-        The temporary file ``.NAME.tmp-XXXXXXXX`` beside the target (see the module docstring).
-
-    Examples
-    --------
-    >>> with atomic_write("summary.json", "w") as f:  # doctest: +SKIP
-    ...     f.write(text)
-    """
-    if mode not in ("wb", "w"):
-        raise ValueError(f"atomic_write mode must be 'wb' or 'w', got {mode!r}")
-    path = Path(path)
-    tmp, fd = _create_temporary(path)
-    try:
-        try:
-            if mode == "w":
-                f = os.fdopen(fd, "w", encoding=encoding or "utf-8", newline="")
-            else:
-                f = os.fdopen(fd, "wb")
-        except BaseException:
-            os.close(fd)
-            raise
-        with f:
-            yield f
-            f.flush()
-            os.fsync(f.fileno())
-        os.replace(tmp, path)
-    except BaseException:
-        with contextlib.suppress(OSError):
-            tmp.unlink()
-        raise
-    _fsync_dir(path.parent)
 
 
 # ---------------------------------------------------------------------------------- folders
