@@ -214,9 +214,14 @@ def test_zoom_plot_shows_the_worst_error_second_and_says_so(monkeypatch):
     assert span.get_x() == pytest.approx(t.min())
 
 
-def test_overlay_draws_desired_on_top_of_achieved():
+def test_overlay_and_psd_draw_desired_on_top_of_achieved():
     desired, achieved = _records(2)
-    for fig in (overlay(desired, achieved), overlay(desired, achieved, window=(1.0, 2.0))):
+    figures = (
+        overlay(desired, achieved),
+        overlay(desired, achieved, window=(1.0, 2.0)),
+        psd_compare(desired, achieved),
+    )
+    for fig in figures:
         for ax in fig.axes:
             des, ach = ax.get_lines()
             assert to_rgba(des.get_color()) == to_rgba("red")

@@ -237,7 +237,8 @@ def psd_compare(
     Returns
     -------
     Figure
-        ``n_channels`` axes with two lines each (desired first).
+        ``n_channels`` axes with two lines each: desired first (thin, on top), achieved second
+        (a wide band beneath), as in :func:`overlay`.
     """
     _check_pair(desired, achieved)
     fs = desired.fs
@@ -255,14 +256,17 @@ def psd_compare(
             f[keep],
             np.maximum(p_des[keep, k], 1e-300),
             color=DESIRED_COLOR,
-            lw=1.0,
+            lw=0.8,
+            zorder=3,
             label=labels[0],
         )
         ax.semilogy(
             f[keep],
             np.maximum(p_ach[keep, k], 1e-300),
             color=ACHIEVED_COLOR,
-            lw=1.0,
+            lw=2.2,
+            alpha=0.55,
+            zorder=2,
             label=labels[1],
         )
         if band is not None:
