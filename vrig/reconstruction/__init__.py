@@ -19,7 +19,7 @@ from .methods import (
     cross_spectra,
     make_method,
 )
-from .protocol import InverseModelMethod, Method, SizedMethod
+from .protocol import InverseModelMethod, Method, SavableMethod, SizedMethod
 from .result import ReconstructionResult
 from .scores import pseudo_damage
 from .settings import IterationSettings
@@ -36,6 +36,7 @@ __all__ = [
     "IterationSettings",
     "Method",
     "ReconstructionResult",
+    "SavableMethod",
     "SizedMethod",
     "SplitSpectra",
     "band_gains",
