@@ -8,6 +8,8 @@ are ``ValueError`` too, including :class:`SimulationDivergedError`, which also s
 
 from __future__ import annotations
 
+import math
+
 __all__ = [
     "IdentificationError",
     "IllConditionedWarning",
@@ -113,7 +115,7 @@ class SimulationDivergedError(IdentificationError, ArithmeticError):
         self.value = float(value)
         self.bound = float(bound)
         self.kind = str(kind)
-        what = "not finite" if not _isfinite(self.value) else f"beyond the bound {self.bound:.6g}"
+        what = "not finite" if not math.isfinite(self.value) else f"beyond the bound {self.bound:.6g}"
         if self.kind == "one-step prediction":
             hint = (
                 "The model's terms overflow for data of this magnitude: check the data's units "
@@ -141,6 +143,3 @@ class SimulationDivergedError(IdentificationError, ArithmeticError):
             self.kind,
         )
 
-
-def _isfinite(x: float) -> bool:
-    return x == x and x not in (float("inf"), float("-inf"))

@@ -17,7 +17,7 @@ from .errors import (
 )
 from .field import pseudo_field
 from .linearity import LinearityResult, check_linearity, check_rig_linearity
-from .reconstruction import ReconstructionResult, reconstruct
+from .reconstruction import IterationSettings, ReconstructionResult, reconstruct
 from .rigs import ChannelSpec, FileRig, MujocoRig, list_rigs, load_rig, rig_path, severity_rigs
 from .testfolder import TestFolder
 from .timehistory import TimeHistory
@@ -29,6 +29,7 @@ __all__ = [
     "ChannelSpec",
     "FileFormatError",
     "FileRig",
+    "IterationSettings",
     "LinearityResult",
     "MujocoRig",
     "ReconstructionError",

@@ -504,7 +504,7 @@ def _check_reconstruct_args(args) -> None:
 
 
 def _cmd_reconstruct(args) -> int:
-    from .reconstruction import reconstruct
+    from .reconstruction import IterationSettings, reconstruct
 
     t_start = time.perf_counter()
     _check_reconstruct_args(args)
@@ -537,16 +537,15 @@ def _cmd_reconstruct(args) -> int:
     from .errors import ReconstructionError
 
     try:
-        result = reconstruct(
-            rig,
-            field,
+        iteration = IterationSettings(
             method=method,
             iterations=args.iterations,
             gain=args.gain,
             bandwidth=band,
-            seed=args.seed,
-            progress=True,
+            id_seed=args.seed,
+            run_seed=args.seed,
         )
+        result = reconstruct(rig, field, iteration, progress=True)
     except ValueError as exc:  # e.g. a desired record too short for the model
         raise _Failure(str(exc)) from exc
     except ReconstructionError as exc:  # nothing played: keep what was made, say what to change

@@ -17,7 +17,7 @@ from identification import split_spectra
 
 from .timehistory import TimeHistory
 
-__all__ = ["band_split", "decimate", "f2d", "gprepro", "identification_band"]
+__all__ = ["band_gains", "band_split", "decimate", "f2d", "gprepro", "identification_band"]
 
 
 def _check(th):
@@ -133,3 +133,42 @@ def f2d(
     if not isinstance(out, TimeHistory):
         raise TypeError(f"the F2D transform must return a TimeHistory, got {type(out).__name__}")
     return out
+
+
+def band_gains(x: np.ndarray, fs: float, gains: np.ndarray, edges) -> np.ndarray:
+    """Scale each frequency band of each channel of ``x`` by its own gain.
+
+    ``gains`` is (n_channels, n_bands); band ``b`` holds the frequencies in
+    ``[edges[b], edges[b + 1])`` (the first band starts at 0 Hz, the last runs to Nyquist,
+    whatever ``edges[0]`` / ``edges[-1]`` say). The scaling is a piecewise-constant weighting of the
+    record's (zero-padded) spectrum, so gains equal across bands give exactly ``gain * x``.
+
+    Parameters
+    ----------
+    x : ndarray (n_samples, n_channels)
+        The record (e.g. a drive correction).
+    fs : float
+        Sample rate [Hz].
+    gains : ndarray (n_channels, n_bands)
+        Gain per channel and band.
+    edges : sequence of float
+        ``n_bands + 1`` band edges [Hz].
+
+    Returns
+    -------
+    ndarray (n_samples, n_channels)
+    """
+    x = np.asarray(x, dtype=float)
+    gains = np.asarray(gains, dtype=float)
+    edges = np.asarray(edges, dtype=float)
+    if gains.ndim != 2 or gains.shape[0] != x.shape[1] or gains.shape[1] != edges.size - 1:
+        raise ValueError(
+            f"gains must be (n_channels={x.shape[1]}, n_bands={edges.size - 1}), got {gains.shape}"
+        )
+    if np.all(gains == gains[:, :1]):
+        return x * gains[:, 0]
+    n = x.shape[0]
+    X = np.fft.rfft(x, n=2 * n, axis=0)
+    f = np.fft.rfftfreq(2 * n, 1.0 / fs)
+    band = np.clip(np.searchsorted(edges, f, side="right") - 1, 0, edges.size - 2)
+    return np.fft.irfft(X * gains[:, band].T, n=2 * n, axis=0)[:n]

@@ -15,6 +15,7 @@ import numpy as np
 from gymnasium import spaces
 
 from ..errors import RigLimitError
+from ..reconstruction import IterationSettings
 from ..timehistory import TimeHistory
 from .physics import FAILURES, IterationPhysics
 from .task import IterationTask, band_edges
@@ -162,8 +163,13 @@ class DriveIterationEnv(gym.Env):
     ----------
     rig : str or Rig
         Rig name (``vrig.list_rigs()``) or rig object.
-    method : str
-        Inverse-model method; ``method_options`` (dict) go to it, e.g. ``{"order": 4}``.
+    settings : IterationSettings, optional
+        The identification settings (method and options, band, identification drive, taper,
+        ``id_seed``, ...); the keyword arguments below, when given, override its values. The
+        iteration's gains come from the actions and the run seed from ``reset``.
+    method : str, optional
+        Inverse-model method (default ``"arx"``); ``method_options`` (dict) go to it, e.g.
+        ``{"order": 4}``.
     fast : bool
         Reduced-fidelity rig (``fidelity="fast"``) and 6 s desired segments instead of the
         full-fidelity rig and 20 s (overridden by explicit ``fidelity`` / ``seconds``).
@@ -178,8 +184,9 @@ class DriveIterationEnv(gym.Env):
         Iteration budget (steps) before truncation; keep ``max_episode_steps`` of ``make`` equal.
     tolerance : float, optional
         η0 tolerance [%] (default :data:`DEFAULT_TOLERANCE` of the rig, else 2 %).
-    model_seed : int
-        Identification seed (fixed per env, so the identified model is reused).
+    model_seed : int, optional
+        Identification seed (``settings.id_seed``, default 0; fixed per env, so the identified
+        model is reused).
     bandwidth, id_duration, id_rms, decimation
         As in :func:`vrig.reconstruct`.
     """
@@ -190,7 +197,8 @@ class DriveIterationEnv(gym.Env):
         self,
         rig="shock-absorber",
         *,
-        method: str = "arx",
+        settings: IterationSettings | None = None,
+        method: str | None = None,
         method_options: dict | None = None,
         fast: bool = False,
         fidelity: str | None = None,
@@ -206,7 +214,7 @@ class DriveIterationEnv(gym.Env):
         trip_penalty: float = 5.0,
         energy_penalty: float = 0.1,
         step_penalty: float = 0.0,
-        model_seed: int = 0,
+        model_seed: int | None = None,
         id_duration: float | None = None,
         id_rms=None,
         decimation: int | None = None,
@@ -216,18 +224,24 @@ class DriveIterationEnv(gym.Env):
     ):
         lo, hi = _check_env_options(render_mode, action_mode, max_iterations, gain_range)
         self.render_mode = None
+        given = {
+            "method": method,
+            "method_options": method_options,
+            "bandwidth": bandwidth,
+            "id_duration": id_duration,
+            "id_rms": id_rms,
+            "decimation": decimation,
+            "id_seed": model_seed,
+        }
+        settings = IterationSettings.build(
+            settings, **{k: v for k, v in given.items() if v is not None}
+        )
+        if fast and settings.id_duration is None:
+            settings = settings.replace(id_duration=FAST_ID_SECONDS)
         self.physics = IterationPhysics(
             rig,
-            method=method,
-            method_options=method_options,
-            bandwidth=bandwidth,
+            settings,
             seconds=seconds if seconds is not None else (FAST_SECONDS if fast else 20.0),
-            id_duration=id_duration
-            if id_duration is not None
-            else (FAST_ID_SECONDS if fast else None),
-            id_rms=id_rms,
-            decimation=decimation,
-            model_seed=model_seed,
             fidelity=fidelity or ("fast" if fast else "full"),
             rig_seed=rig_seed,
             rig_options=rig_options,

@@ -31,7 +31,7 @@ from identification import Arx, ErrorSignalModel, InverseModel, Narx
 
 from ..processing import band_split
 from ..timehistory import TimeHistory
-from .protocol import InverseModelMethod, SizedMethod
+from .protocol import InverseModelMethod, SavableMethod, SizedMethod
 
 __all__ = [
     "METHODS",
@@ -108,6 +108,17 @@ class _InverseTimeDomain:
         inverse = getattr(self, "inverse", None)
         return None if inverse is None else int(np.sum(inverse.model.n_terms_))
 
+    _OPTIONS: tuple[str, ...] = ()
+
+    def options(self) -> dict:
+        """The method's options (``order``, ``degree``, ...), as given."""
+        return {k: getattr(self, k) for k in self._OPTIONS}
+
+    def fitted_models(self) -> dict:
+        """``{"model": InverseModel}`` after :meth:`identify`, ``{}`` before."""
+        inverse = getattr(self, "inverse", None)
+        return {} if inverse is None else {"model": inverse}
+
     def describe(self) -> str:
         m = self.inverse.model
         src = "" if self.responses is None else f" from {self.responses}"
@@ -122,6 +133,7 @@ class InverseArx(_InverseTimeDomain):
     """Time-domain inverse ARX model (the QanTiM method, full-order structure eq. 4-15)."""
 
     name = "arx"
+    _OPTIONS = ("order",)
 
     def __init__(self, order: int = 4, **kw):
         super().__init__(**kw)
@@ -166,6 +178,7 @@ class InverseNarx(_InverseTimeDomain):
     """
 
     name = "narx"
+    _OPTIONS = ("order", "degree", "kind", "focus", "selection", "n_terms")
 
     def __init__(
         self,
@@ -218,6 +231,7 @@ class InverseErrorSignal(_InverseTimeDomain):
     """
 
     name = "error-signal"
+    _OPTIONS = ("linear_order", "nonlinear_order", "degree", "kind", "focus")
 
     def __init__(
         self,
@@ -318,6 +332,20 @@ class SplitSpectra:
         ]
         return None if None in sizes else int(sum(sizes))
 
+    def options(self) -> dict:
+        """``split_hz`` and the two band methods (``low``, ``high``)."""
+        return {"split_hz": self.split_hz, "low": self.low, "high": self.high}
+
+    def fitted_models(self) -> dict:
+        """The bands' fitted models, ``model_low`` / ``model_high`` (``{}`` before
+        :meth:`identify`, or for bands whose methods have no model files)."""
+        return {
+            f"{stem}_{part}": model
+            for part, band in (("low", self.low), ("high", self.high))
+            if isinstance(band, SavableMethod)
+            for stem, model in band.fitted_models().items()
+        }
+
     def describe(self) -> str:
         lo = "" if self.low_responses is None else f" from {self.low_responses}"
         hi = "" if self.high_responses is None else f" from {self.high_responses}"
@@ -402,7 +430,16 @@ class InverseFrf:
         return np.fft.irfft(np.einsum("fij,fj->fi", Hi, R), n=n_fft, axis=0)[:n]
 
     def describe(self) -> str:
+        """One line: the number of frequency lines of the fitted inverse FRF."""
         return f"frf: H1 with {self.f.size} lines, truncated-SVD/Tikhonov inverse"
+
+    def options(self) -> dict:
+        """``nperseg``, ``rcond``, ``tikhonov``."""
+        return {"nperseg": self.nperseg, "rcond": self.rcond, "tikhonov": self.tikhonov}
+
+    def fitted_models(self) -> dict:
+        """``{}``: the inverse FRF has no model file (its size is in :meth:`model_size`)."""
+        return {}
 
     def model_size(self) -> int | None:
         """Real numbers in the inverse FRF matrices (2 per complex entry); None before

@@ -18,6 +18,8 @@ has it:
 
 * :class:`SizedMethod` — ``model_size()``: number of fitted coefficients (None before
   ``identify``);
+* :class:`SavableMethod` — ``options()`` and ``fitted_models()``: what a test folder records
+  (``summary.json``, the model files);
 * :class:`InverseModelMethod` — a time-domain inverse model with a *lead* (the rig's delay the
   inverse advances the response by): ``fitted_lead()`` reads the lead the fit chose,
   ``set_lead(lead)`` fixes it for the next ``identify`` (0: a causal model, no lead search).
@@ -31,13 +33,13 @@ their signatures.
 from __future__ import annotations
 
 from collections.abc import Mapping
-from typing import Protocol, runtime_checkable
+from typing import Any, Protocol, runtime_checkable
 
 import numpy as np
 
 from ..timehistory import TimeHistory
 
-__all__ = ["InverseModelMethod", "Lead", "Method", "SizedMethod"]
+__all__ = ["InverseModelMethod", "Lead", "Method", "SavableMethod", "SizedMethod"]
 
 Lead = int | str | None | Mapping[str, "Lead"]
 """A method's lead [samples]: an int (``"auto"``: searched at identification; None: not
@@ -84,4 +86,20 @@ class InverseModelMethod(Method, SizedMethod, Protocol):
         """Fix the lead for the next ``identify``: a number of samples >= 0 (0: causal), or
         ``"auto"`` (search it); a method of parts takes one value for all of them or a mapping
         as :meth:`fitted_lead` returns it (a part whose lead is None is left as it is)."""
+        ...
+
+
+@runtime_checkable
+class SavableMethod(Protocol):
+    """A method whose options and fitted models a test folder records (``summary.json`` and the
+    model files, :class:`vrig.TestFolder`)."""
+
+    def options(self) -> dict[str, Any]:
+        """The method's options by name (numbers, strings, or band methods for a method made of
+        parts), as given to its constructor."""
+        ...
+
+    def fitted_models(self) -> dict[str, Any]:
+        """``{file stem: fitted model}`` (models with ``save(path)``); empty before
+        ``identify``."""
         ...

@@ -26,6 +26,7 @@ from mujoco import rollout
 from ..errors import RigLimitError, RigModelError, RigParameterError, SimulationInstabilityError
 from ..timehistory import TimeHistory
 from . import gas_spring, hydraulics, stability
+from ._callbacks import foreign_callbacks_suspended
 from .daq import Acquisition
 from .spec import (
     ChannelSpec,
@@ -159,20 +160,7 @@ class MujocoRig:
             self._apply(spec, desc.parameters[name], value)
         n_hyd = sum(1 for c in self._inputs if c.hydraulic is not None)
         spec.nuserdata = max(spec.nuserdata, 8 + 8 * n_hyd)
-        try:
-            self.model = spec.compile()
-        except ValueError as exc:
-            raise RigModelError(f"{desc.mjcf}: MuJoCo could not compile the model: {exc}") from exc
-        self.data = mujoco.MjData(self.model)
-        documented = float(self.model.opt.timestep)
-        ratio = 1.0 / (desc.fs * documented)
-        if abs(ratio - round(ratio)) > 1e-6 or not 1 <= round(ratio) <= _MAX_DECIMATION:
-            raise RigModelError(
-                f"{desc.name}: the physics rate {1 / documented:g} Hz must be an integer multiple "
-                f"(1..{_MAX_DECIMATION}) of fs = {desc.fs:g} Hz"
-            )
-        self._bind()
-        self.stability_limit, self._stiffest = self._stability()
+        documented, ratio = self._compile(spec)
         self.timestep = self._choose_timestep(documented, round(ratio))
         self.model.opt.timestep = self.timestep
         # a blow-up must not reset the data: the interlock record and the time stay (see run)
@@ -183,6 +171,30 @@ class MujocoRig:
         self.seed = seed
 
     # ------------------------------------------------------------------ set-up
+    def _compile(self, spec) -> tuple[float, float]:
+        """Compile ``spec``, make the data, bind the channels and find the stability limit, with
+        every foreign MuJoCo callback suspended (:func:`~vrig.rigs._callbacks.
+        foreign_callbacks_suspended`); returns the documented timestep [s] and fs x timestep."""
+        desc = self._desc
+        with foreign_callbacks_suspended(hydraulics.CONTROL, gas_spring.PASSIVE, gas_spring.SENSOR):
+            try:
+                self.model = spec.compile()
+            except ValueError as exc:
+                raise RigModelError(
+                    f"{desc.mjcf}: MuJoCo could not compile the model: {exc}"
+                ) from exc
+            self.data = mujoco.MjData(self.model)
+            documented = float(self.model.opt.timestep)
+            ratio = 1.0 / (desc.fs * documented)
+            if abs(ratio - round(ratio)) > 1e-6 or not 1 <= round(ratio) <= _MAX_DECIMATION:
+                raise RigModelError(
+                    f"{desc.name}: the physics rate {1 / documented:g} Hz must be an integer "
+                    f"multiple (1..{_MAX_DECIMATION}) of fs = {desc.fs:g} Hz"
+                )
+            self._bind()
+            self.stability_limit, self._stiffest = self._stability()
+        return documented, ratio
+
     def _severity(self, severity) -> float | None:
         """The checked severity: None for a linear rig, 1.0 when not given."""
         desc = self._desc
