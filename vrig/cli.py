@@ -510,7 +510,7 @@ def _cmd_reconstruct(args) -> int:
     _check_reconstruct_args(args)
     rig = _load_rig(args.rig, seed=args.seed)
     if args.gain is None:  # the rig's own default (side-car "reconstruction"), else the global one
-        args.gain = rig.description.reconstruction.get("gain", DEFAULT_GAIN)
+        args.gain = DEFAULT_GAIN if rig.defaults.gain is None else rig.defaults.gain
     band = _band(rig, args.band)
     method, method_text = _method(args, band)
     out = _out_dir(args.out, f"{Path(rig.name).stem}-{args.method}", args.overwrite)
