@@ -5,6 +5,8 @@ from __future__ import annotations
 import contextlib
 import io
 import json
+import os
+import subprocess
 import sys
 from pathlib import Path
 
@@ -402,6 +404,39 @@ def test_bench_run_bad_input(extra, message, capsys, tmp_path):
     assert not (tmp_path / "o").exists()
 
 
+def test_bench_without_a_source_checkout_says_so_in_one_line(monkeypatch, capsys, tmp_path):
+    """An installed wheel has no benchmarks/ next to the vrig package: one clear line and the
+    bad-input exit code 2 (the wheel is simulated by pointing the located folder elsewhere)."""
+    missing = tmp_path / "site-packages" / "benchmarks"
+    monkeypatch.setattr("vrig.cli._benchmarks_dir", lambda: missing)
+    assert main(["bench", "list"]) == 2
+    line = _one_line(capsys)
+    assert line.startswith("vrig bench: vrig bench needs a source checkout")
+    assert str(missing) in line and "pip install -e ." in line
+
+
+def test_bench_finds_the_runner_next_to_vrig_from_any_directory(tmp_path):
+    """vrig bench finds benchmarks/ from the installed vrig package, not from the current
+    directory: run from an empty folder with the checkout off sys.path (an editable install)."""
+    code = "\n".join(
+        [
+            "import importlib.util, sys",
+            "from pathlib import Path",
+            "import vrig.cli",
+            f"root = Path({str(ROOT)!r}).resolve()",
+            "sys.path[:] = [p for p in sys.path if Path(p or '.').resolve() != root]",
+            "assert importlib.util.find_spec('benchmarks') is None, 'benchmarks still importable'",
+            "sys.exit(vrig.cli.main(['bench', 'list']))",
+        ]
+    )
+    env = {**os.environ, "PYTHONPATH": str(ROOT), "OPENBLAS_NUM_THREADS": "1"}
+    run = subprocess.run(
+        [sys.executable, "-c", code], cwd=tmp_path, env=env, capture_output=True, text=True
+    )
+    assert run.returncode == 0, run.stderr
+    assert "methods:" in run.stdout and "arx" in run.stdout
+
+
 def _desired_files(tmp_path) -> dict:
     files = {"folder": tmp_path / "folder.csv", "not a zip": tmp_path / "damaged.npz"}
     files["folder"].mkdir()
@@ -534,14 +569,12 @@ def test_reconstruct_takes_the_rigs_side_car_gain_unless_told(tmp_path):
     progressive mount); the shock absorber names none (0.8); --gain wins over both."""
     side_car = json.loads(vrig.rig_path("elastomeric-damper").read_text())
     documented = side_car["reconstruction"]["gain"]
-    assert documented == 0.5 and vrig.load_rig("elastomeric-damper").description.reconstruction == {
-        "gain": documented
-    }
+    assert documented == 0.5 and vrig.load_rig("elastomeric-damper").defaults.gain == documented
     gain, text = _gain_run(tmp_path, "elastomeric-damper")
     assert gain == documented and f"gain {documented:g}," in text
     gain, _ = _gain_run(tmp_path / "explicit", "elastomeric-damper", "--gain", "0.7")
     assert gain == 0.7
-    assert "reconstruction" not in json.loads(vrig.rig_path("shock-absorber").read_text())
+    assert "gain" not in json.loads(vrig.rig_path("shock-absorber").read_text())["reconstruction"]
     gain, _ = _gain_run(tmp_path, "shock-absorber")
     assert gain == 0.8
 

@@ -23,7 +23,7 @@ Exit codes (every error is one line on stderr, ``vrig COMMAND: ...``, never a tr
 1      the rig or the iteration failed (interlock trip, unstable simulation or model; what was
        made is kept in the results folder)
 2      bad input: arguments, ``--desired`` files, rig descriptions, results folders that cannot
-       be written, plugins that do not load
+       be written, plugins that do not load, ``vrig bench`` without a source checkout
 3      an unexpected error (a bug: ``VRIG_DEBUG=1`` shows the traceback)
 130    interrupted (Ctrl-C)
 =====  ========================================================================================
@@ -510,7 +510,7 @@ def _cmd_reconstruct(args) -> int:
     _check_reconstruct_args(args)
     rig = _load_rig(args.rig, seed=args.seed)
     if args.gain is None:  # the rig's own default (side-car "reconstruction"), else the global one
-        args.gain = rig.description.reconstruction.get("gain", DEFAULT_GAIN)
+        args.gain = DEFAULT_GAIN if rig.defaults.gain is None else rig.defaults.gain
     band = _band(rig, args.band)
     method, method_text = _method(args, band)
     out = _out_dir(args.out, f"{Path(rig.name).stem}-{args.method}", args.overwrite)
@@ -724,18 +724,36 @@ _COMMANDS = {
 }
 
 
+def _benchmarks_dir() -> Path:
+    """``benchmarks/`` of the source checkout the running ``vrig`` package lives in (an editable
+    install or ``PYTHONPATH``); missing when ``vrig`` is an installed wheel."""
+    return Path(__file__).resolve().parents[1] / "benchmarks"
+
+
 def _cmd_bench(argv: list[str]) -> int:
-    """Forward to the benchmark runner, which lives in the source checkout's ``benchmarks/``."""
-    if (Path.cwd() / "benchmarks" / "runner").is_dir() and str(Path.cwd()) not in sys.path:
-        sys.path.insert(0, str(Path.cwd()))  # the console script does not put cwd on sys.path
+    """Forward to the benchmark runner, which lives in the source checkout's ``benchmarks/``
+    (found next to the ``vrig`` package, whatever the current directory)."""
+    bench = _benchmarks_dir()
+    if not (bench / "runner" / "cli.py").is_file():
+        raise _UsageError(
+            f"vrig bench needs a source checkout: there is no benchmark runner at {bench} (a "
+            "wheel ships none); clone the vrig repository (git clone ...), run `pip install -e .` "
+            "in it, and run `vrig bench ...` again"
+        )
+    root = str(bench.parent)
+    if root not in sys.path:  # the runner (and the workers it spawns) import `benchmarks`
+        sys.path.insert(0, root)
     try:
+        import benchmarks
+
+        if Path(benchmarks.__file__).resolve().parent != bench:
+            raise _UsageError(
+                f"another package named benchmarks ({benchmarks.__file__}) hides the benchmark "
+                f"runner at {bench}"
+            )
         from benchmarks.runner.cli import main as bench_main
     except ImportError as exc:
-        raise _UsageError(
-            f"the benchmark runner is not importable ({exc}). It lives in benchmarks/ of the "
-            "source checkout (not in the wheel): run `vrig bench ...` or `python -m benchmarks "
-            "...` from the repository root of a clone (git clone ...; pip install -e .)."
-        ) from None
+        raise _UsageError(f"the benchmark runner at {bench} is not importable ({exc})") from None
     return bench_main(argv, prog="vrig bench")
 
 

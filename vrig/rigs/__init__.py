@@ -16,7 +16,7 @@ from .file_rig import FileRig
 from .hydraulics import HydraulicActuator
 from .mujoco_rig import FAST_MARGIN, MujocoRig, _models_dir
 from .protocol import DescribedRig, Rig
-from .spec import ChannelSpec, read_description
+from .spec import ChannelSpec, RigDefaults, read_description
 from .subset import OutputSubset
 
 __all__ = [
@@ -30,6 +30,7 @@ __all__ = [
     "MujocoRig",
     "OutputSubset",
     "Rig",
+    "RigDefaults",
     "Transducer",
     "list_rigs",
     "load_rig",

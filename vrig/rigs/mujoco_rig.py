@@ -32,6 +32,7 @@ from .spec import (
     ChannelSpec,
     InputDef,
     OutputDef,
+    RigDefaults,
     RigDescription,
     check_drive_limits,
     check_outputs_for_rate,
@@ -480,6 +481,12 @@ class MujocoRig:
     @property
     def description(self) -> RigDescription:
         return self._desc
+
+    @property
+    def defaults(self) -> RigDefaults:
+        """The rig's own defaults from its side-car (band, gain, gym id, tolerance); the same
+        for every variant, severity and override."""
+        return self._desc.defaults
 
     def describe(self) -> str:
         """What the rig is, its channels, limits and parameters, as text."""

@@ -35,6 +35,10 @@ class OutputSubset:
         self.names = names
         self.outputs = tuple(rig.outputs[known.index(n)] for n in names)
 
+    defaults = None
+    """None: the wrapped rig's side-car defaults (band, tolerance) were set on all its responses,
+    so a subset gets the global ones (:func:`vrig.field.default_band`: the test band)."""
+
     def __getattr__(self, attr):  # inputs, fs, bandwidth, description, ... of the wrapped rig
         if attr == "rig":
             raise AttributeError(attr)
