@@ -44,7 +44,17 @@ def _check_split(split_hz, fs) -> tuple[float, float]:
 
 def split_filter(split_hz: float, fs: float, order: int = 4) -> np.ndarray:
     """Second-order sections of the split's Butterworth low-pass (``order`` poles, -3 dB at
-    ``split_hz`` for one pass; applied forward and backward, -6 dB and ``2 * order`` poles)."""
+    ``split_hz`` for one pass; applied forward and backward, -6 dB and ``2 * order`` poles).
+
+    Parameters
+    ----------
+    split_hz : float
+        Split (-3 dB per pass) frequency in Hz, in (0, fs/2).
+    fs : float
+        Sample rate in Hz.
+    order : int, optional
+        Poles of the low-pass (per pass).
+    """
     split_hz, fs = _check_split(split_hz, fs)
     if not isinstance(order, (int, np.integer)) or isinstance(order, bool) or order < 1:
         raise IdentificationError(f"filter order must be a positive integer, got {order!r}")
@@ -69,6 +79,17 @@ def band_split(x, split_hz: float, fs: float, *, order: int = 4) -> tuple[np.nda
     reproduces the whole record when each band model is exact, and a linear system split this
     way is the sum of its band responses. Two separately designed filters (a low-pass and a
     high-pass) would leave a notch or a bump at the crossover.
+
+    Parameters
+    ----------
+    x : array_like, shape (N, channels) or (N,)
+        Records sampled at ``fs``.
+    split_hz : float
+        Split frequency in Hz, in (0, fs/2).
+    fs : float
+        Sample rate in Hz.
+    order : int, optional
+        Poles of the Butterworth low-pass (per pass).
 
     Raises
     ------
