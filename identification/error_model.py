@@ -32,7 +32,8 @@ class ErrorSignalModel:
     linear : Arx, default ``Arx(order=3)``
         The (unfitted) linear model of the system.
     nonlinear : Narx, default ``Narx(order=2, degree=2)``
-        The (unfitted) model of the linear model's free-run error. Together the text's Table 6.5 pair (ARX(3) and a quadratic NARX(2) of the error).
+        The (unfitted) model of the linear model's free-run error. Together the text's
+        Table 6.5 pair (ARX(3) and a quadratic NARX(2) of the error).
     max_radius : float, optional
         Pole radius limit given to both parts at :meth:`fit` (see :class:`Narx`); None keeps
         the parts' own setting.
@@ -76,7 +77,7 @@ class ErrorSignalModel:
         y : array_like, shape (N, ny) or (N,)
             Identification output record, same N, in its physical units.
         input_names, output_names : sequence of str, optional
-            Channel names (default ``u0, u1, ...`` and ``y0, y1, ...``), kept in the model and its file.
+            Channel names (default ``u1, u2, ...``, ``y1, y2, ...``), kept in the model.
         """
         u = as_signal(u, "u")
         y = as_signal(y, "y")
@@ -185,7 +186,7 @@ class ErrorSignalModel:
         return y_lin + self.nonlinear.predict(u, as_signal(y, "y") - y_lin)
 
     def describe(self) -> str:
-        """Multi-line summary of the two fitted parts (their :meth:`Narx.describe` lines)."""
+        """Summary of the two fitted parts (their :meth:`Narx.describe` texts in brackets)."""
         self._check_fitted()
         return (
             f"ErrorSignalModel: linear [{self.linear.describe()}]; "

@@ -468,7 +468,7 @@ class Narx:
         y : array_like, shape (N, ny) or (N,)
             Identification output record, same N, in its physical units.
         input_names, output_names : sequence of str, optional
-            Channel names (default ``u0, u1, ...`` and ``y0, y1, ...``), kept in the model and its file.
+            Channel names (default ``u1, u2, ...``, ``y1, y2, ...``), kept in the model.
         """
         t0 = time.perf_counter()
         u, y = self._fit_least_squares(u, y, input_names, output_names)

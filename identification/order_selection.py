@@ -46,7 +46,7 @@ class OrderScan:
         Parameters
         ----------
         output_names : sequence of str, optional
-            Column headings, one per output channel (default ``y0, y1, ...``).
+            Column headings, one per output channel (default ``y1, y2, ...``).
         """
         ny = self.errors.shape[1]
         names = output_names or [f"y{k + 1}" for k in range(ny)]

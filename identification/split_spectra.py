@@ -230,7 +230,7 @@ class SplitSpectraModel:
         y : array_like, shape (N, ny) or (N,)
             Identification output record, same N, in its physical units.
         input_names, output_names : sequence of str, optional
-            Channel names (default ``u0, u1, ...`` and ``y0, y1, ...``), kept in the model and its file.
+            Channel names (default ``u1, u2, ...``, ``y1, y2, ...``), kept in the model.
         """
         u = as_signal(u, "u")
         y = as_signal(y, "y")
@@ -329,7 +329,8 @@ class SplitSpectraModel:
         return self._up(p_lo, n) + self.high_.predict(u_hi, y_hi)
 
     def describe(self) -> str:
-        """One-line summary: split frequency (Hz), filter order, and each band model's rate and summary."""
+        """One-line summary: split frequency (Hz), filter order, each band model's rate and
+        summary."""
         self._check_fitted()
         rate = self.fs / self.factor_
         return (

@@ -385,7 +385,7 @@ class CorrelationTests:
         Parameters
         ----------
         input_names, output_names : sequence of str, optional
-            Channel names for the rows (default ``u0, u1, ...`` and ``y0, y1, ...``).
+            Channel names for the rows (default ``u1, u2, ...`` and ``e1, e2, ...``).
         """
         ny, nu = self.phi_ue.shape[:2]
         unames = input_names or [f"u{i + 1}" for i in range(nu)]
