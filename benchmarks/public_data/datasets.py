@@ -472,4 +472,3 @@ DATASETS: dict[str, DataSet] = {
     "f16": F16,
     "mr": MR_DAMPER,
 }
-BENCHES = DATASETS  # the former name
