@@ -35,6 +35,7 @@ import gymnasium as gym
 import numpy as np
 
 import vrig  # noqa: F401  (registers the environments)
+from vrig.envs import ENV_IDS
 from vrig.policies import (
     AdaptiveBandGain,
     BandRatioPolicy,
@@ -44,10 +45,9 @@ from vrig.policies import (
     run_episode,
 )
 
-RIGS = {
-    "shock-absorber": "vrig/ShockAbsorber-v0",
-    "elastomeric-damper": "vrig/ElastomericDamper-v0",
-}
+_RIG_IDS = {kwargs["rig"]: env_id for env_id, kwargs in ENV_IDS.items() if "rig" in kwargs}
+RIGS = {rig: _RIG_IDS[rig] for rig in ("shock-absorber", "elastomeric-damper")}
+"""Rig -> its gymnasium id (the side-car's, as registered: :data:`vrig.envs.ENV_IDS`)."""
 HELD_OUT_BASE = 100_001
 BUDGET = 10
 

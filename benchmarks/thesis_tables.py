@@ -543,11 +543,14 @@ def _refocus(model):
     """The same model with every least-squares part switched to ``focus="simulation"``."""
     import copy
 
-    from identification import Narx
+    from identification import ErrorSignalModel, Narx, SplitSpectraModel
 
     model = copy.deepcopy(model)
-    parts = [model] + [getattr(model, a) for a in ("linear", "nonlinear", "low", "high")
-                       if hasattr(model, a)]  # fmt: skip
+    parts = [model]
+    if isinstance(model, ErrorSignalModel):
+        parts += [model.linear, model.nonlinear]
+    elif isinstance(model, SplitSpectraModel):
+        parts += [model.low, model.high]
     for m in parts:
         if isinstance(m, Narx):
             m.focus = "simulation"

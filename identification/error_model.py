@@ -30,14 +30,16 @@ class ErrorSignalModel:
     Parameters
     ----------
     linear : Arx, default ``Arx(order=3)``
+        The (unfitted) linear model of the system.
     nonlinear : Narx, default ``Narx(order=2, degree=2)``
-        The text's Table 6.5 pair (ARX(3) and a quadratic NARX(2) of the error).
+        The (unfitted) model of the linear model's free-run error. Together the text's
+        Table 6.5 pair (ARX(3) and a quadratic NARX(2) of the error).
     max_radius : float, optional
         Pole radius limit given to both parts at :meth:`fit` (see :class:`Narx`); None keeps
         the parts' own setting.
 
-    Attributes (after fit)
-    ----------------------
+    Attributes
+    ----------
     max_lag_ : int, the larger of the two parts' largest lags
     n_terms_ : ndarray, terms per output channel (both parts)
     contraction_ : float, the stronger (smaller) of the two parts' pole contractions (1: none)
@@ -66,7 +68,17 @@ class ErrorSignalModel:
 
     def fit(self, u, y, *, input_names=None, output_names=None):
         """Fit the linear model to ``(u, y)``, then the non-linear one to ``(u, y - y_lin)``
-        (``y_lin``: the linear model's free run from a zero past); returns self."""
+        (``y_lin``: the linear model's free run from a zero past); returns self.
+
+        Parameters
+        ----------
+        u : array_like, shape (N, nu) or (N,)
+            Identification input record, in its physical units (time on axis 0).
+        y : array_like, shape (N, ny) or (N,)
+            Identification output record, same N, in its physical units.
+        input_names, output_names : sequence of str, optional
+            Channel names (default ``u1, u2, ...``, ``y1, y2, ...``), kept in the model.
+        """
         u = as_signal(u, "u")
         y = as_signal(y, "y")
         check_same_length(u, y, "u", "y")
@@ -123,6 +135,16 @@ class ErrorSignalModel:
         ``bound`` (per output channel): limits each part's free run and their sum; default
         each part's own ``bound_``, and the linear part's for the sum.
 
+        Parameters
+        ----------
+        u : array_like, shape (N, nu) or (N,)
+            Input record.
+        y0 : array_like, shape (max_lag_, ny), optional
+            Measured initial outputs (see above); default a zero past.
+        bound : float or array_like of shape (ny,), optional
+            Free-run magnitude bound per output channel, in the output's units, handed to both parts
+            (default each part's own ``bound_``).
+
         Raises
         ------
         SimulationDivergedError
@@ -150,12 +172,21 @@ class ErrorSignalModel:
         return out
 
     def predict(self, u, y) -> np.ndarray:
-        """Linear free run plus one-step-ahead prediction of its error from the measured error."""
+        """Linear free run plus one-step-ahead prediction of its error from the measured error.
+
+        Parameters
+        ----------
+        u : array_like, shape (N, nu) or (N,)
+            Measured input record.
+        y : array_like, shape (N, ny) or (N,)
+            Measured output record, same N (its past values are the regressors).
+        """
         self._check_fitted()
         y_lin = self.linear.simulate(u)
         return y_lin + self.nonlinear.predict(u, as_signal(y, "y") - y_lin)
 
     def describe(self) -> str:
+        """Summary of the two fitted parts (their :meth:`Narx.describe` texts in brackets)."""
         self._check_fitted()
         return (
             f"ErrorSignalModel: linear [{self.linear.describe()}]; "
@@ -165,7 +196,13 @@ class ErrorSignalModel:
     # ------------------------------------------------------------------ persistence
     def save(self, path):
         """Save the fitted model to one ``.npz`` model file (atomic; exact round trip: the
-        loaded model simulates bit for bit the same); returns the path."""
+        loaded model simulates bit for bit the same); returns the path.
+
+        Parameters
+        ----------
+        path : str or os.PathLike
+            Target file; ``.npz`` is appended when the name has another suffix or none.
+        """
         self._check_fitted()
         return save_composite(
             path,
@@ -177,7 +214,13 @@ class ErrorSignalModel:
     @classmethod
     def load(cls, path):
         """Load a model written by :meth:`save` (checked like :meth:`Narx.load
-        <identification.Narx.load>`; raises :class:`~identification.ModelFileError`)."""
+        <identification.Narx.load>`; raises :class:`~identification.ModelFileError`).
+
+        Parameters
+        ----------
+        path : str or os.PathLike
+            A file written by :meth:`save` (``.npz`` appended when missing).
+        """
         params, parts = load_composite(path, "ErrorSignalModel", ("linear", "nonlinear"))
         lin, nl = parts["linear"], parts["nonlinear"]
         try:

@@ -284,8 +284,8 @@ class Narx:
         high-passed response to a displacement drive puts poles at ``z ~ 1`` that estimation
         noise pushes outside the unit circle; 0.995 turns them into leaky integrators.
 
-    Attributes (after fit)
-    ----------------------
+    Attributes
+    ----------
     channels_ : tuple of ChannelStructure
     coef_ : tuple of ndarray, one coefficient vector per output channel
     n_terms_ : ndarray of int, terms per output channel
@@ -460,6 +460,15 @@ class Narx:
         regression and then re-estimated with ``solver``. With ``focus="simulation"`` the
         coefficients are then refined on the free-run error. Either way the stability contract
         (see ``stability_margin``) is enforced before the model is returned.
+
+        Parameters
+        ----------
+        u : array_like, shape (N, nu) or (N,)
+            Identification input record, in its physical units (time on axis 0).
+        y : array_like, shape (N, ny) or (N,)
+            Identification output record, same N, in its physical units.
+        input_names, output_names : sequence of str, optional
+            Channel names (default ``u1, u2, ...``, ``y1, y2, ...``), kept in the model.
         """
         t0 = time.perf_counter()
         u, y = self._fit_least_squares(u, y, input_names, output_names)
@@ -745,6 +754,11 @@ class Narx:
         the LPC "bandwidth expansion". It is how an inverse model with near-integrator poles
         (an acceleration response inverted to a displacement drive) is kept bounded: a pole at
         ``z = 1.002`` becomes a leaky integrator whose corner lies below the identification band.
+
+        Parameters
+        ----------
+        max_radius : float, optional
+            Largest pole radius allowed, in (0, 1]; default 0.995.
         """
         if not 0 < max_radius <= 1:
             raise IdentificationError(f"max_radius must lie in (0, 1], got {max_radius!r}")
@@ -807,6 +821,13 @@ class Narx:
         """One-step-ahead prediction from measured inputs and outputs, shape (N, ny).
 
         The first ``max_lag_`` samples cannot be predicted and are copies of ``y``.
+
+        Parameters
+        ----------
+        u : array_like, shape (N, nu) or (N,)
+            Measured input record.
+        y : array_like, shape (N, ny) or (N,)
+            Measured output record, same N (its past values are the regressors).
 
         Raises
         ------
@@ -915,6 +936,11 @@ class Narx:
 
         The file is replaced atomically (temporary ``.NAME.tmp-XXXXXXXX`` in the same folder,
         ``fsync``, rename): a kill during the save leaves the previous file or the new one.
+
+        Parameters
+        ----------
+        path : str or os.PathLike
+            Target file; ``.npz`` is appended when the name has another suffix or none.
         """
         self._check_fitted()
         path = npz_path(path)
@@ -961,6 +987,11 @@ class Narx:
         counts and names) and every channel's structure against it (regressor sources and lags
         in range, term indices, coefficient count, finite coefficients, positive bounds).
 
+        Parameters
+        ----------
+        path : str or os.PathLike
+            A file written by :meth:`save` (``.npz`` appended when missing).
+
         Raises
         ------
         FileNotFoundError
@@ -988,7 +1019,13 @@ MAX_MODEL_FILE_BYTES = 2**30
 
 
 def npz_path(path) -> Path:
-    """``path`` with the ``.npz`` suffix model files carry (added when missing)."""
+    """``path`` with the ``.npz`` suffix model files carry (added when missing).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        A model file name.
+    """
     path = Path(path)
     if path.suffix != ".npz":
         path = path.with_suffix(path.suffix + ".npz") if path.suffix else path.with_suffix(".npz")
@@ -997,7 +1034,15 @@ def npz_path(path) -> Path:
 
 def model_from_arrays(arrays: dict, path: Path):
     """The Narx/Arx stored in ``arrays`` (a model file's, or one part of a composite model
-    file's), checked (see :meth:`Narx.load`); raises :class:`ModelFileError` naming ``path``."""
+    file's), checked (see :meth:`Narx.load`); raises :class:`ModelFileError` naming ``path``.
+
+    Parameters
+    ----------
+    arrays : dict of str to ndarray
+        The arrays of a model file (or of one part of a composite model file).
+    path : Path
+        The file they were read from, named in the error when they are not a valid model.
+    """
     meta = _model_meta(arrays, path)
     target = {"Narx": Narx, "Arx": Arx}[meta["class"]]
     params = dict(meta["params"])
@@ -1127,6 +1172,49 @@ class Arx(Narx):
     """Linear ARX model (eq. 4-8 / 4-13), full-order MIMO structure: ``Narx(degree=1)``.
 
     Adds :meth:`to_statespace`, the MIMO discrete state-space form of eq. 4-14.
+
+    Parameters
+    ----------
+    order : int or sequence of int, optional
+        Full-order model order n_k per output channel (na = n_k, nb = n_k + 1, nk = 0), as for
+        :class:`Narx`. Give either ``order`` or ``na``/``nb``/``nk``.
+    na, nb, nk : int, sequence or 2-D table, optional
+        Explicit ARX orders instead of ``order`` (output lags 1..na, input lags nk..nk + nb - 1,
+        in samples), as for :class:`Narx`.
+    constant : bool
+        Include a constant term.
+    solver : str or callable
+        Least-squares solver (a name in :data:`~identification.solvers.SOLVERS` or a function).
+    rcond : float, optional
+        Relative singular-value threshold for rank decisions (default ``max(N, M) * eps``).
+    n_terms : int, optional
+        Select at most this many terms per channel (by ``selection``).
+    err_tol : float, optional
+        With FROLS, stop when the unexplained output fraction drops below this.
+    bound_factor : float
+        Free-run divergence bound: ``bound_factor * max|y|`` of the identification output.
+    focus : {"prediction", "simulation"}
+        Minimise the one-step error (least squares) or the free-run error (output-error
+        refinement), as for :class:`Narx`.
+    horizon : int, optional
+        With ``focus="simulation"``: a truncated horizon in samples (default the whole record).
+    max_iter : int
+        With ``focus="simulation"``: Levenberg-Marquardt iterations per horizon stage.
+    holdout : float
+        With ``focus="simulation"``: fraction of the record (its end) held out for early stopping.
+    stability_margin : float
+        The free run is checked on the identification input and on this multiple of it.
+    max_radius : float, optional
+        Contract the fitted poles inside this radius (:meth:`Narx.stabilise`); None: untouched.
+    selection : {"frols", "simulation"}
+        How terms are chosen: one-step error reduction ratio or free-run error (SEMP).
+    criterion : {"aic", "aicc", "bic", "fpe", "press"}, optional
+        Choose the number of terms along the selection path by this criterion.
+    functions : None
+        Must be None or empty: ARX takes no regressor functions (use ``Narx(degree=1,
+        functions=...)``); anything else raises :class:`IdentificationError`.
+    function_sources : str
+        Accepted for the same signature as :class:`Narx` and ignored (no functions).
     """
 
     def __init__(
@@ -1187,6 +1275,11 @@ class Arx(Narx):
         State ``x(t) = [y(t-1); ...; y(t-p); u(t-1); ...; u(t-p)]`` with p the largest lag
         (a non-minimal but exact realisation): ``x(t+1) = A x(t) + B u(t)``,
         ``y(t) = C x(t) + D u(t)``. Simulating it from ``x = 0`` equals :meth:`simulate`.
+
+        Parameters
+        ----------
+        dt : float, optional
+            Sample time of the state-space model in s (> 0; default 1.0, i.e. time in samples).
         """
         import control
 

@@ -34,11 +34,6 @@ class ForwardSelection:
     selected: np.ndarray
     err: np.ndarray
 
-    @property
-    def explained(self) -> float:
-        """Total fraction of the output energy explained, ``sum(err)``."""
-        return float(self.err.sum())
-
 
 @nb.njit(cache=True, nogil=True)
 def _frols(W, y, n_max, err_tol):  # pragma: no cover - compiled

@@ -37,7 +37,21 @@ _BLOCK_BYTES = 2 * 2**20
 
 @dataclass(frozen=True, eq=False)
 class InputPart:
-    """Input-only factors of a group of channels that share input regressors and monomials."""
+    """Input-only factors of a group of channels that share input regressors and monomials.
+
+    Parameters
+    ----------
+    reg_src, reg_lag, reg_fun, reg_bp : ndarray (Ru,)
+        The group's input regressors: input index, lag in samples, function code (0: identity)
+        and breakpoint (in the input's units).
+    parent, factor : ndarray of int
+        Input-monomial program: monomial m is monomial ``parent[m]`` times regressor
+        ``factor[m]`` (monomial 0 is the constant 1).
+    e_mono, e_col, e_coef : ndarray
+        Entries of the coefficient matrix W: input monomial, column of A and coefficient.
+    columns : ndarray of int
+        The columns of A (output monomials, all channels) this part fills.
+    """
 
     reg_src: np.ndarray  # (Ru,) input index of each input regressor
     reg_lag: np.ndarray  # (Ru,) its lag
@@ -53,7 +67,23 @@ class InputPart:
 
 @dataclass(frozen=True, eq=False)
 class SimulationPlan:
-    """Flat arrays consumed by the compiled free-run kernels (see :func:`compile_plan`)."""
+    """Flat arrays consumed by the compiled free-run kernels (see :func:`compile_plan`).
+
+    Parameters
+    ----------
+    ny, nu : int
+        Numbers of output and input channels.
+    max_lag : int
+        Largest lag of any regressor, in samples.
+    reg_src, reg_lag, reg_fun, reg_bp, reg_ptr : ndarray
+        Fed-back output regressors of every channel, concatenated (output index, lag in samples,
+        function code, breakpoint); channel k's are ``reg_ptr[k]:reg_ptr[k + 1]``.
+    parent, factor, mono_ptr : ndarray of int
+        Output-monomial programs: monomial m is monomial ``parent[m]`` times regressor
+        ``factor[m]``; channel k's monomials are ``mono_ptr[k]:mono_ptr[k + 1]``.
+    input_parts : tuple of InputPart
+        The input-only coefficient polynomials, one part per group of channels sharing them.
+    """
 
     ny: int
     nu: int
@@ -70,6 +100,7 @@ class SimulationPlan:
 
     @property
     def n_output_monomials(self) -> int:
+        """Number of output monomials over all channels."""
         return int(self.mono_ptr[-1])
 
 
@@ -134,7 +165,17 @@ def _input_part(group: dict) -> InputPart:
 
 
 def compile_plan(channels: tuple[ChannelStructure, ...], coefs, ny: int, nu: int) -> SimulationPlan:
-    """Rewrite all output channels for :func:`simulate_plan` (see the module docstring)."""
+    """Rewrite all output channels for :func:`simulate_plan` (see the module docstring).
+
+    Parameters
+    ----------
+    channels : tuple of ChannelStructure
+        The structure of each output channel.
+    coefs : sequence of ndarray
+        The coefficient vector of each channel (one per term).
+    ny, nu : int
+        Numbers of output and input channels.
+    """
     yregs_all, reg_ptr = [], [0]
     par, fac, mono_ptr = [], [], [0]
     groups: list[dict] = []
@@ -183,6 +224,19 @@ def simulate_plan(
     With ``y0 = None`` the past before the first sample is zero (inputs and outputs) and every
     sample is simulated; otherwise the first ``max_lag`` outputs are ``y0`` and simulation starts
     at sample ``max_lag`` using the given inputs.
+
+    Parameters
+    ----------
+    plan : SimulationPlan
+        The compiled model.
+    u : ndarray (N, nu)
+        Validated input record.
+    y0 : ndarray (max_lag, ny) or None
+        Measured initial outputs, or None for a zero past.
+    bound : ndarray (ny,)
+        Free-run magnitude bound per output channel, in the output's units.
+    output_names : sequence of str
+        Output channel names, for the divergence error message.
 
     Raises
     ------

@@ -5,6 +5,8 @@ from __future__ import annotations
 import contextlib
 import io
 import json
+import os
+import subprocess
 import sys
 from pathlib import Path
 
@@ -392,14 +394,47 @@ def test_a_plugin_that_raises_is_bad_input(command, capsys, tmp_path):
         (["--out", "AFILE"], "is a file, not a folder"),
     ],
 )
-def test_bench_run_bad_input(extra, message, capsys, tmp_path):
+def test_bench_run_bad_input(extra, message, capfd, tmp_path):
     (tmp_path / "afile").write_text("x")
     extra = [str(tmp_path / "afile") if e == "AFILE" else e for e in extra]
     out = [] if "--out" in extra else ["--out", str(tmp_path / "o")]
     argv = ["bench", "run", "--rigs", "shock-absorber", "--methods", "arx", *out, *extra]
     assert main(argv) == 2
-    assert message in _one_line(capsys)
+    assert message in _one_line(capfd)  # the runner runs in a child interpreter
     assert not (tmp_path / "o").exists()
+
+
+def test_bench_without_a_source_checkout_says_so_in_one_line(monkeypatch, capsys, tmp_path):
+    """An installed wheel has no benchmarks/ next to the vrig package: one clear line and the
+    bad-input exit code 2 (the wheel is simulated by pointing the located folder elsewhere)."""
+    missing = tmp_path / "site-packages" / "benchmarks"
+    monkeypatch.setattr("vrig.cli._benchmarks_dir", lambda: missing)
+    assert main(["bench", "list"]) == 2
+    line = _one_line(capsys)
+    assert line.startswith("vrig bench: vrig bench needs a source checkout")
+    assert str(missing) in line and "pip install -e ." in line
+
+
+def test_bench_finds_the_runner_next_to_vrig_from_any_directory(tmp_path):
+    """vrig bench finds benchmarks/ from the installed vrig package, not from the current
+    directory: run from an empty folder with the checkout off sys.path (an editable install)."""
+    code = "\n".join(
+        [
+            "import importlib.util, sys",
+            "from pathlib import Path",
+            "import vrig.cli",
+            f"root = Path({str(ROOT)!r}).resolve()",
+            "sys.path[:] = [p for p in sys.path if Path(p or '.').resolve() != root]",
+            "assert importlib.util.find_spec('benchmarks') is None, 'benchmarks still importable'",
+            "sys.exit(vrig.cli.main(['bench', 'list']))",
+        ]
+    )
+    env = {**os.environ, "PYTHONPATH": str(ROOT), "OPENBLAS_NUM_THREADS": "1"}
+    run = subprocess.run(
+        [sys.executable, "-c", code], cwd=tmp_path, env=env, capture_output=True, text=True
+    )
+    assert run.returncode == 0, run.stderr
+    assert "methods:" in run.stdout and "arx" in run.stdout
 
 
 def _desired_files(tmp_path) -> dict:
@@ -475,7 +510,6 @@ def test_a_reconstruction_that_cannot_play_it00_keeps_the_identification(
         ("vrig.rigs.read_description", ["describe", "shock-absorber"]),
         ("vrig.reconstruction.reconstruct", ["reconstruct", "--rig", "shock-absorber"]),
         ("vrig.demo.run_demo", ["demo"]),
-        ("benchmarks.runner.cli.cmd_list", ["bench", "list"]),
     ],
 )
 def test_ctrl_c_anywhere_exits_130_with_one_line(target, argv, capsys, monkeypatch, tmp_path):
@@ -483,8 +517,6 @@ def test_ctrl_c_anywhere_exits_130_with_one_line(target, argv, capsys, monkeypat
         raise KeyboardInterrupt
 
     monkeypatch.chdir(tmp_path)
-    if target.startswith("benchmarks"):
-        import benchmarks.runner.cli  # noqa: F401
     if target == "vrig.reconstruction.reconstruct":
         argv = [*argv, "--seconds", "2", "--out", str(tmp_path / "o")]
         monkeypatch.setattr("vrig.cli.pseudo_field", lambda rig, band, s, seed: _tiny(rig))
@@ -495,6 +527,31 @@ def test_ctrl_c_anywhere_exits_130_with_one_line(target, argv, capsys, monkeypat
         pytest.fail("KeyboardInterrupt escaped main()")
     assert code == 130
     assert _one_line(capsys).endswith(": interrupted")
+
+
+def test_ctrl_c_during_vrig_bench_exits_130_with_one_line(tmp_path):
+    """vrig bench runs the runner in a child interpreter (vrig never imports the benchmarks):
+    Ctrl-C (SIGINT to the whole process group, as a terminal sends it) gives one line and 130."""
+    import signal
+    import time
+
+    code = "import sys, vrig.cli; sys.exit(vrig.cli.main(sys.argv[1:]))"
+    argv = ["bench", "run", "--rigs", "shock-absorber", "--methods", "arx", "--quick",
+            "--no-plots", "--no-thesis", "--workers", "1", "--out", str(tmp_path / "o")]  # fmt: skip
+    env = {**os.environ, "PYTHONPATH": str(ROOT), "OPENBLAS_NUM_THREADS": "1"}
+    proc = subprocess.Popen(
+        [sys.executable, "-c", code, *argv], cwd=tmp_path, env=env, text=True,
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, start_new_session=True,
+    )  # fmt: skip
+    first = proc.stdout.readline()  # the runner's first line: it is running
+    assert "benchmark" in first, first
+    time.sleep(0.5)
+    os.killpg(proc.pid, signal.SIGINT)
+    _out, err = proc.communicate(timeout=120)
+    assert proc.returncode == 130, err
+    lines = [line for line in err.splitlines() if line.strip()]
+    # one line, the runner's (it says where the finished records are kept), none from vrig
+    assert len(lines) == 1 and "interrupted" in lines[0], err
 
 
 def _tiny(rig):
@@ -534,14 +591,12 @@ def test_reconstruct_takes_the_rigs_side_car_gain_unless_told(tmp_path):
     progressive mount); the shock absorber names none (0.8); --gain wins over both."""
     side_car = json.loads(vrig.rig_path("elastomeric-damper").read_text())
     documented = side_car["reconstruction"]["gain"]
-    assert documented == 0.5 and vrig.load_rig("elastomeric-damper").description.reconstruction == {
-        "gain": documented
-    }
+    assert documented == 0.5 and vrig.load_rig("elastomeric-damper").defaults.gain == documented
     gain, text = _gain_run(tmp_path, "elastomeric-damper")
     assert gain == documented and f"gain {documented:g}," in text
     gain, _ = _gain_run(tmp_path / "explicit", "elastomeric-damper", "--gain", "0.7")
     assert gain == 0.7
-    assert "reconstruction" not in json.loads(vrig.rig_path("shock-absorber").read_text())
+    assert "gain" not in json.loads(vrig.rig_path("shock-absorber").read_text())["reconstruction"]
     gain, _ = _gain_run(tmp_path, "shock-absorber")
     assert gain == 0.8
 

@@ -62,12 +62,11 @@ def test_environments_are_registered_on_import_vrig():
         assert spec.entry_point == "vrig.envs.drive_iteration:DriveIterationEnv"
     assert gym.spec("vrig/ElastomericDamper-v0").kwargs["rig"] == "elastomeric-damper"
     assert gym.spec("vrig/LightTruckFront-v0").kwargs["rig"] == "light-truck-front"
-    # every per-rig id has a measured tolerance (DEFAULT_TOLERANCE), not the 2 % fallback
-    from vrig.envs import DEFAULT_TOLERANCE
-
+    # every per-rig id has a measured tolerance (its side-car's), not the 2 % fallback
     for env_id, kwargs in ENV_IDS.items():
         if "rig" in kwargs:
-            assert kwargs["rig"] in DEFAULT_TOLERANCE, env_id
+            defaults = vrig.load_rig(kwargs["rig"]).defaults
+            assert defaults.gym_id == env_id and defaults.tolerance is not None, env_id
     assert vrig.envs.DriveIterationEnv is not None
 
 
@@ -313,7 +312,7 @@ def test_a_drawn_target_whose_it00_trips_is_redrawn_an_explicit_one_raises(monke
     "env_id,seed", [("vrig/LightTruckFront-v0", 0), ("vrig/ShockAbsorber-v0", 1)]
 )
 def test_the_default_tolerance_is_reached_at_gain_08_but_not_at_it00(env_id, seed):
-    """The rule of DEFAULT_TOLERANCE on the default (full-fidelity, 20 s) env: the slowest of the
+    """The tolerance rule (vrig.envs) on the default (full-fidelity, 20 s) env: the slowest of the
     measured targets (reset seeds 0-2) meets the tolerance within the 10-step budget at the
     fixed gain 0.8, and not at IT00 (it takes several iterations)."""
     e = gym.make(env_id)

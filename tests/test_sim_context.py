@@ -203,3 +203,36 @@ def test_the_context_layout_is_named():
     g = s.record(2, 7)
     assert (g["tendon"], g["sensor"]) == (2, 7)
     assert g["p0"] == 3e5 + s.ambient_pressure and g["area_slope"] == -0.05
+
+
+def test_a_rig_loads_with_a_users_callbacks_installed_and_leaves_them_uncalled_and_intact():
+    """MuJoCo's compiler runs a model once with whatever callbacks are installed: a user's Python
+    ``mjcb_control`` made ``load_rig`` fail ("Python exception raised") and a C callback ran on the
+    rig's model. Loading suspends them; they are in place afterwards and fire for the user."""
+    m = mujoco.MjModel.from_xml_string(USER_XML)
+    d = mujoco.MjData(m)
+    seen = {"python": 0, "c_foreign": 0, "c_mine": 0}
+    mine = d._address
+
+    def user(model, data):
+        seen["python"] += 1
+
+    def c_passive(model_ptr, data_ptr):
+        seen["c_mine" if data_ptr == mine else "c_foreign"] += 1
+
+    passive = GENERIC(c_passive)
+    mujoco.set_mjcb_control(user)
+    mujoco.set_mjcb_passive(passive)
+    rig = vrig.load_rig("pneumatic-trailer", seed=0)  # hydraulics and a gas spring
+    assert seen == {"python": 0, "c_foreign": 0, "c_mine": 0}
+    assert mujoco.get_mjcb_control() is user and mujoco.get_mjcb_passive() is passive
+    x = drive(rig, 0.25, 7)
+    mujoco.set_mjcb_control(None)
+    mujoco.set_mjcb_passive(None)
+    ref = alone("pneumatic-trailer", [x])[0]  # the rig loaded and run without user callbacks
+    mujoco.set_mjcb_control(user)
+    mujoco.set_mjcb_passive(passive)
+    assert np.array_equal(rig.run(x, seed=1, chunk_seconds=0.25).data, ref)
+    assert seen["c_foreign"] == 0 and seen["python"] == 0
+    mujoco.mj_step(m, d, 3)
+    assert seen == {"python": 3, "c_foreign": 0, "c_mine": 3}

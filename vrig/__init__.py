@@ -17,11 +17,13 @@ from .errors import (
 )
 from .field import pseudo_field
 from .linearity import LinearityResult, check_linearity, check_rig_linearity
-from .reconstruction import ReconstructionResult, reconstruct
+from .reconstruction import IterationSettings, ReconstructionResult, reconstruct
 from .rigs import ChannelSpec, FileRig, MujocoRig, list_rigs, load_rig, rig_path, severity_rigs
 from .testfolder import TestFolder
 from .timehistory import TimeHistory
 
+# the one place the version is written: pyproject.toml reads it ([tool.setuptools.dynamic]),
+# `vrig --version` prints it, importlib.metadata.version("vrig") gives it for an installed package
 __version__ = "0.1.0"
 
 __all__ = [
@@ -29,6 +31,7 @@ __all__ = [
     "ChannelSpec",
     "FileFormatError",
     "FileRig",
+    "IterationSettings",
     "LinearityResult",
     "MujocoRig",
     "ReconstructionError",

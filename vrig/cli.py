@@ -23,7 +23,7 @@ Exit codes (every error is one line on stderr, ``vrig COMMAND: ...``, never a tr
 1      the rig or the iteration failed (interlock trip, unstable simulation or model; what was
        made is kept in the results folder)
 2      bad input: arguments, ``--desired`` files, rig descriptions, results folders that cannot
-       be written, plugins that do not load
+       be written, plugins that do not load, ``vrig bench`` without a source checkout
 3      an unexpected error (a bug: ``VRIG_DEBUG=1`` shows the traceback)
 130    interrupted (Ctrl-C)
 =====  ========================================================================================
@@ -34,8 +34,11 @@ from __future__ import annotations
 import argparse
 import contextlib
 import os
+import signal
+import subprocess
 import sys
 import tempfile
+import threading
 import time
 from pathlib import Path
 
@@ -89,6 +92,9 @@ def _parser() -> argparse.ArgumentParser:
         "identification and dynamic response reconstruction",
         epilog=_EXIT_CODES,
     )
+    from . import __version__  # the package's one version (pyproject reads it from there)
+
+    p.add_argument("--version", action="version", version=f"%(prog)s {__version__}")
     sub = p.add_subparsers(dest="command", required=True)
     _add_demo_parser(sub)
     _add_rig_info_parsers(sub)
@@ -504,13 +510,13 @@ def _check_reconstruct_args(args) -> None:
 
 
 def _cmd_reconstruct(args) -> int:
-    from .reconstruction import reconstruct
+    from .reconstruction import IterationSettings, reconstruct
 
     t_start = time.perf_counter()
     _check_reconstruct_args(args)
     rig = _load_rig(args.rig, seed=args.seed)
     if args.gain is None:  # the rig's own default (side-car "reconstruction"), else the global one
-        args.gain = rig.description.reconstruction.get("gain", DEFAULT_GAIN)
+        args.gain = DEFAULT_GAIN if rig.defaults.gain is None else rig.defaults.gain
     band = _band(rig, args.band)
     method, method_text = _method(args, band)
     out = _out_dir(args.out, f"{Path(rig.name).stem}-{args.method}", args.overwrite)
@@ -537,16 +543,15 @@ def _cmd_reconstruct(args) -> int:
     from .errors import ReconstructionError
 
     try:
-        result = reconstruct(
-            rig,
-            field,
+        iteration = IterationSettings(
             method=method,
             iterations=args.iterations,
             gain=args.gain,
             bandwidth=band,
-            seed=args.seed,
-            progress=True,
+            id_seed=args.seed,
+            run_seed=args.seed,
         )
+        result = reconstruct(rig, field, iteration, progress=True)
     except ValueError as exc:  # e.g. a desired record too short for the model
         raise _Failure(str(exc)) from exc
     except ReconstructionError as exc:  # nothing played: keep what was made, say what to change
@@ -725,19 +730,46 @@ _COMMANDS = {
 }
 
 
+def _benchmarks_dir() -> Path:
+    """``benchmarks/`` of the source checkout the running ``vrig`` package lives in (an editable
+    install or ``PYTHONPATH``); missing when ``vrig`` is an installed wheel."""
+    return Path(__file__).resolve().parents[1] / "benchmarks"
+
+
 def _cmd_bench(argv: list[str]) -> int:
-    """Forward to the benchmark runner, which lives in the source checkout's ``benchmarks/``."""
-    if (Path.cwd() / "benchmarks" / "runner").is_dir() and str(Path.cwd()) not in sys.path:
-        sys.path.insert(0, str(Path.cwd()))  # the console script does not put cwd on sys.path
-    try:
-        from benchmarks.runner.cli import main as bench_main
-    except ImportError as exc:
+    """Forward to the benchmark runner, which lives in the source checkout's ``benchmarks/``
+    (found next to the ``vrig`` package, whatever the current directory), run in a child
+    interpreter; returns its exit code."""
+    bench = _benchmarks_dir()
+    if not (bench / "runner" / "cli.py").is_file():
         raise _UsageError(
-            f"the benchmark runner is not importable ({exc}). It lives in benchmarks/ of the "
-            "source checkout (not in the wheel): run `vrig bench ...` or `python -m benchmarks "
-            "...` from the repository root of a clone (git clone ...; pip install -e .)."
-        ) from None
-    return bench_main(argv, prog="vrig bench")
+            f"vrig bench needs a source checkout: there is no benchmark runner at {bench} (a "
+            "wheel ships none); clone the vrig repository (git clone ...), run `pip install -e .` "
+            "in it, and run `vrig bench ...` again"
+        )
+    # a separate interpreter: vrig (the library) never imports the benchmarks (the floor above
+    # it); the runner and the workers it spawns import them from the checkout root
+    root = str(bench.parent)
+    env = dict(os.environ)
+    env["PYTHONPATH"] = os.pathsep.join(p for p in (root, env.get("PYTHONPATH")) if p)
+    code = (
+        "import sys; from pathlib import Path; import benchmarks\n"
+        "if Path(benchmarks.__file__).resolve().parent != Path(sys.argv[1]):\n"
+        "    sys.exit(f'vrig bench: another package named benchmarks ({benchmarks.__file__}) "
+        "hides the benchmark runner at {sys.argv[1]}')\n"
+        "from benchmarks.runner.cli import main\n"
+        "sys.exit(main(sys.argv[2:], prog='vrig bench'))"
+    )
+    child = subprocess.Popen([sys.executable, "-c", code, str(bench), *argv], env=env)
+    # Ctrl-C reaches the whole foreground process group: the child says "interrupted" and exits
+    # 130, so this process waits for it instead of printing a second line
+    main_thread = threading.current_thread() is threading.main_thread()
+    previous = signal.signal(signal.SIGINT, signal.SIG_IGN) if main_thread else None
+    try:
+        return child.wait()
+    finally:
+        if main_thread:
+            signal.signal(signal.SIGINT, previous)
 
 
 def _say(command: str, text: str) -> None:

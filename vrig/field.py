@@ -10,12 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["DEFAULT_BANDS", "default_band", "pseudo_field"]
-
-DEFAULT_BANDS = {"shaker": (10.0, 60.0)}
-"""Default simulation bands that differ from a rig's test band: the shaker's accelerometer is
-deaf below ~10 Hz (a ~ ω² x below the 32 Hz suspension resonance; §3.1.1), so the inverse model
-of the full 0-80 Hz band is unstable, and the drive needs headroom below its 80 Hz edge."""
+__all__ = ["default_band", "pseudo_field"]
 
 _FIELD_FRACTION = 0.10  # pseudo-field drive RMS as a fraction of full scale (5 mm on the damper)
 _FIELD_HEADROOM = 2 / 3  # pseudo-field responses peak below this fraction of the transducer range
@@ -23,8 +18,14 @@ _FADE_S = 1.0
 
 
 def default_band(rig) -> tuple[float, float]:
-    """The simulation band reconstructions use on ``rig`` unless told otherwise [Hz]."""
-    return tuple(DEFAULT_BANDS.get(rig.name, rig.bandwidth))
+    """The simulation band reconstructions use on ``rig`` unless told otherwise [Hz].
+
+    The rig's side-car band (``rig.defaults.band``, side-car ``"reconstruction": {"band": ...}``)
+    where it differs from the test band (e.g. the shaker's 10-60 Hz: its README), else the test
+    band ``rig.bandwidth`` (also for a rig without a side-car, e.g. a user's own :class:`vrig.rigs.Rig`).
+    """
+    band = getattr(getattr(rig, "defaults", None), "band", None)
+    return tuple(rig.bandwidth if band is None else band)
 
 
 def pseudo_field(rig, band: tuple[float, float], seconds: float, *, seed: int = 0):

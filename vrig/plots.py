@@ -229,10 +229,15 @@ def psd_compare(
     Parameters
     ----------
     desired, achieved : TimeHistory
+        The two records to compare (same channels and sample rate).
     nperseg : int, optional
         Welch segment length (default: about 0.5 Hz resolution, at most the record length).
     band : (low, high) Hz, optional
         The simulation band: shaded, and the frequency axis ends at twice its upper edge.
+    labels : tuple of str, optional
+        Legend labels of the desired and achieved lines.
+    title : str, optional
+        Figure title.
 
     Returns
     -------
@@ -288,6 +293,8 @@ def error_vs_iteration(result, *, title: str | None = None) -> Figure:
     ----------
     result : ReconstructionResult
         Uses ``errors`` (iterations + 1, n_outputs), ``best_iteration`` and ``desired.names``.
+    title : str, optional
+        Axes title (default: what is plotted).
 
     Returns
     -------
@@ -336,9 +343,11 @@ def drive_vs_limits(
     Parameters
     ----------
     drive : TimeHistory
+        The drive to show, in the drive channels' units.
     rig_inputs : sequence of ChannelSpec
         ``rig.inputs``; matched to the drive's channels by name, else by position.
     title : str, optional
+        Figure title.
     trip : RigLimitError, optional
         The interlock that tripped (or refused) this drive: its time is marked with a vertical
         orange line in every axes (when known), the channel it names gets the limit in its title,
@@ -450,9 +459,12 @@ def repeatability_plot(
         Frequencies [Hz] (from :func:`vrig.repeatability.repeatability_function`).
     rf, snr : arrays (F, channels)
         ``R_f`` [%] and :func:`vrig.repeatability.signal_to_noise` [dB].
-    names : channel names.
+    names : sequence of str
+        Channel names (legend).
     band : (low, high) Hz, optional
         Shaded; the frequency axis ends at twice its upper edge.
+    title : str, optional
+        Figure title.
 
     Returns
     -------
@@ -498,6 +510,17 @@ def save_reconstruction_plots(result, folder, rig=None, *, dpi: int = 110) -> li
     :class:`~vrig.errors.RigLimitError`. A result with no iteration played (from a
     :class:`~vrig.ReconstructionError`) gets only that plot. Existing files of these names are
     replaced.
+
+    Parameters
+    ----------
+    result : ReconstructionResult
+        The reconstruction (or the result carried by a :class:`~vrig.ReconstructionError`).
+    folder : str or os.PathLike
+        Where the PNGs go (created if missing).
+    rig : rig, optional
+        The rig whose drive full scales are plotted against the drives.
+    dpi : int, optional
+        Resolution of the PNGs, in dots per inch.
 
     Returns
     -------
@@ -579,9 +602,11 @@ def save_figure(fig: Figure, path, *, dpi: int = 110) -> Path:
     Parameters
     ----------
     fig : Figure
+        The matplotlib figure to save.
     path : str or Path
         The image file; its suffix gives the format (``.png``, ``.pdf``, ``.svg``...).
     dpi : int
+        Resolution of raster formats, in dots per inch.
 
     Returns
     -------

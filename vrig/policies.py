@@ -38,7 +38,14 @@ __all__ = [
 
 
 class Policy:
-    """Base class: ``reset()`` per episode, ``policy(obs) -> action``."""
+    """Base class: ``reset()`` per episode, ``policy(obs) -> action``.
+
+    Parameters
+    ----------
+    env : gymnasium.Env
+        A :class:`vrig.envs.DriveIterationEnv` (or a wrapper of one); its action layout sets the
+        shape of the actions.
+    """
 
     name = "policy"
 
@@ -49,10 +56,25 @@ class Policy:
         """Forget the episode's state (called by :func:`run_episode` after ``env.reset``)."""
 
     def gains(self, obs) -> np.ndarray:  # pragma: no cover - abstract
-        """Gains per drive channel and band (n_inputs, n_bands), or anything broadcasting."""
+        """Gains per drive channel and band (n_inputs, n_bands), or anything broadcasting.
+
+        Parameters
+        ----------
+        obs : dict of str to ndarray
+            The environment's observation (``iteration``, ``band_error``,
+            ``band_error_change``, ...; see :class:`vrig.envs.DriveIterationEnv`).
+        """
         raise NotImplementedError
 
     def reidentify(self, obs) -> bool:
+        """Whether to re-identify the inverse model before the next iteration (default: never).
+
+        Parameters
+        ----------
+        obs : dict of str to ndarray
+            The environment's observation (``iteration``, ``band_error``,
+            ``band_error_change``, ...; see :class:`vrig.envs.DriveIterationEnv`).
+        """
         return False
 
     def __call__(self, obs) -> np.ndarray:
@@ -69,7 +91,16 @@ class Policy:
 
 
 class FixedGain(Policy):
-    """The same gain every iteration (what :func:`vrig.reconstruct` does)."""
+    """The same gain every iteration (what :func:`vrig.reconstruct` does).
+
+    Parameters
+    ----------
+    env : gymnasium.Env
+        A :class:`vrig.envs.DriveIterationEnv` (or a wrapper of one); its action layout sets the
+        shape of the actions.
+    gain : float, optional
+        The gain applied to every band and drive channel.
+    """
 
     def __init__(self, env, gain: float = 0.8):
         super().__init__(env)
@@ -77,11 +108,32 @@ class FixedGain(Policy):
         self.name = f"fixed {self.gain:g}"
 
     def gains(self, obs):
+        """The fixed gain, every iteration.
+
+        Parameters
+        ----------
+        obs : dict of str to ndarray
+            The environment's observation (``iteration``, ``band_error``,
+            ``band_error_change``, ...; see :class:`vrig.envs.DriveIterationEnv`).
+        """
         return self.gain
 
 
 class DecreasingGain(Policy):
-    """``gain_n = max(floor, start * decay**(n))`` for the update after iteration n."""
+    """``gain_n = max(floor, start * decay**(n))`` for the update after iteration n.
+
+    Parameters
+    ----------
+    env : gymnasium.Env
+        A :class:`vrig.envs.DriveIterationEnv` (or a wrapper of one); its action layout sets the
+        shape of the actions.
+    start : float, optional
+        Gain of the update after IT00.
+    decay : float, optional
+        Factor applied per iteration.
+    floor : float, optional
+        Smallest gain.
+    """
 
     def __init__(self, env, start: float = 1.2, decay: float = 0.85, floor: float = 0.5):
         super().__init__(env)
@@ -89,13 +141,36 @@ class DecreasingGain(Policy):
         self.name = f"decreasing {self.start:g}x{self.decay:g}^n"
 
     def gains(self, obs):
+        """``max(floor, start * decay**n)`` with n the observed iteration.
+
+        Parameters
+        ----------
+        obs : dict of str to ndarray
+            The environment's observation (``iteration``, ``band_error``,
+            ``band_error_change``, ...; see :class:`vrig.envs.DriveIterationEnv`).
+        """
         n = float(obs["iteration"][0])
         return max(self.floor, self.start * self.decay**n)
 
 
 class AdaptiveBandGain(Policy):
     """Per band: multiply the gain by ``shrink`` when the band's error grew in the last
-    iteration (any output channel), else by ``grow``; gains kept in [``low``, ``high``]."""
+    iteration (any output channel), else by ``grow``; gains kept in [``low``, ``high``].
+
+    Parameters
+    ----------
+    env : gymnasium.Env
+        A :class:`vrig.envs.DriveIterationEnv` (or a wrapper of one); its action layout sets the
+        shape of the actions.
+    start : float, optional
+        Gain of every band at the first update.
+    shrink : float, optional
+        Factor applied to a band's gain when its error grew.
+    grow : float, optional
+        Factor applied to a band's gain otherwise.
+    low, high : float, optional
+        Range the gains are kept in.
+    """
 
     def __init__(
         self,
@@ -113,9 +188,18 @@ class AdaptiveBandGain(Policy):
         self.reset()
 
     def reset(self):
+        """Forget the gains of the last episode (the next call starts from ``start``)."""
         self._g = None
 
     def gains(self, obs):
+        """The per-band gains after this observation's error changes.
+
+        Parameters
+        ----------
+        obs : dict of str to ndarray
+            The environment's observation (``iteration``, ``band_error``,
+            ``band_error_change``, ...; see :class:`vrig.envs.DriveIterationEnv`).
+        """
         lay = self.layout
         if self._g is None or float(obs["iteration"][0]) == 0:
             self._g = np.full((lay.n_inputs, lay.n_bands), self.start)
@@ -134,6 +218,14 @@ class BandRatioPolicy(Policy):
     ``error_b`` the log10 band-error ratio and ``change_b`` its change over the last iteration
     (both taken as the maximum over output channels) and ``n`` the iteration index.
     ``params = [theta_1 .. theta_B, alpha, beta, gamma]``.
+
+    Parameters
+    ----------
+    env : gymnasium.Env
+        A :class:`vrig.envs.DriveIterationEnv` (or a wrapper of one); its action layout sets the
+        shape of the actions.
+    params : array_like, shape (n_bands + 3,)
+        ``[theta_1 .. theta_B, alpha, beta, gamma]`` (see above).
     """
 
     def __init__(self, env, params):
@@ -146,16 +238,41 @@ class BandRatioPolicy(Policy):
 
     @staticmethod
     def n_params(env) -> int:
+        """Length of the parameter vector for ``env``: its number of bands plus 3.
+
+        Parameters
+        ----------
+        env : gymnasium.Env
+            A :class:`vrig.envs.DriveIterationEnv` (or a wrapper of one); its action layout sets the
+            shape of the actions.
+        """
         return env.unwrapped.layout.n_bands + 3
 
     @staticmethod
     def initial(env, gain: float = 0.8) -> np.ndarray:
-        """Parameters of the fixed gain ``gain`` (a starting point for the search)."""
+        """Parameters of the fixed gain ``gain`` (a starting point for the search).
+
+        Parameters
+        ----------
+        env : gymnasium.Env
+            A :class:`vrig.envs.DriveIterationEnv` (or a wrapper of one); its action layout sets the
+            shape of the actions.
+        gain : float, optional
+            The fixed gain the parameters reproduce.
+        """
         p = np.zeros(BandRatioPolicy.n_params(env))
         p[:-3] = np.log(gain)
         return p
 
     def gains(self, obs):
+        """The learned per-band gains for this observation (same for every drive channel).
+
+        Parameters
+        ----------
+        obs : dict of str to ndarray
+            The environment's observation (``iteration``, ``band_error``,
+            ``band_error_change``, ...; see :class:`vrig.envs.DriveIterationEnv`).
+        """
         nb = self.layout.n_bands
         theta, (alpha, beta, gamma) = self.params[:nb], self.params[nb:]
         err = np.asarray(obs["band_error"], float).max(axis=0)
@@ -167,8 +284,23 @@ class BandRatioPolicy(Policy):
 
 @dataclass
 class EpisodeResult:
-    """One episode: ``iterations`` steps played, ``success`` (tolerance met), the mean η0 per
-    iteration (IT00 first), the final η0 per channel, the total reward and why it ended."""
+    """One episode of :func:`run_episode`.
+
+    Attributes
+    ----------
+    iterations : int
+        Steps played (iterations after IT00).
+    success : bool
+        True when the tolerance was met.
+    mean_eta0 : list of float
+        Mean η0 over the response channels per iteration, IT00 first, in %.
+    final_eta0 : ndarray (n_outputs,) or None
+        η0 per response channel at the end, in %.
+    total_reward : float
+        Sum of the step rewards.
+    reason : str
+        Why the episode ended (the env's ``info["reason"]``).
+    """
 
     iterations: int
     success: bool
@@ -178,12 +310,31 @@ class EpisodeResult:
     reason: str = ""
 
     def iterations_to_tolerance(self, budget: int) -> int:
-        """Iterations after IT00 until the tolerance was met; ``budget + 1`` if never."""
+        """Iterations after IT00 until the tolerance was met; ``budget + 1`` if never.
+
+        Parameters
+        ----------
+        budget : int
+            The episode's iteration budget (returned plus one when the tolerance was never met).
+        """
         return self.iterations if self.success else budget + 1
 
 
 def run_episode(env, policy, *, seed=None, options=None) -> EpisodeResult:
-    """Play one episode of ``policy`` on ``env``."""
+    """Play one episode of ``policy`` on ``env``.
+
+    Parameters
+    ----------
+    env : gymnasium.Env
+        A :class:`vrig.envs.DriveIterationEnv` (or a wrapper of one); its action layout sets the
+        shape of the actions.
+    policy : Policy
+        The policy (reset after ``env.reset``, then called with each observation).
+    seed : int, optional
+        Seed of ``env.reset``.
+    options : dict, optional
+        Options of ``env.reset``.
+    """
     obs, info = env.reset(seed=seed, options=options)
     policy.reset()
     res = EpisodeResult(0, bool(info["success"]), [info["mean_eta0"]], info["eta0"])
@@ -221,6 +372,26 @@ def cross_entropy_search(
     above 5 % of its initial value). The best vector ever evaluated is returned with its score.
     ``map_fn(objective, candidates)`` evaluates a generation (e.g. a process pool's ``map``; the
     objective must then be picklable).
+
+    Parameters
+    ----------
+    objective : callable
+        ``objective(params) -> float``, the score to minimise.
+    mean, std : array_like
+        Initial mean and standard deviation of the sampling distribution, one per parameter.
+    generations : int, optional
+        Number of generations.
+    population : int, optional
+        Parameter vectors sampled per generation.
+    elite : int, optional
+        Best vectors kept to refit the distribution.
+    seed : int, optional
+        Seed of the sampling.
+    callback : callable, optional
+        ``callback(generation, best_params, best_score)`` after each generation (the best
+        vector so far and its score).
+    map_fn : callable, optional
+        ``map_fn(objective, candidates)`` evaluates a generation (default the built-in ``map``).
 
     Returns
     -------

@@ -54,6 +54,7 @@ import numpy as np
 from . import io
 from .errors import FileFormatError
 from .files import atomic_write, is_temporary, read_bytes, recover_directory, staged_directory
+from .reconstruction.protocol import InverseModelMethod, Method, SavableMethod
 from .timehistory import TimeHistory
 
 __all__ = ["FORMATS", "IterationRecord", "TestFolder"]
@@ -121,30 +122,25 @@ def _plain(value):
 
 
 def _inverse_models(method) -> dict:
-    """``{file stem: InverseModel}`` of a method (``model``, or ``model_low``/``model_high``)."""
-    if hasattr(method, "inverse"):
-        return {"model": method.inverse}
-    low, high = getattr(method, "low", None), getattr(method, "high", None)
-    if hasattr(low, "inverse") and hasattr(high, "inverse"):
-        return {"model_low": low.inverse, "model_high": high.inverse}
-    return {}
+    """``{file stem: model}`` of a method (:class:`~vrig.reconstruction.SavableMethod`: ``model``,
+    or ``model_low``/``model_high`` for split spectra); ``{}`` for any other method."""
+    return method.fitted_models() if isinstance(method, SavableMethod) else {}
 
 
 def _method_summary(method) -> dict:
+    """Name, class, description, options and lead of a method (band methods nested)."""
     out = {"name": getattr(method, "name", type(method).__name__), "class": type(method).__name__}
     try:
         out["description"] = method.describe()
     except Exception:  # a user method without describe(), or not identified
         out["description"] = type(method).__name__
-    for key in ("order", "degree", "kind", "split_hz", "nperseg", "rcond", "tikhonov"):
-        if hasattr(method, key):
-            out[key] = _plain(getattr(method, key))
-    if hasattr(method, "inverse") and hasattr(method.inverse, "lead_"):
-        out["lead"] = int(method.inverse.lead_)
-    for part in ("low", "high"):
-        sub = getattr(method, part, None)
-        if sub is not None and hasattr(sub, "identify"):
-            out[part] = _method_summary(sub)
+    if isinstance(method, SavableMethod):
+        for key, value in method.options().items():
+            out[key] = _method_summary(value) if isinstance(value, Method) else _plain(value)
+    if isinstance(method, InverseModelMethod):
+        lead = method.fitted_lead()
+        if isinstance(lead, int):
+            out["lead"] = lead
     return out
 
 
@@ -328,6 +324,7 @@ class TestFolder:
         Parameters
         ----------
         result : ReconstructionResult
+            The reconstruction to write (or the result of a :class:`~vrig.ReconstructionError`).
         field : TimeHistory, optional
             The field (or pseudo-field) response the desired response was made from: FIELD01.
         fmt : {"rsp", "csv", "mat", "npz"}
@@ -417,7 +414,13 @@ class TestFolder:
         return {k: found[k] for k in sorted(found, key=_order_key)}
 
     def read(self, name: str) -> TimeHistory:
-        """One record by QanTiM name (``"IDDRV"``, ``"IT03RES"``, ``"FINDRV01"``...)."""
+        """One record by QanTiM name (``"IDDRV"``, ``"IT03RES"``, ``"FINDRV01"``...).
+
+        Parameters
+        ----------
+        name : str
+            A QanTiM record name.
+        """
         files = self.files()
         key = name.upper()
         if key not in files:
@@ -457,7 +460,13 @@ class TestFolder:
         )
 
     def load_iteration(self, xx: int) -> IterationRecord:
-        """ITxxDRV, RITxxRES, ITxxRES and the iteration's scores."""
+        """ITxxDRV, RITxxRES, ITxxRES and the iteration's scores.
+
+        Parameters
+        ----------
+        xx : int
+            Iteration number, 0..99 (0: IT00).
+        """
         if not isinstance(xx, (int, np.integer)) or not 0 <= xx <= 99:
             raise ValueError(f"iteration must be an integer 0..99, got {xx!r}")
         its = self.iterations

@@ -84,14 +84,17 @@ class TimeHistory:
     # ------------------------------------------------------------------ basics
     @property
     def n_samples(self) -> int:
+        """Number of samples (rows of ``data``)."""
         return int(self.data.shape[0])
 
     @property
     def n_channels(self) -> int:
+        """Number of channels (columns of ``data``)."""
         return int(self.data.shape[1])
 
     @property
     def dt(self) -> float:
+        """Sample interval ``1 / fs`` in s."""
         return 1.0 / self.fs
 
     @property
@@ -118,6 +121,18 @@ class TimeHistory:
 
     # ------------------------------------------------------------------ selection
     def index(self, name: str) -> int:
+        """Column index of the channel called ``name``.
+
+        Parameters
+        ----------
+        name : str
+            A channel name.
+
+        Raises
+        ------
+        KeyError
+            If there is no channel of that name (the message lists the names).
+        """
         try:
             return self.names.index(name)
         except ValueError:
@@ -144,11 +159,25 @@ class TimeHistory:
         )
 
     def channel(self, name: str) -> np.ndarray:
-        """The samples of one channel as a 1-D array."""
+        """The samples of one channel as a 1-D array.
+
+        Parameters
+        ----------
+        name : str
+            A channel name.
+        """
         return self.data[:, self.index(name)]
 
     def window(self, start: float = 0.0, stop: float | None = None) -> TimeHistory:
-        """The samples with ``start <= t < stop`` (seconds)."""
+        """The samples with ``start <= t < stop`` (seconds).
+
+        Parameters
+        ----------
+        start : float, optional
+            First time kept, in s from the record's start.
+        stop : float, optional
+            End of the window (excluded), in s; default the end of the record.
+        """
         i0 = round(start * self.fs)
         i1 = self.n_samples if stop is None else round(stop * self.fs)
         if not 0 <= i0 < i1 <= self.n_samples:
@@ -158,13 +187,25 @@ class TimeHistory:
         return self.with_data(self.data[i0:i1])
 
     def with_data(self, data) -> TimeHistory:
-        """Same sample rate, names and units, new samples."""
+        """Same sample rate, names and units, new samples.
+
+        Parameters
+        ----------
+        data : array_like, shape (n_samples, n_channels)
+            The new samples, one column per channel of this history, in its units.
+        """
         return TimeHistory(data, self.fs, self.names, self.units)
 
     # ------------------------------------------------------------------ persistence
     def save(self, path) -> Path:
         """Write an ``.npz`` with the data, ``fs``, names and units (atomically: see
-        :func:`vrig.files.atomic_write`); a missing or other suffix becomes ``.npz``."""
+        :func:`vrig.files.atomic_write`); a missing or other suffix becomes ``.npz``.
+
+        Parameters
+        ----------
+        path : str or os.PathLike
+            Target file.
+        """
         path = Path(path)
         if path.suffix != ".npz":
             path = path.with_suffix(".npz")
@@ -182,6 +223,11 @@ class TimeHistory:
     @classmethod
     def load(cls, path) -> TimeHistory:
         """Read a file written by :meth:`save`.
+
+        Parameters
+        ----------
+        path : str or os.PathLike
+            A file written by :meth:`save`.
 
         Raises
         ------

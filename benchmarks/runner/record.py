@@ -10,8 +10,8 @@ settings:
   ``rig`` (loaded with seed 0, at the record's severity) over its default simulation band, with
   seed ``desired``;
 * the reconstruction runs on the rig loaded with seed ``seed`` at the same severity:
-  ``vrig.reconstruct(rig, desired, method=<plugin's object>, iterations, gain, bandwidth,
-  seed=seed)``.
+  ``vrig.reconstruct(rig, desired, settings.iteration(<plugin's object>, band, seed))`` (one
+  :class:`vrig.IterationSettings`; ``seed`` is both the identification and the run seed).
 
 Scores (η0 is the DC-corrected QanTiM fit value, eq. 5-28, in %; "mean" is over the response
 channels):
@@ -61,6 +61,7 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
+from vrig.reconstruction import IterationSettings
 from vrig.reconstruction.protocol import InverseModelMethod, Method
 
 from .registry import get_method, load_plugins, model_size
@@ -103,6 +104,18 @@ class Settings:
             raise ValueError(f"fidelity must be 'full' or 'fast', got {self.fidelity!r}")
         if not 0.1 <= self.holdout <= 0.5:
             raise ValueError(f"holdout must be 0.1..0.5, got {self.holdout}")
+
+    def iteration(self, method, band: tuple[float, float], seed: int) -> IterationSettings:
+        """The :class:`vrig.IterationSettings` of a record: this run's iterations and gain, the
+        record's method object and band, ``seed`` for the identification and the rig runs."""
+        return IterationSettings(
+            method=method,
+            iterations=self.iterations,
+            gain=self.gain,
+            bandwidth=band,
+            id_seed=seed,
+            run_seed=seed,
+        )
 
 
 SEVERITY_RANGE = (0.0, 2.0)
@@ -433,15 +446,7 @@ def compute_record(key: RecordKey, settings: Settings, plugin_specs=()) -> dict:
         stage = "reconstruction"
         t = time.perf_counter()
         try:
-            result = vrig.reconstruct(
-                rig,
-                desired,
-                method=timed,
-                iterations=settings.iterations,
-                gain=settings.gain,
-                bandwidth=band,
-                seed=key.seed,
-            )
+            result = vrig.reconstruct(rig, desired, settings.iteration(timed, band, key.seed))
         finally:
             timing["reconstruction_s"] = time.perf_counter() - t
             timing["fit_s"], timing["model_sim_s"] = timed.fit_s, timed.sim_s

@@ -15,30 +15,17 @@ import numpy as np
 from gymnasium import spaces
 
 from ..errors import RigLimitError
+from ..reconstruction import IterationSettings
 from ..timehistory import TimeHistory
 from .physics import FAILURES, IterationPhysics
 from .task import IterationTask, band_edges
 
-__all__ = ["DEFAULT_TOLERANCE", "FIELD_REDRAWS", "ActionLayout", "DriveIterationEnv"]
+__all__ = ["FALLBACK_TOLERANCE", "FIELD_REDRAWS", "ActionLayout", "DriveIterationEnv"]
 
-DEFAULT_TOLERANCE = {
-    "shock-absorber": 1.7,
-    "elastomeric-damper": 0.91,
-    "shaker": 0.5,
-    "radiator": 3.0,
-    "light-truck-front": 4.1,
-}
-"""Default tolerance [% η0, every channel] per rig: reachable, but only after several iterations.
-
-The rule: the largest max-channel η0 at IT07 over the pseudo-field targets of ``reset(seed=0..2)``
-of the full-fidelity env (20 s targets) at a fixed gain (0.8, or the rig side-car's
-``"reconstruction"`` gain: 0.5 on the elastomeric damper), rounded up to two significant
-figures, on the rig's default variant. Measured (issue 12/13): shock-absorber ``thesis`` 1.61 %
-(``mild`` 0.52 %, where 0.5 % was set), elastomeric-damper ``thesis`` at gain 0.5 0.91 %
-(``mild`` at 0.8: 0.64 %; 1.3 % was set), light-truck-front 4.04 %. The radiator keeps 3 %,
-measured on an earlier ``mild`` twin: on ``thesis`` the top tank stalls at 10-14 % (the rule
-would give 14 %, a stall level, not convergence), so on the calibrated radiator no target meets
-3 % in the budget. Other rigs get 2 %."""
+FALLBACK_TOLERANCE = 2.0
+"""Default η0 tolerance [%, every channel] on a rig whose side-car names none
+(``rig.defaults.tolerance``: the side-car's ``"reconstruction": {"gym": {"tolerance": ...}}``;
+the rule by which those are measured: :mod:`vrig.envs`)."""
 
 FIELD_REDRAWS = 4
 """How often ``reset`` redraws a pseudo-field target whose IT00 drive trips the rig or exceeds
@@ -162,8 +149,13 @@ class DriveIterationEnv(gym.Env):
     ----------
     rig : str or Rig
         Rig name (``vrig.list_rigs()``) or rig object.
-    method : str
-        Inverse-model method; ``method_options`` (dict) go to it, e.g. ``{"order": 4}``.
+    settings : IterationSettings, optional
+        The identification settings (method and options, band, identification drive, taper,
+        ``id_seed``, ...); the keyword arguments below, when given, override its values. The
+        iteration's gains come from the actions and the run seed from ``reset``.
+    method : str, optional
+        Inverse-model method (default ``"arx"``); ``method_options`` (dict) go to it, e.g.
+        ``{"order": 4}``.
     fast : bool
         Reduced-fidelity rig (``fidelity="fast"``) and 6 s desired segments instead of the
         full-fidelity rig and 20 s (overridden by explicit ``fidelity`` / ``seconds``).
@@ -177,9 +169,11 @@ class DriveIterationEnv(gym.Env):
     max_iterations : int
         Iteration budget (steps) before truncation; keep ``max_episode_steps`` of ``make`` equal.
     tolerance : float, optional
-        η0 tolerance [%] (default :data:`DEFAULT_TOLERANCE` of the rig, else 2 %).
-    model_seed : int
-        Identification seed (fixed per env, so the identified model is reused).
+        η0 tolerance [%] (default: the rig's side-car tolerance ``rig.defaults.tolerance``,
+        else :data:`FALLBACK_TOLERANCE`, 2 %; the rule: :mod:`vrig.envs`).
+    model_seed : int, optional
+        Identification seed (``settings.id_seed``, default 0; fixed per env, so the identified
+        model is reused).
     bandwidth, id_duration, id_rms, decimation
         As in :func:`vrig.reconstruct`.
     """
@@ -190,7 +184,8 @@ class DriveIterationEnv(gym.Env):
         self,
         rig="shock-absorber",
         *,
-        method: str = "arx",
+        settings: IterationSettings | None = None,
+        method: str | None = None,
         method_options: dict | None = None,
         fast: bool = False,
         fidelity: str | None = None,
@@ -206,7 +201,7 @@ class DriveIterationEnv(gym.Env):
         trip_penalty: float = 5.0,
         energy_penalty: float = 0.1,
         step_penalty: float = 0.0,
-        model_seed: int = 0,
+        model_seed: int | None = None,
         id_duration: float | None = None,
         id_rms=None,
         decimation: int | None = None,
@@ -216,18 +211,24 @@ class DriveIterationEnv(gym.Env):
     ):
         lo, hi = _check_env_options(render_mode, action_mode, max_iterations, gain_range)
         self.render_mode = None
+        given = {
+            "method": method,
+            "method_options": method_options,
+            "bandwidth": bandwidth,
+            "id_duration": id_duration,
+            "id_rms": id_rms,
+            "decimation": decimation,
+            "id_seed": model_seed,
+        }
+        settings = IterationSettings.build(
+            settings, **{k: v for k, v in given.items() if v is not None}
+        )
+        if fast and settings.id_duration is None:
+            settings = settings.replace(id_duration=FAST_ID_SECONDS)
         self.physics = IterationPhysics(
             rig,
-            method=method,
-            method_options=method_options,
-            bandwidth=bandwidth,
+            settings,
             seconds=seconds if seconds is not None else (FAST_SECONDS if fast else 20.0),
-            id_duration=id_duration
-            if id_duration is not None
-            else (FAST_ID_SECONDS if fast else None),
-            id_rms=id_rms,
-            decimation=decimation,
-            model_seed=model_seed,
             fidelity=fidelity or ("fast" if fast else "full"),
             rig_seed=rig_seed,
             rig_options=rig_options,
@@ -235,7 +236,8 @@ class DriveIterationEnv(gym.Env):
         ph = self.physics
         self.edges = band_edges(ph.band, n_bands)
         if tolerance is None:
-            tolerance = DEFAULT_TOLERANCE.get(ph.rig.name, 2.0)
+            tolerance = getattr(getattr(ph.rig, "defaults", None), "tolerance", None)
+            tolerance = FALLBACK_TOLERANCE if tolerance is None else tolerance
         if not (np.isfinite(tolerance) and tolerance > 0):
             raise ValueError(f"tolerance must be a positive number [%], got {tolerance!r}")
         self.task = IterationTask(

@@ -2,7 +2,7 @@
 
 No observation, reward or termination here (that is :mod:`vrig.envs.task`), dm_control style:
 :class:`IterationPhysics` owns the rig (built once), identifies the inverse model once per
-(rig, method, options, band, identification length and level, decimation, identification seed)
+rig and identification settings (:meth:`~vrig.reconstruction.IterationSettings.identification_key`)
 and keeps it in a small process-wide cache, and starts one
 :class:`~vrig.reconstruction.DriveIteration` engine per episode around a desired response with
 a private copy of that model (re-identification during an episode never leaks into the next one).
@@ -19,7 +19,8 @@ from identification.errors import SimulationDivergedError
 
 from ..errors import RigLimitError, SimulationInstabilityError
 from ..field import default_band, pseudo_field
-from ..reconstruction import DriveIteration
+from ..reconstruction import DriveIteration, IterationSettings
+from ..reconstruction.settings import cache_key
 from ..rigs import load_rig
 from ..timehistory import TimeHistory
 
@@ -35,17 +36,6 @@ def clear_model_cache() -> None:
     _MODELS.clear()
 
 
-def _freeze(value):
-    """A hashable, repr-stable version of an option value for the cache key."""
-    if isinstance(value, dict):
-        return tuple(sorted((k, _freeze(v)) for k, v in value.items()))
-    if isinstance(value, (list, tuple, np.ndarray)):
-        return tuple(_freeze(v) for v in np.asarray(value, dtype=object).ravel())
-    if isinstance(value, (str, int, float, bool, type(None), np.generic)):
-        return value
-    return repr(value)
-
-
 class IterationPhysics:
     """The rig and its inverse model, ready to iterate a drive for any desired response.
 
@@ -54,76 +44,67 @@ class IterationPhysics:
     rig : str or Rig
         A shipped rig name (built with ``load_rig(rig, seed=rig_seed, fidelity=fidelity,
         **rig_options)``) or a rig object.
-    method : str
-        Reconstruction method (``"arx"``, ``"narx"``, ``"split"``, ``"frf"``); ``method_options``
-        go to it (``order``, ``degree``, ``split_hz``, ...).
-    bandwidth : (low, high) Hz, optional
-        Simulation band (default :func:`vrig.field.default_band`).
+    settings : IterationSettings, optional
+        The identification settings (method and its options, band, identification drive,
+        decimation, taper, ``id_seed``); the band defaults to :func:`vrig.field.default_band` and
+        ``id_duration`` to ``seconds``. ``id_seed`` is fixed for the life of the physics, so every
+        episode reuses the same identified model; the run seed is per episode (:meth:`start`).
     seconds : float
-        Length of the pseudo-field desired responses and (unless ``id_duration`` is given) of
-        the identification drive.
-    id_duration, id_rms, decimation
-        As in :func:`vrig.reconstruct` (``id_duration`` defaults to ``seconds``).
-    model_seed : int
-        Seed of the identification drive and of the identification run: fixed for the life of
-        the physics, so every episode reuses the same identified model.
+        Length of the pseudo-field desired responses [s].
+    fidelity : {"full", "fast"}
+        Rig fidelity of a named rig.
+    rig_seed : int
+        Seed of a named rig (its noise realisation).
+    rig_options : dict, optional
+        Further ``load_rig`` options of a named rig (``variant``, ``severity``, parameters).
+    **options
+        Settings by name on top of ``settings`` (:meth:`IterationSettings.build`);
+        ``model_seed`` is the identification seed (``id_seed``).
     """
 
     def __init__(
         self,
         rig,
+        settings: IterationSettings | None = None,
         *,
-        method: str = "arx",
-        method_options: dict | None = None,
-        bandwidth: tuple[float, float] | None = None,
         seconds: float = 20.0,
-        id_duration: float | None = None,
-        id_rms=None,
-        decimation: int | None = None,
-        model_seed: int = 0,
         fidelity: str = "full",
         rig_seed: int = 0,
         rig_options: dict | None = None,
+        **options,
     ):
         if not (np.isfinite(seconds) and seconds >= 2.0):
             raise ValueError(f"seconds must be a finite number >= 2, got {seconds!r}")
         rig_options = dict(rig_options or {})
         if isinstance(rig, str):
             self.rig = load_rig(rig, seed=rig_seed, fidelity=fidelity, **rig_options)
-            rig_key = (rig, fidelity, rig_seed, _freeze(rig_options))
+            rig_key = (rig, fidelity, rig_seed, cache_key(rig_options))
         else:
             self.rig = rig
-            rig_key = ("object", id(rig))
-        self.method_name = method
-        self.method_options = dict(method_options or {})
-        self.band = tuple(float(b) for b in (bandwidth or default_band(self.rig)))
+            rig_key = cache_key(rig)  # by identity, kept alive by the key
+        if "model_seed" in options:
+            options["id_seed"] = options.pop("model_seed")
+        settings = IterationSettings.build(settings, **options)
+        band = tuple(float(b) for b in (settings.bandwidth or default_band(self.rig)))
+        duration = settings.id_duration if settings.id_duration is not None else float(seconds)
+        self.settings = settings.replace(bandwidth=band, id_duration=float(duration))
+        self.band = band
         self.seconds = float(seconds)
-        self.id_duration = float(id_duration) if id_duration is not None else self.seconds
-        self.id_rms = id_rms
-        self.decimation = decimation
-        self.model_seed = int(model_seed)
         self._fields: OrderedDict = OrderedDict()
         self.inputs = list(self.rig.inputs)
         self.outputs = list(self.rig.outputs)
         self.fs = float(self.rig.fs)
         self.drive_full_scale = np.array([c.full_scale for c in self.inputs], dtype=float)
-        self._key = (
-            rig_key,
-            method,
-            _freeze(self.method_options),
-            self.band,
-            self.id_duration,
-            _freeze(id_rms),
-            decimation,
-            self.model_seed,
-        )
+        self._key = (rig_key, self.settings.identification_key())
 
     @property
     def n_inputs(self) -> int:
+        """Number of drive channels."""
         return len(self.inputs)
 
     @property
     def n_outputs(self) -> int:
+        """Number of response channels."""
         return len(self.outputs)
 
     def pseudo_field(self, seed: int) -> TimeHistory:
@@ -142,17 +123,7 @@ class IterationPhysics:
         """An engine for ``desired`` with the (cached) identified inverse model; its rig runs use
         the seeds ``run_seed + 1 + iteration`` (as :func:`vrig.reconstruct` with ``seed=run_seed``).
         """
-        engine = DriveIteration(
-            self.rig,
-            desired,
-            method=self.method_name,
-            bandwidth=self.band,
-            id_duration=self.id_duration,
-            id_rms=self.id_rms,
-            decimation=self.decimation,
-            seed=self.model_seed,
-            **self.method_options,
-        )
+        engine = DriveIteration(self.rig, desired, self.settings.replace(run_seed=int(run_seed)))
         cached = _MODELS.get(self._key)
         if cached is None:
             engine.identify()
@@ -163,7 +134,6 @@ class IterationPhysics:
             _MODELS.move_to_end(self._key)
             method, id_drive, id_response = cached
             engine.use_identified(copy.deepcopy(method), id_drive, id_response)
-        engine.seed = int(run_seed)  # from here on the engine's seed only seeds the rig runs
         return engine
 
 

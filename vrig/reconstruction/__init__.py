@@ -1,12 +1,14 @@
-"""Response reconstruction: inverse-model methods and the drive-iteration loop."""
+"""Response reconstruction: inverse-model methods and the drive-iteration loop.
 
-from .iteration import (
-    DriveIteration,
-    ReconstructionResult,
-    band_gains,
-    pseudo_damage,
-    reconstruct,
-)
+``settings`` (:class:`IterationSettings`, one frozen object) → ``engine`` (:class:`DriveIteration`:
+identify, invert, play, correct) → ``iteration`` (:func:`reconstruct`: the loop) →
+``result`` (:class:`ReconstructionResult`), scored by ``scores``; the inverse-model methods are in
+``methods`` (their contract in ``protocol``).
+"""
+
+from ..processing import band_gains
+from .engine import DriveIteration
+from .iteration import MAX_ITERATIONS, reconstruct
 from .methods import (
     METHODS,
     InverseArx,
@@ -17,9 +19,13 @@ from .methods import (
     cross_spectra,
     make_method,
 )
-from .protocol import InverseModelMethod, Method, SizedMethod
+from .protocol import InverseModelMethod, Method, SavableMethod, SizedMethod
+from .result import ReconstructionResult
+from .scores import pseudo_damage
+from .settings import IterationSettings
 
 __all__ = [
+    "MAX_ITERATIONS",
     "METHODS",
     "DriveIteration",
     "InverseArx",
@@ -27,8 +33,10 @@ __all__ = [
     "InverseFrf",
     "InverseModelMethod",
     "InverseNarx",
+    "IterationSettings",
     "Method",
     "ReconstructionResult",
+    "SavableMethod",
     "SizedMethod",
     "SplitSpectra",
     "band_gains",

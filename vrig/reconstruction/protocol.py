@@ -18,6 +18,8 @@ has it:
 
 * :class:`SizedMethod` — ``model_size()``: number of fitted coefficients (None before
   ``identify``);
+* :class:`SavableMethod` — ``options()`` and ``fitted_models()``: what a test folder records
+  (``summary.json``, the model files);
 * :class:`InverseModelMethod` — a time-domain inverse model with a *lead* (the rig's delay the
   inverse advances the response by): ``fitted_lead()`` reads the lead the fit chose,
   ``set_lead(lead)`` fixes it for the next ``identify`` (0: a causal model, no lead search).
@@ -31,13 +33,13 @@ their signatures.
 from __future__ import annotations
 
 from collections.abc import Mapping
-from typing import Protocol, runtime_checkable
+from typing import Any, Protocol, runtime_checkable
 
 import numpy as np
 
 from ..timehistory import TimeHistory
 
-__all__ = ["InverseModelMethod", "Lead", "Method", "SizedMethod"]
+__all__ = ["InverseModelMethod", "Lead", "Method", "SavableMethod", "SizedMethod"]
 
 Lead = int | str | None | Mapping[str, "Lead"]
 """A method's lead [samples]: an int (``"auto"``: searched at identification; None: not
@@ -50,11 +52,25 @@ class Method(Protocol):
     """A reconstruction method (see the module docstring)."""
 
     def identify(self, iddrv: TimeHistory, idres: TimeHistory) -> None:
-        """Fit the method from identification drive ``iddrv`` and response ``idres``."""
+        """Fit the method from identification drive ``iddrv`` and response ``idres``.
+
+        Parameters
+        ----------
+        iddrv : TimeHistory
+            Identification drive record.
+        idres : TimeHistory
+            The response measured for it (same length and sample rate).
+        """
         ...
 
     def drive(self, response: TimeHistory) -> np.ndarray:
-        """The drive (n_samples, n_drives) the fitted method predicts for ``response``."""
+        """The drive (n_samples, n_drives) the fitted method predicts for ``response``.
+
+        Parameters
+        ----------
+        response : TimeHistory
+            The response to compute a drive for (desired, or an iteration's target).
+        """
         ...
 
     def describe(self) -> str:
@@ -83,5 +99,27 @@ class InverseModelMethod(Method, SizedMethod, Protocol):
     def set_lead(self, lead: Lead) -> None:
         """Fix the lead for the next ``identify``: a number of samples >= 0 (0: causal), or
         ``"auto"`` (search it); a method of parts takes one value for all of them or a mapping
-        as :meth:`fitted_lead` returns it (a part whose lead is None is left as it is)."""
+        as :meth:`fitted_lead` returns it (a part whose lead is None is left as it is).
+
+        Parameters
+        ----------
+        lead : int, "auto" or mapping of str to int or None
+            The lead (samples) or leads of the parts.
+        """
+        ...
+
+
+@runtime_checkable
+class SavableMethod(Protocol):
+    """A method whose options and fitted models a test folder records (``summary.json`` and the
+    model files, :class:`vrig.TestFolder`)."""
+
+    def options(self) -> dict[str, Any]:
+        """The method's options by name (numbers, strings, or band methods for a method made of
+        parts), as given to its constructor."""
+        ...
+
+    def fitted_models(self) -> dict[str, Any]:
+        """``{file stem: fitted model}`` (models with ``save(path)``); empty before
+        ``identify``."""
         ...

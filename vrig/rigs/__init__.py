@@ -16,7 +16,7 @@ from .file_rig import FileRig
 from .hydraulics import HydraulicActuator
 from .mujoco_rig import FAST_MARGIN, MujocoRig, _models_dir
 from .protocol import DescribedRig, Rig
-from .spec import ChannelSpec, read_description
+from .spec import ChannelSpec, RigDefaults, read_description
 from .subset import OutputSubset
 
 __all__ = [
@@ -30,6 +30,7 @@ __all__ = [
     "MujocoRig",
     "OutputSubset",
     "Rig",
+    "RigDefaults",
     "Transducer",
     "list_rigs",
     "load_rig",
@@ -55,7 +56,13 @@ def severity_rigs() -> list[str]:
 
 
 def rig_path(name: str) -> Path:
-    """The side-car description file of a shipped rig."""
+    """The side-car description file of a shipped rig.
+
+    Parameters
+    ----------
+    name : str
+        A shipped rig's name (see :func:`list_rigs`).
+    """
     path = _models_dir() / name / f"{name}.rig.json"
     if not path.exists():
         raise ValueError(f"unknown rig {name!r}; available rigs: {list_rigs()}")

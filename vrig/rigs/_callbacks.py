@@ -13,6 +13,7 @@ removed. The raw-pointer intrinsics the compiled callbacks need live here too. U
 
 from __future__ import annotations
 
+import contextlib
 import ctypes
 import threading
 
@@ -199,6 +200,42 @@ class Hook:
                 self._previous = None
                 self.table[0, 0] = 0
 
+    def _take_foreign(self):
+        """Stop calling the foreign callback (a user's); returns what to give back."""
+        with self._lock:
+            if self.installed:  # vrig's own hook is live (runs in other threads): stop chaining
+                saved = ("chained", int(self.table[0, 0]))
+                self.table[0, 0] = 0
+                return saved
+            saved = ("slot", self._get())
+            if saved[1] is not None:
+                self._set(None)
+            return saved
+
+    def _give_back(self, saved) -> None:
+        """Undo :meth:`_take_foreign` (whatever vrig's own hook did meanwhile)."""
+        kind, value = saved
+        with self._lock:
+            if self.installed:  # vrig's hook live now: the foreign callback is its previous one
+                if kind == "chained":
+                    self.table[0, 0] = value
+                elif value is not None and self._previous is None:
+                    self._previous = value
+                    self.table[0, 0] = _c_address(value)
+            elif kind == "slot" and value is not None and self._get() is None:
+                self._set(value)
+
+    @contextlib.contextmanager
+    def foreign_suspended(self):
+        """A ``with`` block in which this slot calls no callback but vrig's own registered
+        contexts: the user's callback (a Python callable or a C function) is neither called
+        nor lost, and is back in place (or chained again) afterwards."""
+        saved = self._take_foreign()
+        try:
+            yield
+        finally:
+            self._give_back(saved)
+
     def context_of(self, data: mujoco.MjData):
         """The registered context of ``data``, or None."""
         entry = self._live.get(data._address)
@@ -211,3 +248,23 @@ def _c_address(callback) -> int:
     if isinstance(callback, ctypes._CFuncPtr):
         return int(ctypes.cast(callback, ctypes.c_void_p).value or 0)
     return 0
+
+
+@contextlib.contextmanager
+def foreign_callbacks_suspended(*hooks: Hook):
+    """Suspend every foreign callback of ``hooks`` (see :meth:`Hook.foreign_suspended`).
+
+    For the model compilation and the load-time forward passes of a rig: MuJoCo's compiler runs
+    the model once (``mj_setConst``) with whatever callbacks are installed, so a user's Python
+    ``mjcb_control`` made the compilation itself fail ("Python exception raised", the binding
+    cannot wrap a model that does not exist yet), and a C callback would run on vrig's model.
+
+    Parameters
+    ----------
+    *hooks : Hook
+        The hooks whose slots to keep free of foreign callbacks.
+    """
+    with contextlib.ExitStack() as stack:
+        for hook in hooks:
+            stack.enter_context(hook.foreign_suspended())
+        yield

@@ -26,11 +26,13 @@ from mujoco import rollout
 from ..errors import RigLimitError, RigModelError, RigParameterError, SimulationInstabilityError
 from ..timehistory import TimeHistory
 from . import gas_spring, hydraulics, stability
+from ._callbacks import foreign_callbacks_suspended
 from .daq import Acquisition
 from .spec import (
     ChannelSpec,
     InputDef,
     OutputDef,
+    RigDefaults,
     RigDescription,
     check_drive_limits,
     check_outputs_for_rate,
@@ -159,20 +161,7 @@ class MujocoRig:
             self._apply(spec, desc.parameters[name], value)
         n_hyd = sum(1 for c in self._inputs if c.hydraulic is not None)
         spec.nuserdata = max(spec.nuserdata, 8 + 8 * n_hyd)
-        try:
-            self.model = spec.compile()
-        except ValueError as exc:
-            raise RigModelError(f"{desc.mjcf}: MuJoCo could not compile the model: {exc}") from exc
-        self.data = mujoco.MjData(self.model)
-        documented = float(self.model.opt.timestep)
-        ratio = 1.0 / (desc.fs * documented)
-        if abs(ratio - round(ratio)) > 1e-6 or not 1 <= round(ratio) <= _MAX_DECIMATION:
-            raise RigModelError(
-                f"{desc.name}: the physics rate {1 / documented:g} Hz must be an integer multiple "
-                f"(1..{_MAX_DECIMATION}) of fs = {desc.fs:g} Hz"
-            )
-        self._bind()
-        self.stability_limit, self._stiffest = self._stability()
+        documented, ratio = self._compile(spec)
         self.timestep = self._choose_timestep(documented, round(ratio))
         self.model.opt.timestep = self.timestep
         # a blow-up must not reset the data: the interlock record and the time stay (see run)
@@ -183,6 +172,30 @@ class MujocoRig:
         self.seed = seed
 
     # ------------------------------------------------------------------ set-up
+    def _compile(self, spec) -> tuple[float, float]:
+        """Compile ``spec``, make the data, bind the channels and find the stability limit, with
+        every foreign MuJoCo callback suspended (:func:`~vrig.rigs._callbacks.
+        foreign_callbacks_suspended`); returns the documented timestep [s] and fs x timestep."""
+        desc = self._desc
+        with foreign_callbacks_suspended(hydraulics.CONTROL, gas_spring.PASSIVE, gas_spring.SENSOR):
+            try:
+                self.model = spec.compile()
+            except ValueError as exc:
+                raise RigModelError(
+                    f"{desc.mjcf}: MuJoCo could not compile the model: {exc}"
+                ) from exc
+            self.data = mujoco.MjData(self.model)
+            documented = float(self.model.opt.timestep)
+            ratio = 1.0 / (desc.fs * documented)
+            if abs(ratio - round(ratio)) > 1e-6 or not 1 <= round(ratio) <= _MAX_DECIMATION:
+                raise RigModelError(
+                    f"{desc.name}: the physics rate {1 / documented:g} Hz must be an integer "
+                    f"multiple (1..{_MAX_DECIMATION}) of fs = {desc.fs:g} Hz"
+                )
+            self._bind()
+            self.stability_limit, self._stiffest = self._stability()
+        return documented, ratio
+
     def _severity(self, severity) -> float | None:
         """The checked severity: None for a linear rig, 1.0 when not given."""
         desc = self._desc
@@ -437,6 +450,7 @@ class MujocoRig:
     # ------------------------------------------------------------------ public
     @property
     def name(self) -> str:
+        """The rig's name (from its side-car description)."""
         return self._desc.name
 
     @property
@@ -446,10 +460,12 @@ class MujocoRig:
 
     @property
     def inputs(self) -> tuple[ChannelSpec, ...]:
+        """The drive channels (name, unit, full scale), in drive column order."""
         return tuple(c.spec for c in self._inputs)
 
     @property
     def outputs(self) -> tuple[ChannelSpec, ...]:
+        """The response channels (name, unit, full scale), in response column order."""
         return tuple(c.spec for c in self._outputs)
 
     @property
@@ -459,15 +475,24 @@ class MujocoRig:
 
     @property
     def input_defs(self) -> tuple[InputDef, ...]:
+        """The side-car definitions of the drive channels (actuator, limits...)."""
         return tuple(self._inputs)
 
     @property
     def output_defs(self) -> tuple[OutputDef, ...]:
+        """The side-car definitions of the response channels (sensor, transducer...)."""
         return tuple(self._outputs)
 
     @property
     def description(self) -> RigDescription:
+        """The rig's parsed side-car description."""
         return self._desc
+
+    @property
+    def defaults(self) -> RigDefaults:
+        """The rig's own defaults from its side-car (band, gain, gym id, tolerance); the same
+        for every variant, severity and override."""
+        return self._desc.defaults
 
     def describe(self) -> str:
         """What the rig is, its channels, limits and parameters, as text."""

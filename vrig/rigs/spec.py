@@ -30,12 +30,14 @@ __all__ = [
     "SEVERITY_RANGE",
     "ChannelSpec",
     "Parameter",
+    "RigDefaults",
     "RigDescription",
     "Severity",
     "Variant",
     "check_drive_limits",
     "check_outputs_for_rate",
     "check_severity",
+    "read_defaults",
     "read_description",
     "rig_schema",
     "schema_path",
@@ -165,6 +167,36 @@ class OutputDef:
 
 
 @dataclass(frozen=True)
+class RigDefaults:
+    """A rig's own defaults where they differ from the global ones (side-car
+    ``"reconstruction"``; ``rig.defaults`` of a rig built from a side-car).
+
+    They belong to the rig, not to a parameter set: ``variant``, ``severity`` and parameter
+    overrides do not change them. ``None``: the side-car sets none (the global default applies).
+
+    Attributes
+    ----------
+    band : (float, float) or None
+        Simulation band (low, high) [Hz] of reconstructions, pseudo-field desired responses and
+        the gymnasium envs where it differs from the test band ``bandwidth``
+        (:func:`vrig.field.default_band`).
+    gain : float or None
+        Iteration gain in (0, 2] of ``vrig reconstruct`` (global default 0.8).
+    gym_id : str or None
+        The gymnasium id of the rig (``"vrig/Shaker-v0"``); a shipped rig's id is registered on
+        ``import vrig`` (:data:`vrig.envs.ENV_IDS`).
+    tolerance : float or None
+        Default η0 tolerance [%] of the drive-iteration env on this rig, measured by the rule
+        stated in :mod:`vrig.envs` (global default 2 %).
+    """
+
+    band: tuple[float, float] | None = None
+    gain: float | None = None
+    gym_id: str | None = None
+    tolerance: float | None = None
+
+
+@dataclass(frozen=True)
 class RigDescription:
     """Everything in a side-car file, validated."""
 
@@ -186,7 +218,7 @@ class RigDescription:
     default_variant: str = "mild"  # the variant load_rig(name) gives (variant=None)
     severity: Severity | None = None  # the non-linearity severity axis; None: a linear rig
     air_springs: tuple = ()  # AirSpring elements (vrig.rigs.gas_spring), side-car "air_springs"
-    reconstruction: dict = field(default_factory=dict)  # the CLI's per-rig defaults ("gain")
+    defaults: RigDefaults = RigDefaults()  # side-car "reconstruction": band, gain, gym, tolerance
 
 
 MILD = "mild"
@@ -331,17 +363,18 @@ def _schema_allowed(error) -> str:
     return sub.get("description", "")
 
 
-def validate_description(raw, where: str = "side-car") -> None:
+def validate_description(raw, where: str = "side-car", *, schema: dict | None = None) -> None:
     """Check a parsed side-car against :func:`rig_schema` (and for NaN/infinite numbers, which
     JSON Schema cannot see); raises :class:`RigParameterError` naming the key and what is
-    allowed (unknown keys such as a misspelt ``noise_rmss`` included)."""
+    allowed (unknown keys such as a misspelt ``noise_rmss`` included). ``schema``: check
+    against this (part of the) schema instead."""
     for path, value in _non_finite(raw):
         key = _json_path(path)
         raise RigParameterError(
             f"{where}: {key} is {value!r}: every number must be finite", key, value, "finite"
         )
     error = jsonschema.exceptions.best_match(
-        jsonschema.Draft202012Validator(rig_schema()).iter_errors(raw)
+        jsonschema.Draft202012Validator(schema or rig_schema()).iter_errors(raw)
     )
     if error is not None:
         key = _json_path(error.absolute_path)
@@ -497,14 +530,64 @@ def check_outputs_for_rate(outputs, fs: float, where: str) -> None:
         )
 
 
-def _band(raw: dict, fs: float, where: str) -> tuple[float, float]:
-    band = tuple(float(b) for b in raw.get("bandwidth_hz", (0.0, fs / 4)))
+def _band(values, fs: float, where: str, key: str = "bandwidth_hz") -> tuple[float, float]:
+    """``values`` as a band (low, high) [Hz] with 0 <= low < high <= fs/2, else
+    :class:`RigParameterError` naming ``key``."""
+    band = tuple(float(b) for b in values)
     if not 0 <= band[0] < band[1] <= fs / 2:
         allowed = f"[low, high] with 0 <= low < high <= fs/2 = {fs / 2:g} Hz"
         raise RigParameterError(
-            f"{where}: bandwidth_hz must be {allowed}, got {list(band)}", "bandwidth_hz", band, allowed
+            f"{where}: {key} must be {allowed}, got {list(band)}", key, band, allowed
         )
     return band
+
+
+def _read_defaults(raw: dict, fs: float, where: str) -> RigDefaults:
+    """The side-car's ``"reconstruction"`` block (types and ranges: the schema) as
+    :class:`RigDefaults`; the band is checked against ``fs``."""
+    block = raw.get("reconstruction", {})
+    gym = block.get("gym", {})
+    band = block.get("band")
+    return RigDefaults(
+        band=None if band is None else _band(band, fs, where, "reconstruction.band"),
+        gain=None if "gain" not in block else float(block["gain"]),
+        gym_id=gym.get("id"),
+        tolerance=None if "tolerance" not in gym else float(gym["tolerance"]),
+    )
+
+
+def _read_json(path: Path) -> dict:
+    try:
+        return json.loads(path.read_text())
+    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
+        raise RigModelError(f"{path}: not valid JSON ({exc})") from exc
+
+
+def read_defaults(path) -> RigDefaults:
+    """Only the :class:`RigDefaults` of a ``*.rig.json`` side-car file, checked as
+    :func:`read_description` checks them, without reading the rest (the gymnasium registration
+    reads every shipped side-car on ``import vrig``).
+
+    Raises
+    ------
+    RigModelError
+        Not JSON.
+    RigParameterError
+        (a RigModelError) ``fs`` or the ``"reconstruction"`` block is missing, of the wrong
+        type, out of range or has an unknown key.
+    """
+    path = Path(path)
+    raw = _read_json(path)
+    full = rig_schema()
+    part = {
+        "type": "object",
+        "required": ["fs"],
+        "properties": {k: full["properties"][k] for k in ("fs", "reconstruction")},
+    }
+    if isinstance(raw, dict):  # (not an object: the schema says so)
+        raw = {k: raw[k] for k in ("fs", "reconstruction") if k in raw}
+    validate_description(raw, str(path), schema=part)
+    return _read_defaults(raw, float(raw["fs"]), str(path))
 
 
 def read_description(path) -> RigDescription:
@@ -519,10 +602,7 @@ def read_description(path) -> RigDescription:
         (:func:`rig_schema` and the checks it names), or an unknown key.
     """
     path = Path(path)
-    try:
-        raw = json.loads(path.read_text())
-    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
-        raise RigModelError(f"{path}: not valid JSON ({exc})") from exc
+    raw = _read_json(path)
     where = str(path)
     validate_description(raw, where)
     mjcf = path.parent / raw["mjcf"]
@@ -573,7 +653,7 @@ def read_description(path) -> RigDescription:
         path=path,
         mjcf=mjcf,
         fs=fs,
-        bandwidth=_band(raw, fs, where),
+        bandwidth=_band(raw.get("bandwidth_hz", (0.0, fs / 4)), fs, where),
         settle_time=float(raw.get("settle_time", 0.0)),
         anti_alias=aa,
         inputs=tuple(inputs),
@@ -585,9 +665,7 @@ def read_description(path) -> RigDescription:
         default_variant=default_variant,
         severity=_read_severity(raw.get("severity"), params, where),
         air_springs=_read_air_springs(raw.get("air_springs", []), where),
-        reconstruction={
-            k: float(v) for k, v in raw.get("reconstruction", {}).items() if k != "description"
-        },  # ranges: schema
+        defaults=_read_defaults(raw, fs, where),
     )
 
 

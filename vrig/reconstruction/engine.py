@@ -1,0 +1,381 @@
+"""The drive-iteration engine: one reconstruction, step by step (§1.3, App. G).
+
+:class:`DriveIteration` identifies the inverse model (IDDRV -> rig -> IDRES), computes the first
+drive (IT00DRV = inverse(DESRES)), plays drives on the rig and computes the corrections; the loop
+that strings these together is :func:`vrig.reconstruct` (:mod:`.iteration`), and the gymnasium
+environments drive the same engine a step at a time.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy import signal
+
+from identification.errors import SimulationDivergedError
+
+from ..errors import RigLimitError, SimulationInstabilityError
+from ..processing import band_gains, decimate, gprepro, identification_band
+from ..rigs.spec import check_drive_limits
+from ..signals import random_drive, triangular_psd
+from ..timehistory import TimeHistory
+from .methods import make_method
+from .scores import scores
+from .settings import IterationSettings
+
+__all__ = ["DriveIteration"]
+
+
+def _check_drive(rig, drive: np.ndarray, what: str) -> None:
+    check_drive_limits(rig.inputs, drive, fs=rig.fs, what=what)
+
+
+def _check_band(band, fs: float) -> tuple[float, float]:
+    """The simulation band: two finite numbers with 0 <= low < high <= fs/2 (Nyquist)."""
+    try:
+        lo, hi = (float(b) for b in band)
+    except (TypeError, ValueError):
+        raise ValueError(f"bandwidth must be (low, high) in Hz, got {band!r}") from None
+    if not (np.isfinite(lo) and np.isfinite(hi) and 0 <= lo < hi <= fs / 2):
+        raise ValueError(
+            f"bandwidth must satisfy 0 <= low < high <= fs/2 = {fs / 2:g} Hz (Nyquist), got "
+            f"({lo:g}, {hi:g})"
+        )
+    return lo, hi
+
+
+def _check_id_rms(id_rms, full: np.ndarray) -> np.ndarray:
+    """Identification drive RMS per channel: finite, > 0 and at most the full scale."""
+    rms = np.asarray(id_rms if id_rms is not None else 0.05 * full, float)
+    try:
+        rms = np.broadcast_to(rms, full.shape)
+    except ValueError:
+        raise ValueError(
+            f"id_rms must be one value or one per drive channel ({full.size}), got {id_rms!r}"
+        ) from None
+    if not np.all(np.isfinite(rms) & (rms > 0) & (rms <= full)):
+        raise ValueError(
+            f"id_rms must be finite, > 0 and <= each drive's full scale {full.tolist()}, "
+            f"got {rms.tolist()}"
+        )
+    return rms
+
+
+def _check_content(desired: TimeHistory, desres: TimeHistory, band) -> None:
+    """See :meth:`DriveIteration.check_desired`."""
+    scale = np.abs(desired.data).max(axis=0)
+    rms = np.sqrt(np.mean(desres.data**2, axis=0))
+    empty = ~(rms > 1e-9 * scale)
+    if empty.any():
+        k = int(np.argmax(empty))
+        raise ValueError(
+            f"desired channel {desired.names[k]!r} has no content in the simulation band "
+            f"{band[0]:g}-{band[1]:g} Hz after de-trending and DC removal (RMS {rms[k]:.3g} "
+            f"against a peak of {scale[k]:.3g}): a constant or out-of-band record cannot be "
+            "reconstructed"
+        )
+
+
+class DriveIteration:
+    """One reconstruction, step by step: the engine of :func:`reconstruct` and of the gymnasium
+    environments (so a policy's fixed gain reproduces ``reconstruct`` exactly).
+
+    >>> it = DriveIteration(rig, desired, method="arx", seed=0)     # doctest: +SKIP
+    >>> it.identify()                                               # IDDRV -> IDRES -> model
+    >>> drive = it.first_drive()                                    # IT00DRV = inverse(DESRES)
+    >>> drv, raw, res, (eta0, rms, damage) = it.play(drive, 0)      # RIT00RES, IT00RES, scores
+    >>> drive = it.next_drive(drive, res, gain=0.8)                 # IT01DRV
+
+    ``play`` raises :class:`~vrig.RigLimitError` for a drive beyond the rig's limits *before*
+    sending it, or when the rig trips. A drive that was refused or tripped the rig (in ``play``
+    or ``identify``) is kept in ``rejected`` as ``("REFUSEDxx" | "TRIPPEDxx", drive)`` (``xx``
+    the iteration, ``ID`` for the identification drive) until the next drive is played; a drive
+    that is not finite is refused but not kept.
+
+    Parameters
+    ----------
+    rig : Rig
+        The rig (:class:`~vrig.rigs.Rig` protocol).
+    desired : TimeHistory
+        The desired response (DESRES before processing), the rig's outputs at ``rig.fs``.
+    settings : IterationSettings, optional
+        The iteration's settings (default: the defaults); the engine uses the identification
+        ones and ``id_seed`` / ``run_seed``, the loop's (gain, iterations, ...) are the caller's.
+    **options
+        Settings by name applied on top of ``settings`` (see :meth:`IterationSettings.build`).
+    """
+
+    def __init__(
+        self,
+        rig,
+        desired: TimeHistory,
+        settings: IterationSettings | None = None,
+        **options,
+    ):
+        if not isinstance(desired, TimeHistory):
+            raise TypeError("desired must be a vrig.TimeHistory")
+        if desired.fs != rig.fs:
+            raise ValueError(f"desired is sampled at {desired.fs:g} Hz, the rig at {rig.fs:g} Hz")
+        if desired.n_channels != len(rig.outputs):
+            raise ValueError(
+                f"desired has {desired.n_channels} channels, the rig {len(rig.outputs)} responses"
+            )
+        s = self.settings = IterationSettings.build(settings, **options)
+        self.rig = rig
+        self.band = _check_band(s.bandwidth if s.bandwidth is not None else rig.bandwidth, rig.fs)
+        self.id_band = identification_band(self.band, fs=rig.fs)
+        self.method = make_method(s.method, **s.method_options)
+        self.decimation = (
+            max(1, int(rig.fs // (8 * self.id_band[1]))) if s.decimation is None else s.decimation
+        )
+        self.taper = float(s.taper)
+        self.n_inputs = len(rig.inputs)
+        full = np.array([c.full_scale for c in rig.inputs])
+        self.id_rms = _check_id_rms(s.id_rms, full)
+        self.id_psd = s.id_psd
+        self.id_samples = round((s.id_duration or desired.duration) * rig.fs)
+        self.desres = gprepro(desired, self.band)
+        self._desired = desired
+        self.n = self.desres.n_samples
+        self.names = [c.name for c in rig.inputs]
+        self.units = [c.unit for c in rig.inputs]
+        self.id_drive: TimeHistory | None = None
+        self.id_response: TimeHistory | None = None
+        self.target: np.ndarray | None = None
+        self.rejected: tuple[str, TimeHistory] | None = None
+
+    # -- resampling between the rig rate and the model rate
+    def down(self, th: TimeHistory) -> TimeHistory:
+        """A record at the model rate (``fs / decimation``, zero-phase anti-alias filter).
+
+        Parameters
+        ----------
+        th : TimeHistory
+            A record at the rig rate.
+
+        Returns
+        -------
+        TimeHistory
+        """
+        return decimate(th, self.decimation)
+
+    def up(self, x: np.ndarray) -> np.ndarray:
+        """Samples at the model rate interpolated back to the rig rate (``n`` samples).
+
+        Parameters
+        ----------
+        x : ndarray (n_model_samples, n_channels)
+            A drive at the model rate.
+
+        Returns
+        -------
+        ndarray (n, n_channels)
+        """
+        if self.decimation == 1:
+            return x
+        return signal.resample_poly(x, self.decimation, 1, axis=0)[: self.n]
+
+    def identify(self) -> None:
+        """IDDRV (``id_psd``, default triangular over the identification band) -> IDRES ->
+        inverse model.
+
+        The drive RMS is halved (up to three times) while the rig refuses or trips on it."""
+        rig, rms = self.rig, self.id_rms
+        shape = self.id_psd
+        if shape is None:
+            shape = triangular_psd((max(self.id_band[0], 0.0), self.id_band[1]))
+        for _attempt in range(4):
+            iddrv = random_drive(
+                shape,
+                self.id_samples,
+                rig.fs,
+                channels=self.n_inputs,
+                rms=rms,
+                seed=self.settings.id_seed,
+                names=self.names,
+                unit=rig.inputs[0].unit,
+            )
+            try:
+                _, idres = self._send(iddrv, "ID", "the identification drive", self.settings.id_seed)
+                break
+            except RigLimitError as exc:  # halve the amplitude and try again
+                rms, last_trip = rms / 2, exc
+        else:
+            raise last_trip  # even at 1/8 of the amplitude the identification drive trips
+        self.id_drive, self.id_response = iddrv, idres
+        self._fit(iddrv, idres)
+
+    def reidentify(self, drive: TimeHistory, raw: TimeHistory) -> None:
+        """Adaptive strategy: re-fit the inverse from the latest drive / raw response pair.
+
+        Parameters
+        ----------
+        drive : TimeHistory
+            The drive last played (ITxxDRV).
+        raw : TimeHistory
+            The rig's raw response to it (RITxxRES).
+        """
+        self._fit(drive, raw)
+
+    def _fit(self, drive: TimeHistory, response: TimeHistory) -> None:
+        self.method.identify(
+            self.down(gprepro(drive, self.id_band)), self.down(gprepro(response, self.id_band))
+        )
+        self.target = self._inverse(self.desres, "DESRES")
+
+    def _inverse(self, response: TimeHistory, what: str) -> np.ndarray:
+        """The method's drive for ``response`` at the model rate; a non-finite value raises
+        :class:`~identification.SimulationDivergedError` (as a diverging free run does)."""
+        x = np.asarray(self.method.drive(self.down(response)), dtype=float)
+        bad = ~np.isfinite(x)
+        if bad.any():
+            i, j = np.argwhere(bad)[0]
+            raise SimulationDivergedError(
+                j, f"{self.names[j]} (inverse of {what})", i, x[i, j], np.inf
+            )
+        return x
+
+    def use_identified(self, method, id_drive: TimeHistory, id_response: TimeHistory) -> None:
+        """Take an already identified method (e.g. a cached inverse model, identified by
+        :meth:`identify` on the same rig, band and settings) instead of identifying again.
+
+        Parameters
+        ----------
+        method : Method
+            The identified method.
+        id_drive, id_response : TimeHistory
+            The identification records it was identified from (IDDRV, IDRES).
+        """
+        self.method = make_method(method)
+        self.id_drive, self.id_response = id_drive, id_response
+        self.target = self._inverse(self.desres, "DESRES")
+
+    def shape(self, x: np.ndarray) -> np.ndarray:
+        """A drive (or drive correction) as it may be sent: band-limited to the identification
+        band (zero-phase, as every other record: what the model does outside the band it was
+        identified in is drift, not information) and tapered to zero over the first and last
+        ``taper`` seconds (the rig starts and ends at rest; a step at the start would trip the
+        following-error interlock).
+
+        Parameters
+        ----------
+        x : ndarray (n, n_inputs)
+            A drive or correction at the rig rate, in the drives' units.
+
+        Returns
+        -------
+        ndarray (n, n_inputs)
+        """
+        th = TimeHistory(x, self.rig.fs, self.names, self.units)
+        y = np.array(gprepro(th, self.id_band, detrend=False).data)
+        m = min(round(self.taper * self.rig.fs), self.n // 4)
+        if m > 0:
+            ramp = 0.5 - 0.5 * np.cos(np.pi * np.arange(m) / m)
+            y[:m] *= ramp[:, None]
+            y[self.n - m :] *= ramp[::-1, None]
+        return y
+
+    def check_desired(self) -> None:
+        """Raise ``ValueError`` when a desired channel has nothing to reproduce in the band
+        (constant, a pure trend or out of band): its η0 would be a ratio of round-off
+        (2.3e14 % for a constant record). Called by :meth:`first_drive` and, before the
+        identification, by :func:`reconstruct`; identifying alone needs no desired content."""
+        _check_content(self._desired, self.desres, self.band)
+
+    def first_drive(self) -> np.ndarray:
+        """IT00DRV = inverse(DESRES), band-limited and tapered (:meth:`shape`), at the rig rate."""
+        if self.target is None:
+            raise RuntimeError("identify() first")
+        self.check_desired()
+        return self.shape(self.up(self.target))
+
+    def play(self, drive: np.ndarray, iteration: int):
+        """Check and send ``drive`` (ITxxDRV); returns (drive, raw, processed, (η0, rms, damage)).
+
+        Raises RigLimitError (nothing is sent when the drive itself is beyond the limits).
+
+        Parameters
+        ----------
+        drive : ndarray (n, n_inputs) or TimeHistory
+            The drive, at the rig rate.
+        iteration : int
+            Its iteration number xx (names the records; the rig run is seeded with
+            ``run_seed + 1 + xx``).
+
+        Returns
+        -------
+        drive, raw, processed : TimeHistory
+            ITxxDRV, RITxxRES and ITxxRES (GPREPRO over the simulation band).
+        scores : (eta0, rms_error, damage_ratio)
+            Per response channel (:func:`~vrig.reconstruction.scores.scores`).
+        """
+        what = f"IT{iteration:02d}DRV"
+        run_seed = self.settings.rig_run_seed + 1 + iteration
+        drv, raw = self._send(drive, f"{iteration:02d}", what, run_seed)
+        res = gprepro(raw, self.band)
+        return drv, raw, res, scores(self.desres, res)
+
+    def _send(self, drive, tag: str, what: str, seed: int):
+        """Check ``drive`` (TimeHistory or array) against the limits and play it; returns
+        (drive as TimeHistory, raw response). A refused drive or one that trips the rig (an
+        interlock, an unstable simulation) is kept in ``rejected`` before the error goes on."""
+        self.rejected = None
+        data = drive.data if isinstance(drive, TimeHistory) else np.asarray(drive, dtype=float)
+        drv = None
+        if np.all(np.isfinite(data)):
+            drv = drive if isinstance(drive, TimeHistory) else self._th(data)
+        try:
+            _check_drive(self.rig, data, what)
+        except RigLimitError:
+            self.rejected = None if drv is None else (f"REFUSED{tag}", drv)
+            raise
+        try:
+            raw = self.rig.run(drv, seed=seed)
+        except (RigLimitError, SimulationInstabilityError):
+            self.rejected = (f"TRIPPED{tag}", drv)
+            raise
+        return drv, raw
+
+    def _th(self, data: np.ndarray) -> TimeHistory:
+        return TimeHistory(data, self.rig.fs, self.names, self.units)
+
+    def correction(self, response: TimeHistory) -> np.ndarray:
+        """``inverse(DESRES) - inverse(ITxxRES)`` at the rig rate (the un-scaled update),
+        band-limited and tapered like the drive (:meth:`shape`).
+
+        Parameters
+        ----------
+        response : TimeHistory
+            The processed response of the last iteration (ITxxRES).
+
+        Returns
+        -------
+        ndarray (n, n_inputs)
+        """
+        return self.shape(self.up(self.target - self._inverse(response, "the response")))
+
+    def next_drive(self, drive: np.ndarray, response: TimeHistory, gain, edges=None) -> np.ndarray:
+        """``ITn+1DRV = ITnDRV + gain * (inverse(DESRES) - inverse(ITnRES))``.
+
+        Parameters
+        ----------
+        drive : ndarray (n, n_inputs)
+            ITnDRV.
+        response : TimeHistory
+            ITnRES (processed).
+        gain : float, sequence or ndarray (n_inputs, n_bands)
+            A scalar, one value per drive channel, or one per channel and band.
+        edges : sequence of float, optional
+            Band edges [Hz] of per-band gains (see :func:`~vrig.processing.band_gains`).
+
+        Returns
+        -------
+        ndarray (n, n_inputs)
+            ITn+1DRV.
+        """
+        corr = self.correction(response)
+        g = np.asarray(gain, dtype=float)
+        if g.ndim == 2:
+            if edges is None:
+                raise ValueError("per-band gains need the band edges")
+            return drive + band_gains(corr, self.rig.fs, g, edges)
+        return drive + np.broadcast_to(g, (self.n_inputs,)) * corr

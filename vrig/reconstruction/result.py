@@ -1,0 +1,105 @@
+"""The result of a reconstruction: every iteration played, its scores and why it stopped."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..timehistory import TimeHistory
+from .settings import IterationSettings
+
+__all__ = ["ReconstructionResult"]
+
+
+@dataclass
+class ReconstructionResult:
+    """Everything a reconstruction produced (QanTiM names).
+
+    Attributes
+    ----------
+    desired : TimeHistory
+        DESRES: the desired response after processing (GPREPRO over ``bandwidth``).
+    method : Method
+        The identified method (its inverse model) the drives were computed with.
+    bandwidth : (low, high) Hz
+        The simulation band.
+    errors : ndarray (n_iterations_run + 1, n_outputs)
+        η0 [%] (eq. 5-28) of ITxxRES against DESRES, IT00 first.
+    rms_errors : ndarray, same shape
+        RMS error [%] of ITxxRES against DESRES (means removed).
+    damage_ratio : ndarray, same shape
+        Rainflow pseudo-damage of ITxxRES over that of DESRES (S-N slope 5).
+    drives, responses, raw_responses : list of TimeHistory
+        ITxxDRV, ITxxRES (processed) and RITxxRES (raw) per iteration.
+    best_iteration : int
+        Iteration with the smallest mean η0; ``final_drive``/``final_response`` are its records.
+        ``-1`` when no iteration was played (the result of a :class:`~vrig.ReconstructionError`).
+    id_drive, id_response : TimeHistory or None
+        IDDRV and IDRES (raw); ``None`` when the identification drive could not be played.
+    stopped : str
+        Why the loop stopped before the last iteration ("" when it ran them all).
+    error : Exception or None
+        The exception that stopped the loop (None when it completed or diverged).
+    rejected_name, rejected_drive : str, TimeHistory or None
+        The drive that was refused before it was sent (``"REFUSEDxx"``, ``"REFUSEDID"`` for the
+        identification drive) or that tripped the rig (``"TRIPPEDxx"``, ``"TRIPPEDID"``), when
+        the loop stopped on one; ``""``/``None`` otherwise.
+    decimation, gain, strategy, seed : int, ndarray, str, int
+        The model decimation used, the gain per drive channel, the strategy and the
+        identification seed (``settings.id_seed``).
+    settings : IterationSettings
+        Everything the reconstruction was run with.
+    """
+
+    desired: TimeHistory
+    id_drive: TimeHistory | None
+    id_response: TimeHistory | None
+    method: object
+    bandwidth: tuple[float, float]
+    errors: np.ndarray
+    rms_errors: np.ndarray
+    damage_ratio: np.ndarray
+    drives: list = field(default_factory=list)
+    responses: list = field(default_factory=list)
+    raw_responses: list = field(default_factory=list)
+    best_iteration: int = 0
+    stopped: str = ""
+    decimation: int = 1
+    gain: np.ndarray | None = None
+    strategy: str = "fixed"
+    seed: int = 0
+    settings: IterationSettings | None = None
+    error: Exception | None = None
+    rejected_name: str = ""
+    rejected_drive: TimeHistory | None = None
+
+    @property
+    def final_drive(self) -> TimeHistory:
+        """The drive of the best iteration (FINDRV01); ``ValueError`` when none was played."""
+        return self.drives[self._best()]
+
+    @property
+    def final_response(self) -> TimeHistory:
+        """The processed response of the best iteration (FINRES01); ``ValueError`` when none was
+        played."""
+        return self.responses[self._best()]
+
+    def _best(self) -> int:
+        if not self.drives or not 0 <= self.best_iteration < len(self.drives):
+            raise ValueError(f"no iteration was played ({self.stopped or 'empty result'})")
+        return self.best_iteration
+
+    def table(self) -> str:
+        """Per-iteration, per-channel η0 table."""
+        names = self.desired.names
+        head = f"{'iteration':>9} " + " ".join(f"{n[:14]:>14}" for n in names) + f" {'mean':>8}"
+        rows = [head]
+        for i, e in enumerate(self.errors):
+            mark = " *" if i == self.best_iteration else ""
+            rows.append(
+                f"{f'IT{i:02d}':>9} "
+                + " ".join(f"{v:>13.2f}%" for v in e)
+                + f" {e.mean():>7.2f}%{mark}"
+            )
+        return "\n".join(rows)
