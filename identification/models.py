@@ -17,7 +17,13 @@ import numpy as np
 
 from ._files import atomic_write, read_npz
 from ._transforms import FUNCTIONS
-from ._validation import as_signal, check_initial_outputs, check_same_length, per_channel_int
+from ._validation import (
+    as_signal,
+    check_initial_outputs,
+    check_same_length,
+    check_steps_ahead,
+    per_channel_int,
+)
 from .budget import check_allocation, product
 from .errors import (
     IdentificationError,
@@ -31,7 +37,7 @@ from .free_run_selection import check_criterion, criterion_path, simulation_sele
 from .output_error import FlatModel, refine
 from .regression import regression_matrix
 from .selection import forward_regression
-from .simulation import compile_plan, simulate_plan
+from .simulation import compile_plan, predict_plan_k_step, simulate_plan
 from .solvers import get_solver
 from .structure import (
     AUTO_BREAKPOINTS,
@@ -794,10 +800,12 @@ class Narx:
         ----------
         u : array (N, nu) or (N,)
             Input record.
-        y0 : array (max_lag_, ny), optional
-            Initial outputs: the first ``max_lag_`` samples are set to ``y0`` and simulation
-            starts at sample ``max_lag_``. Default: zero past (inputs and outputs before sample
-            0 are zero) and every sample is simulated.
+        y0 : array (L, ny) or (L,), L >= max_lag_, optional
+            Initialisation window of measured outputs (nonlinear_benchmarks' convention, e.g.
+            ``y0 = y[:50]``): the first ``L`` samples of the result are ``y0`` and simulation
+            starts at sample ``L`` from its last ``max_lag_`` samples (the same numbers, bit for
+            bit, as ``simulate(u[L - max_lag_:], y0=y0[-max_lag_:])``). Default: zero past
+            (inputs and outputs before sample 0 are zero) and every sample is simulated.
         bound : float or array (ny,), optional
             Magnitude bound per channel; default ``bound_``. ``np.inf`` checks finiteness only.
 
@@ -810,38 +818,70 @@ class Narx:
         u = as_signal(u, "u", n_channels=self.n_inputs_)
         if y0 is not None:
             y0 = check_initial_outputs(y0, u, self.max_lag_, self.n_outputs_)
+        return simulate_plan(self.plan_, u, y0, self._bound(bound), self.output_names_)
+
+    def _bound(self, bound) -> np.ndarray:
         if bound is None:
             bound = self.bound_
         bound = np.broadcast_to(np.asarray(bound, dtype=np.float64), (self.n_outputs_,)).copy()
         if np.any(np.isnan(bound)) or np.any(bound <= 0):
             raise IdentificationError(f"bound must be positive, got {bound}")
-        return simulate_plan(self.plan_, u, y0, bound, self.output_names_)
+        return bound
 
-    def predict(self, u, y) -> np.ndarray:
-        """One-step-ahead prediction from measured inputs and outputs, shape (N, ny).
+    def predict(self, u, y, *, steps_ahead: int | None = 1, bound=None) -> np.ndarray:
+        """Prediction from measured inputs and outputs, shape (N, ny): one step ahead by
+        default, k steps ahead, or a free run (SysIdentPy's ``steps_ahead``).
 
-        The first ``max_lag_`` samples cannot be predicted and are copies of ``y``.
+        .. note:: **The default differs from SysIdentPy's.** SysIdentPy's ``predict`` defaults
+           to ``steps_ahead=None``, a free run; here the default is ``steps_ahead=1`` (what
+           ``predict(u, y)`` has always returned). One-step-ahead errors are far smaller than
+           free-run errors: to score a model as SysIdentPy's default does, pass
+           ``steps_ahead=None`` (or call :meth:`simulate`).
+
+        The first ``max_lag_`` samples cannot be predicted and are copies of ``y`` (as in
+        SysIdentPy).
 
         Parameters
         ----------
-        u : array_like, shape (N, nu) or (N,)
-            Measured input record.
-        y : array_like, shape (N, ny) or (N,)
-            Measured output record, same N (its past values are the regressors).
+        u : array (N, nu) or (N,)
+            Measured inputs.
+        y : array (N, ny) or (N,)
+            Measured outputs, time-aligned with ``u``; N > ``max_lag_``.
+        steps_ahead : None, 1 or int k > 1 (keyword only)
+            ``1``: one-step-ahead prediction (every regressor from measured data).
+            ``None``: free-run simulation from the first ``max_lag_`` measured outputs,
+            exactly ``simulate(u, y0=y[:max_lag_])``.
+            ``k``: k-step-ahead prediction as SysIdentPy's: from sample ``max_lag_`` on the
+            record is cut into windows of k samples (the last one may be shorter); each window
+            is a free run re-initialised from the measured outputs just before it, so sample
+            ``max_lag_ + j k + i`` is predicted ``i + 1`` steps ahead (``i < k``). A ``k`` of at
+            least ``N - max_lag_`` is the free run.
+        bound : float or array (ny,), optional
+            For ``None`` and ``k > 1`` (free runs): as for :meth:`simulate`, default
+            ``bound_``. The one-step prediction only checks finiteness.
 
         Raises
         ------
         SimulationDivergedError
-            (``kind = "one-step prediction"``) when a prediction is not finite: the data are
-            so large that the model's terms overflow. The result never holds NaN or inf.
+            ``kind = "one-step prediction"`` when a one-step prediction is not finite (the data
+            are so large that the model's terms overflow: the result never holds NaN or inf);
+            ``"free-run simulation"`` / ``"k-step prediction"`` when a free run leaves
+            ``bound``.
         """
         self._check_fitted()
+        steps = check_steps_ahead(steps_ahead)
         u = as_signal(u, "u", n_channels=self.n_inputs_)
         y = as_signal(y, "y", n_channels=self.n_outputs_)
         check_same_length(u, y, "u", "y")
         p = self.max_lag_
         if u.shape[0] <= p:
             raise IdentificationError(f"need more than max_lag_ = {p} samples to predict")
+        if steps is None:
+            return self.simulate(u, y0=y[:p], bound=bound)
+        if steps > 1:
+            return predict_plan_k_step(
+                self.plan_, u, y, steps, self._bound(bound), self.output_names_
+            )
         out = y.copy()
         X, shared_with = None, None
         with np.errstate(over="ignore", invalid="ignore"):  # overflow is reported below

@@ -16,7 +16,7 @@ import numpy as np
 from scipy import signal
 
 from ._composite import load_composite, save_composite
-from ._validation import as_signal, check_same_length
+from ._validation import as_signal, check_same_length, check_steps_ahead
 from .errors import IdentificationError, InsufficientDataError, SimulationDivergedError
 from .models import Arx, Narx
 
@@ -291,28 +291,40 @@ class SplitSpectraModel:
             when a band's free run leaves its bound (names the channel, sample and band).
         """
         u_lo, u_hi, n = self._input(u)
-        y_lo = self._band("low", self.low_, self._down(u_lo), bound, self.factor_)
-        y_hi = self._band("high", self.high_, u_hi, bound, 1)
+        kw = {"bound": bound}
+        y_lo = self._band("low", self.low_.simulate, (self._down(u_lo),), kw, self.factor_)
+        y_hi = self._band("high", self.high_.simulate, (u_hi,), kw, 1)
         return self._up(y_lo, n) + y_hi
 
     @staticmethod
-    def _band(band: str, model: Narx, u: np.ndarray, bound, factor: int) -> np.ndarray:
+    def _band(band: str, run, args: tuple, kwargs: dict, factor: int) -> np.ndarray:
+        """``run(*args, **kwargs)`` (a band model's simulate or predict), a divergence
+        re-raised with its sample counted at ``fs`` and the band named."""
         try:
-            return model.simulate(u, bound=bound)
+            return run(*args, **kwargs)
         except SimulationDivergedError as exc:  # the sample counted at fs
+            what = "free run" if exc.kind == "free-run simulation" else exc.kind
             raise SimulationDivergedError(
                 exc.channel,
                 exc.channel_name,
                 exc.sample * factor,
                 exc.value,
                 exc.bound,
-                f"{band}-band free run",
+                f"{band}-band {what}",
             ) from None
 
-    def predict(self, u, y) -> np.ndarray:
-        """One-step-ahead prediction (N, ny): each band model's prediction from the measured
-        band of ``u`` and ``y`` (the low band at its own rate, one low-rate step ahead,
-        interpolated back to ``fs``), summed.
+    def predict(self, u, y, *, steps_ahead: int | None = 1, bound=None) -> np.ndarray:
+        """Prediction (N, ny): each band model's prediction from the measured band of ``u``
+        and ``y`` (the low band at its own rate, interpolated back to ``fs``), summed.
+
+        ``steps_ahead`` (SysIdentPy's meaning, see :meth:`Narx.predict
+        <identification.Narx.predict>`; the default, 1, is not SysIdentPy's): ``1`` one step
+        ahead (the low band one low-rate step); ``k`` k steps ahead (the low band
+        ``ceil(k / factor_)`` low-rate steps, i.e. at least k samples at ``fs``); ``None`` each
+        band's free run from the first ``max_lag_`` samples of its measured band. The bands of
+        ``y`` need the whole record, so that free run has no :meth:`simulate` counterpart
+        (``simulate`` starts both bands from a zero past). ``bound``: for the free runs, as
+        for :meth:`simulate`.
 
         Parameters
         ----------
@@ -320,13 +332,33 @@ class SplitSpectraModel:
             Measured input record.
         y : array_like, shape (N, ny) or (N,)
             Measured output record, same N (its past values are the regressors).
+        steps_ahead : int or None
+            ``1`` (default) one step ahead, ``k`` k steps ahead, ``None`` a free run.
+        bound : float, optional
+            Free-run bound, as for :meth:`simulate`.
+
+        Raises
+        ------
+        SimulationDivergedError
+            when a band's prediction is not finite or its free run leaves ``bound`` (the sample
+            counted at ``fs``).
         """
+        steps = check_steps_ahead(steps_ahead)
         u_lo, u_hi, n = self._input(u)
         y = as_signal(y, "y", n_channels=self.n_outputs_)
         check_same_length(u_lo, y, "u", "y")
         y_lo, y_hi = self.split(y)
-        p_lo = self.low_.predict(self._down(u_lo), self._down(y_lo))
-        return self._up(p_lo, n) + self.high_.predict(u_hi, y_hi)
+        if steps == 1:
+            p_lo = self.low_.predict(self._down(u_lo), self._down(y_lo))
+            return self._up(p_lo, n) + self.high_.predict(u_hi, y_hi)
+        low_steps = None if steps is None else -(-steps // self.factor_)
+        kw = {"bound": bound}
+        p_lo = self._band(
+            "low", self.low_.predict, (self._down(u_lo), self._down(y_lo)),
+            {"steps_ahead": low_steps, **kw}, self.factor_,
+        )
+        p_hi = self._band("high", self.high_.predict, (u_hi, y_hi), {"steps_ahead": steps, **kw}, 1)
+        return self._up(p_lo, n) + p_hi
 
     def describe(self) -> str:
         """One-line summary: split frequency (Hz), filter order, each band model's rate and
