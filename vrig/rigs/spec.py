@@ -16,13 +16,13 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import jsonschema
-import numpy as np
 
-from ..errors import RigLimitError, RigModelError, RigParameterError
+from ..errors import RigModelError, RigParameterError
 from ._checks import check_number, describe_range
 from .daq import AntiAliasFilter, Transducer
 from .gas_spring import AirSpring
 from .hydraulics import HydraulicActuator
+from .limits import check_drive_limits  # re-exported: its public path before rigs.limits
 
 __all__ = [
     "MILD",
@@ -866,39 +866,3 @@ def read_description(path) -> RigDescription:
         defaults=_read_defaults(raw, fs, where),
     )
 
-
-def check_drive_limits(
-    channels, drive, *, fs: float | None = None, what: str = "the drive"
-) -> None:
-    """Raise :class:`~vrig.errors.RigLimitError` if any drive channel exceeds its full scale.
-
-    A drive beyond a channel's ± full scale (or not finite) is never sent: the error names the
-    channel, the first offending sample (and its time when ``fs`` is given) and says the drive was not sent.
-
-    Parameters
-    ----------
-    channels : sequence of ChannelSpec
-        The drive channels, one per column of ``drive``.
-    drive : ndarray
-        Drive samples, shape (samples, channels), in each channel's unit.
-    fs : float, optional
-        Sample rate [Hz]; when given, the error states the offending sample's time [s].
-    what : str
-        What the drive is, for the error message (``"the drive"``, ``"the drive file"``,
-        ``"IT03DRV"``).
-    """
-    for j, c in enumerate(channels):
-        over = ~(np.abs(drive[:, j]) <= c.full_scale)  # NaN counts as over: never sent either
-        if over.any():
-            i = int(np.argmax(over))
-            when = f"sample {i}" + (f", t = {i / fs:.4f} s" if fs else "")
-            fix = "scale it down" if np.isfinite(drive[i, j]) else "it is not finite"
-            raise RigLimitError(
-                "drive",
-                c.name,
-                float("nan"),
-                drive[i, j],
-                c.full_scale,
-                c.unit,
-                hint=f"({when}): {what} was not sent; {fix}.",
-            )
