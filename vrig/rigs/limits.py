@@ -22,7 +22,8 @@ def check_drive_limits(
     """Raise :class:`~vrig.errors.RigLimitError` if any drive channel exceeds its full scale.
 
     A drive beyond a channel's ± full scale (or not finite) is never sent: the error names the
-    channel, the first offending sample (and its time when ``fs`` is given) and says the drive was not sent.
+    channel, the first offending sample (and its time when ``fs`` is given) and says the drive
+    was not sent.
 
     Parameters
     ----------
