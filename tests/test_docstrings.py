@@ -39,17 +39,6 @@ from numpydoc import docscrape  # the test extra: pip install -e ".[test]"
 ROOT = Path(__file__).resolve().parents[1]
 PACKAGES = ("identification", "vrig")
 
-# TEMPORARY (issue 14): these modules are being rewritten by other engineers in parallel; their
-# docstrings are written with the rewrite and the files are not checked here until it lands. The
-# set may only shrink: delete an entry as soon as its file passes (the last test says which).
-BEING_REWRITTEN = {
-    "vrig/envs/physics.py",
-    "vrig/envs/drive_iteration.py",
-    "vrig/field.py",
-    "vrig/cli.py",
-    "vrig/rigs/spec.py",
-}
-
 # Decorators whose function is not called with the signature it is written with.
 PROPERTY_DECORATORS = ("property", "cached_property", "setter", "deleter", "getter")
 # ... and those that wrap a core in a public signature: the core's docstring documents that one
@@ -213,8 +202,6 @@ def _package_problems() -> dict[tuple[str, str], list[str]]:
             rel = path.relative_to(ROOT)
             if "__pycache__" in rel.parts or not _is_public_module(rel):
                 continue
-            if rel.as_posix() in BEING_REWRITTEN:
-                continue
             for name, problems in docstring_problems(path.read_text(encoding="utf-8")).items():
                 found[rel.as_posix(), name] = problems
     return found
@@ -363,14 +350,3 @@ def test_every_public_function_and_method_is_documented_in_numpydoc():
         f"{f}:{name}: {'; '.join(problems)}" for (f, name), problems in bad
     )
 
-
-def test_the_files_being_rewritten_are_not_skipped_longer_than_needed():
-    """An entry of BEING_REWRITTEN whose file was moved, removed or now passes must go."""
-    gone = sorted(f for f in BEING_REWRITTEN if not (ROOT / f).is_file())
-    assert not gone, f"moved or removed: delete from BEING_REWRITTEN: {gone}"
-    passing = []
-    for f in sorted(BEING_REWRITTEN):
-        problems = docstring_problems((ROOT / f).read_text(encoding="utf-8"))
-        if not any(problems.values()):
-            passing.append(f)
-    assert not passing, f"documented now: delete from BEING_REWRITTEN: {passing}"

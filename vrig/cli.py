@@ -811,7 +811,14 @@ def _run(command: str, func, arg) -> int:
 
 
 def main(argv: list[str] | None = None) -> int:
-    """The ``vrig`` command (see the module docstring); returns the exit code."""
+    """The ``vrig`` command (see the module docstring); returns the exit code.
+
+    Parameters
+    ----------
+    argv : list of str, optional
+        The command-line arguments after the program name (``["reconstruct", "--rig",
+        "shock-absorber"]``); ``None`` (default): ``sys.argv[1:]``.
+    """
     raw = list(sys.argv[1:] if argv is None else argv)
     command = raw[0] if raw else "vrig"
     try:

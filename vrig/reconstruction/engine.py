@@ -15,7 +15,7 @@ from identification.errors import SimulationDivergedError
 
 from ..errors import RigLimitError, SimulationInstabilityError
 from ..processing import band_gains, decimate, gprepro, identification_band
-from ..rigs.spec import check_drive_limits
+from ..rigs.limits import check_drive_limits
 from ..signals import random_drive, triangular_psd
 from ..timehistory import TimeHistory
 from .methods import make_method

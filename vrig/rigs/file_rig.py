@@ -14,7 +14,8 @@ from pathlib import Path
 import numpy as np
 
 from ..timehistory import TimeHistory
-from .spec import ChannelSpec, check_drive_limits
+from .limits import check_drive_limits
+from .spec import ChannelSpec
 
 __all__ = ["FileRig"]
 

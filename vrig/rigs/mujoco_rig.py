@@ -28,13 +28,13 @@ from ..timehistory import TimeHistory
 from . import gas_spring, hydraulics, stability
 from ._callbacks import foreign_callbacks_suspended
 from .daq import Acquisition
+from .limits import check_drive_limits
 from .spec import (
     ChannelSpec,
     InputDef,
     OutputDef,
     RigDefaults,
     RigDescription,
-    check_drive_limits,
     check_outputs_for_rate,
     check_severity,
     read_description,

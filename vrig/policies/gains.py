@@ -1,4 +1,4 @@
-"""Drive-iteration policies for the ``vrig/`` gymnasium environments, and a gradient-free trainer.
+"""Drive-iteration policies for the ``vrig/`` gymnasium environments: the gains of each iteration.
 
 A policy is built for one environment (it reads the env's :class:`~vrig.envs.ActionLayout`),
 ``reset()`` at the start of each episode and called with each observation; it returns a valid
@@ -12,16 +12,13 @@ flat action (gains in the env's range). All of them work on any action mode (``b
 * :class:`BandRatioPolicy` - the learned one: per band ``g_b = exp(theta_b + alpha * change_b +
   beta * (error_b + 1) + gamma * n)`` from the observed log10 band-error ratio (``error_b``), its
   change over the last iteration (``change_b``) and the iteration index ``n``; parameters found
-  by :func:`cross_entropy_search` (``benchmarks/learned_iteration.py`` trains it). No GPU, no
-  deep-learning library.
+  by :func:`~vrig.policies.search.cross_entropy_search` (``benchmarks/learned_iteration.py``
+  trains it). No GPU, no deep-learning library.
 
-:func:`run_episode` plays one episode and returns an :class:`EpisodeResult`.
+An episode of a policy is played by :func:`~vrig.policies.episodes.run_episode`.
 """
 
 from __future__ import annotations
-
-from collections.abc import Callable
-from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -29,11 +26,8 @@ __all__ = [
     "AdaptiveBandGain",
     "BandRatioPolicy",
     "DecreasingGain",
-    "EpisodeResult",
     "FixedGain",
     "Policy",
-    "cross_entropy_search",
-    "run_episode",
 ]
 
 
@@ -53,7 +47,8 @@ class Policy:
         self.layout = env.unwrapped.layout
 
     def reset(self) -> None:
-        """Forget the episode's state (called by :func:`run_episode` after ``env.reset``)."""
+        """Forget the episode's state (called by :func:`~vrig.policies.episodes.run_episode`
+        after ``env.reset``)."""
 
     def gains(self, obs) -> np.ndarray:  # pragma: no cover - abstract
         """Gains per drive channel and band (n_inputs, n_bands), or anything broadcasting.
@@ -281,137 +276,3 @@ class BandRatioPolicy(Policy):
         x = theta + alpha * change + beta * (err + 1.0) + gamma * n
         return np.exp(np.clip(x, -20, 5))[None, :]
 
-
-@dataclass
-class EpisodeResult:
-    """One episode of :func:`run_episode`.
-
-    Attributes
-    ----------
-    iterations : int
-        Steps played (iterations after IT00).
-    success : bool
-        True when the tolerance was met.
-    mean_eta0 : list of float
-        Mean η0 over the response channels per iteration, IT00 first, in %.
-    final_eta0 : ndarray (n_outputs,) or None
-        η0 per response channel at the end, in %.
-    total_reward : float
-        Sum of the step rewards.
-    reason : str
-        Why the episode ended (the env's ``info["reason"]``).
-    """
-
-    iterations: int
-    success: bool
-    mean_eta0: list = field(default_factory=list)
-    final_eta0: np.ndarray | None = None
-    total_reward: float = 0.0
-    reason: str = ""
-
-    def iterations_to_tolerance(self, budget: int) -> int:
-        """Iterations after IT00 until the tolerance was met; ``budget + 1`` if never.
-
-        Parameters
-        ----------
-        budget : int
-            The episode's iteration budget (returned plus one when the tolerance was never met).
-        """
-        return self.iterations if self.success else budget + 1
-
-
-def run_episode(env, policy, *, seed=None, options=None) -> EpisodeResult:
-    """Play one episode of ``policy`` on ``env``.
-
-    Parameters
-    ----------
-    env : gymnasium.Env
-        A :class:`vrig.envs.DriveIterationEnv` (or a wrapper of one); its action layout sets the
-        shape of the actions.
-    policy : Policy
-        The policy (reset after ``env.reset``, then called with each observation).
-    seed : int, optional
-        Seed of ``env.reset``.
-    options : dict, optional
-        Options of ``env.reset``.
-    """
-    obs, info = env.reset(seed=seed, options=options)
-    policy.reset()
-    res = EpisodeResult(0, bool(info["success"]), [info["mean_eta0"]], info["eta0"])
-    done = False
-    while not done:
-        obs, reward, terminated, truncated, info = env.step(policy(obs))
-        res.iterations += 1
-        res.total_reward += float(reward)
-        res.mean_eta0.append(info["mean_eta0"])
-        res.final_eta0, res.success, res.reason = (
-            info["eta0"],
-            bool(info["success"]),
-            info["reason"],
-        )
-        done = terminated or truncated
-    return res
-
-
-def cross_entropy_search(
-    objective: Callable[[np.ndarray], float],
-    mean,
-    std,
-    *,
-    generations: int = 8,
-    population: int = 12,
-    elite: int = 3,
-    seed: int = 0,
-    callback: Callable[[int, np.ndarray, float], None] | None = None,
-    map_fn: Callable = map,
-):
-    """Minimise ``objective(params)`` by the cross-entropy method.
-
-    Each generation samples ``population`` parameter vectors from a diagonal Gaussian, keeps
-    the ``elite`` best and refits the mean and standard deviation to them (the std is kept
-    above 5 % of its initial value). The best vector ever evaluated is returned with its score.
-    ``map_fn(objective, candidates)`` evaluates a generation (e.g. a process pool's ``map``; the
-    objective must then be picklable).
-
-    Parameters
-    ----------
-    objective : callable
-        ``objective(params) -> float``, the score to minimise.
-    mean, std : array_like
-        Initial mean and standard deviation of the sampling distribution, one per parameter.
-    generations : int, optional
-        Number of generations.
-    population : int, optional
-        Parameter vectors sampled per generation.
-    elite : int, optional
-        Best vectors kept to refit the distribution.
-    seed : int, optional
-        Seed of the sampling.
-    callback : callable, optional
-        ``callback(generation, best_params, best_score)`` after each generation (the best
-        vector so far and its score).
-    map_fn : callable, optional
-        ``map_fn(objective, candidates)`` evaluates a generation (default the built-in ``map``).
-
-    Returns
-    -------
-    (best_params, best_score, history) : ndarray, float, list of (generation, mean score of the
-    elite, best score so far)
-    """
-    rng = np.random.default_rng(seed)
-    mean = np.asarray(mean, dtype=float).copy()
-    std = np.broadcast_to(np.asarray(std, dtype=float), mean.shape).copy()
-    std_min = 0.05 * std
-    best, best_score, history = mean.copy(), float(objective(mean)), []
-    for gen in range(generations):
-        cands = mean + std * rng.standard_normal((population, mean.size))
-        scores = np.array(list(map_fn(objective, list(cands))), dtype=float)
-        order = np.argsort(scores, kind="stable")[:elite]
-        if scores[order[0]] < best_score:
-            best, best_score = cands[order[0]].copy(), float(scores[order[0]])
-        mean = cands[order].mean(axis=0)
-        std = np.maximum(cands[order].std(axis=0), std_min)
-        history.append((gen, float(scores[order].mean()), best_score))
-        if callback is not None:
-            callback(gen, best, best_score)
-    return best, best_score, history
