@@ -46,6 +46,7 @@ def pseudo_field(rig, band: tuple[float, float], seconds: float, *, seed: int = 
     from scipy.signal.windows import tukey
 
     from .errors import RigLimitError
+    from .progress import status
     from .signals import random_drive, triangular_psd
 
     n = round(seconds * rig.fs)
@@ -54,7 +55,12 @@ def pseudo_field(rig, band: tuple[float, float], seconds: float, *, seed: int = 
     fade = tukey(n, min(1.0, 2 * _FADE_S / seconds))[:, None]
     fraction = _FIELD_FRACTION
     last_error = None
-    for _attempt in range(5):
+    for attempt in range(5):
+        status(
+            f"desired response: {seconds:g} s pseudo-field drive at {100 * fraction:.3g} % of "
+            f"full scale rms -> {rig.name}"
+            + (f" (attempt {attempt + 1} of 5: the last level was too large)" if attempt else "")
+        )
         drive = random_drive(
             triangular_psd(band),
             n,
@@ -74,6 +80,7 @@ def pseudo_field(rig, band: tuple[float, float], seconds: float, *, seed: int = 
         else:
             swing = np.abs(response.data - response.data.mean(axis=0)).max(axis=0)
             if np.all(swing <= _FIELD_HEADROOM * out_full):
+                status("desired response: checking that 1.5x that drive runs too")
                 try:  # the same headroom on the interlocks: 1.5x the drive must run too
                     rig.run(drive.with_data(drive.data / _FIELD_HEADROOM), seed=seed + 10_000)
                 except RigLimitError as exc:
