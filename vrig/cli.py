@@ -630,6 +630,7 @@ def _reconstruct(rig, field, method, band, args, out: Path, save: dict):
     """Run the reconstruction; a failure before IT00 saves what was made and raises
     :class:`_Failure` (exit code 7)."""
     from .errors import ReconstructionError
+    from .progress import is_enabled
     from .reconstruction import IterationSettings, reconstruct
 
     try:
@@ -641,7 +642,7 @@ def _reconstruct(rig, field, method, band, args, out: Path, save: dict):
             id_seed=args.seed,
             run_seed=args.seed,
         )
-        return reconstruct(rig, field, iteration, progress=True)
+        return reconstruct(rig, field, iteration, progress=is_enabled())
     except ValueError as exc:  # e.g. a desired record too short for the model: bad input
         raise _UsageError(str(exc)) from exc
     except ReconstructionError as exc:  # nothing played: keep what was made, say what to change

@@ -38,6 +38,9 @@ def pseudo_field(rig, band: tuple[float, float], seconds: float, *, seed: int = 
     desired response made right at the following-error limit cannot be reached by any drive
     that differs from the original).
 
+    Each level tried is reported on stderr inside :func:`vrig.progress.enabled` (quiet
+    otherwise).
+
     Returns
     -------
     (drive, response) : TimeHistory, TimeHistory

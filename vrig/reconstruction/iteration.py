@@ -61,7 +61,9 @@ def reconstruct(
         Method, iterations, gain, band, identification drive, seeds, stopping rule (default:
         the defaults of :class:`~vrig.reconstruction.IterationSettings`).
     progress : bool
-        Show a progress bar over the iterations (stderr).
+        Show a progress bar over the iterations and the status of the identification, the fit
+        and long rig runs on stderr (:mod:`vrig.progress`; ``False`` leaves an outer
+        :func:`vrig.progress.enabled` in force).
     **options
         Settings by name on top of ``settings``: ``method`` (``"arx"``, ``"narx"``, ``"split"``,
         ``"frf"``, ``"error-signal"`` or a method object), ``iterations``, ``gain``,
