@@ -393,15 +393,15 @@ def test_describe_a_folder_named_like_a_side_car_is_bad_input(capsys, tmp_path):
 
 
 @pytest.mark.parametrize("command", ["list", "run"])
-def test_a_plugin_that_raises_is_bad_input(command, capsys, tmp_path):
+def test_a_plugin_that_raises_is_bad_input(command, capfd, tmp_path):
     plugin = tmp_path / "broken.py"
     plugin.write_text("raise RuntimeError('this plugin is broken')\n")
     argv = ["bench", command, "--plugin", str(plugin)]
     assert main(argv + (["--out", str(tmp_path / "o")] if command == "run" else [])) == 2
-    line = _one_line(capsys)
+    line = _one_line(capfd)  # the runner runs in a child interpreter: its stderr is the fd's
     assert f"plugin {plugin} failed to load: RuntimeError: this plugin is broken" in line
     assert main(["bench", "list", "--plugin", "no_such_plugin_module"]) == 2
-    assert "ModuleNotFoundError" in _one_line(capsys)
+    assert "ModuleNotFoundError" in _one_line(capfd)
 
 
 @pytest.mark.parametrize(

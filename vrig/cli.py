@@ -165,6 +165,9 @@ def _parser() -> argparse.ArgumentParser:
         "identification and dynamic response reconstruction",
         epilog=_EXIT_CODES,
     )
+    from . import __version__  # the package's one version (pyproject reads it from there)
+
+    p.add_argument("--version", action="version", version=f"%(prog)s {__version__}")
     sub = p.add_subparsers(dest="command", required=True)
     _add_demo_parser(sub)
     _add_rig_info_parsers(sub)
