@@ -307,3 +307,24 @@ def test_the_cli_shows_progress_only_on_a_terminal_or_when_asked(monkeypatch, tm
         assert f"vrig: {phase}" in err
     quiet, loud = _summary(tmp_path / "quiet"), _summary(tmp_path / "loud")
     assert quiet["errors"] == loud["errors"]
+
+
+def test_a_model_that_cannot_be_fitted_exits_7_and_keeps_the_identification_records(
+    monkeypatch, tmp_path, capsys
+):
+    from identification.errors import UnstableModelError
+    from vrig.reconstruction.methods import InverseArx
+
+    def unstable(self, *args, **kwargs):
+        raise UnstableModelError("no order gives a bounded free run")
+
+    monkeypatch.setattr(InverseArx, "identify", unstable)
+    monkeypatch.setattr("vrig.plots.save_reconstruction_plots", lambda *a, **k: [])
+    out = tmp_path / "model"
+    assert main([*ARGV, "--out", str(out)]) == 7
+    line = _stderr_line(capsys)
+    assert line.startswith("vrig reconstruct: failed: no iteration played: model")
+    assert "the inverse model could not be fitted: try a lower --order" in line
+    names = {p.name for p in out.iterdir()}
+    assert {"IDDRV.npz", "IDRES.npz", "FIELD01.npz", "summary.json"} <= names
+    assert _summary(out)["stop_kind"] == "model"
