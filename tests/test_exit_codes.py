@@ -303,7 +303,7 @@ def test_the_cli_shows_progress_only_on_a_terminal_or_when_asked(monkeypatch, tm
     monkeypatch.setenv("VRIG_PROGRESS", "1")
     assert main([*argv, "--out", str(tmp_path / "loud")]) == 0
     err = capsys.readouterr().err
-    for phase in ("loading rig", "desired response", "identifying", "fitting", "writing"):
+    for phase in ("loading rig", "desired response", "identifying", "fitting", "writing", "drawing"):
         assert f"vrig: {phase}" in err
     quiet, loud = _summary(tmp_path / "quiet"), _summary(tmp_path / "loud")
     assert quiet["errors"] == loud["errors"]

@@ -681,8 +681,9 @@ def _save(result, out: Path, rig, args, save: dict) -> list[Path]:
     from .progress import status
     from .testfolder import TestFolder
 
-    status(f"writing the test folder {out}/ and the plots")
+    status(f"writing the test folder {out}/ ...")
     written = TestFolder(out).save(result, fmt=args.fmt, rig=rig, overwrite=args.overwrite, **save)
+    status("drawing the plots (overlay, zoom, PSD, error per iteration, drive vs limits) ...")
     plots = save_reconstruction_plots(result, out, rig=rig)
     names = [p.name for p in written]
     shown = names if len(names) <= 11 else [*names[:6], "...", *names[-5:]]
