@@ -364,3 +364,28 @@ def test_the_thesis_report_does_not_overlap_another_runs(tmp_path, monkeypatch):
         holder.wait()
     line, ok = run_child()  # the holder is dead: its lock is stale
     assert ok and "skipped" not in line and calls == [tmp_path]
+
+
+def test_a_long_record_gets_status_lines_on_stderr(tmp_path, monkeypatch, capsys):
+    """While a record runs and none finishes, the runner prints a status line on stderr every
+    HEARTBEAT_S seconds (shortened here; the record itself is a stub that takes its time)."""
+    import importlib
+
+    ex = importlib.import_module("benchmarks.runner.execute")
+
+    def slow_record(key, settings, specs):
+        time.sleep(0.6)
+        raise KeyboardInterrupt  # stop after the first record: the lines are what is tested
+
+    monkeypatch.setattr(ex, "HEARTBEAT_S", 0.2)
+    monkeypatch.setattr(ex, "compute_record", slow_record)
+    store = Store(tmp_path / "o")
+    store.prepare(SETTINGS)
+    with pytest.raises(KeyboardInterrupt):
+        execute(KEYS[:2], SETTINGS, store, backend="serial")
+    err = capsys.readouterr().err
+    assert "benchmarks: 0 of 2 records done, running for" in err
+    assert err.count("benchmarks:") >= 2  # 0.6 s at one line per 0.2 s of silence
+    with pytest.raises(KeyboardInterrupt):
+        execute(KEYS[:2], SETTINGS, store, backend="serial", log=None)
+    assert capsys.readouterr().err == ""  # --quiet: no status lines either

@@ -299,11 +299,30 @@ def test_the_help_documents_the_exit_codes(capsys):
     out = " ".join(capsys.readouterr().out.split())
     for code in (
         "0 success",
-        "1 the rig or the iteration failed",
+        "1 failed",
         "2 bad input",
+        "3 an unexpected error",
+        "4 vrig reconstruct stopped after IT00 on an interlock trip or a refused drive",
+        "5 vrig reconstruct stopped after IT00 on divergence",
+        "6 vrig reconstruct stopped after IT00: the rig's simulation or the re-identified",
+        "7 vrig reconstruct failed before any iteration was played",
         "130 interrupted",
     ):
         assert code in out
+
+
+def test_the_exit_codes_are_one_table_the_constants_and_the_epilog_share():
+    """The module documentation's table, the ExitCode constants and --help list the same codes;
+    every stop kind of a reconstruction has its code."""
+    import vrig.cli as cli
+    from vrig.reconstruction.result import STOP_KINDS
+
+    table = [int(line[:7]) for line in cli.__doc__.splitlines() if line[:7].strip().isdigit()]
+    assert table == sorted(int(c) for c in cli.ExitCode)
+    assert list(cli.EXIT_CODE_MEANINGS) == table
+    assert set(cli.STOP_EXIT) == set(STOP_KINDS)
+    assert cli.STOP_EXIT["completed"] == cli.STOP_EXIT["converged"] == 0
+    assert len({cli.STOP_EXIT[k] for k in ("interlock", "diverged", "unstable")}) == 3
 
 
 @pytest.mark.parametrize(
@@ -479,19 +498,19 @@ def test_a_demo_whose_model_diverges_fails_with_one_line(capsys):
 def test_a_reconstruction_that_cannot_play_it00_keeps_the_identification(
     capsys, monkeypatch, tmp_path
 ):
-    """IT00DRV beyond the drive's full scale (the inverse scaled up 1000x here): exit 1, one
-    line saying what to change, and the identification records, model, summary and the refused
-    drive (record and plot) in --out."""
+    """IT00DRV beyond the drive's full scale (the inverse scaled up 1000x here): exit 7 (failed
+    before any iteration), one line saying what to change, and the identification records,
+    model, summary and the refused drive (record and plot) in --out."""
     from vrig.reconstruction.iteration import DriveIteration
 
     first = DriveIteration.first_drive
     monkeypatch.setattr(DriveIteration, "first_drive", lambda self: 1000 * first(self))
     out = tmp_path / "failed"
     argv = ["reconstruct", "--rig", "shock-absorber", "--seconds", "4", "--format", "npz"]
-    assert main([*argv, "--out", str(out)]) == 1
+    assert main([*argv, "--out", str(out)]) == 7
     line = _one_line(capsys)
     assert line.startswith("vrig reconstruct: failed: no iteration played: IT00: interlock")
-    assert "IT00DRV was not sent" in line and "use a smaller desired response" in line
+    assert "IT00DRV was not sent" in line and "or a smaller desired response" in line
     names = {p.name for p in out.iterdir()}
     expected = {"IDDRV.npz", "IDRES.npz", "FIELD01.npz", "DESRES01.npz", "DESDRV.npz"}
     expected |= {"REFUSED00.npz", "model.npz", "summary.json", "refused_drive_vs_limits.png"}

@@ -16,15 +16,33 @@
 thirds of their transducer ranges; 1 s fade-in and fade-out). It writes the QanTiM test folder
 (:class:`vrig.testfolder.TestFolder`) and the plots (:mod:`vrig.plots`) into ``--out``.
 
-Exit codes (every error is one line on stderr, ``vrig COMMAND: ...``, never a traceback):
+Progress of the long phases (desired-response generation, identification, long rig runs, the
+iterations) goes to stderr when stderr is a terminal; ``VRIG_PROGRESS=1`` shows it anyway,
+``VRIG_PROGRESS=0`` never (:mod:`vrig.progress`).
+
+Exit codes (every error is one line on stderr, ``vrig COMMAND: ...``, never a traceback; a
+``vrig reconstruct`` that stopped early or failed says why on one line too, with what to change,
+and keeps what it made in ``--out``; the codes are the constants of :class:`ExitCode`, the stop
+kinds ``summary.json``'s ``stop_kind``):
 
 =====  ========================================================================================
-0      success
-1      the rig or the iteration failed (interlock trip, unstable simulation or model; what was
-       made is kept in the results folder)
+0      success; ``vrig reconstruct``: every iteration played, or converged (stop kind
+       completed, converged)
+1      failed: the rig or the computation of another command (an interlock trip, an unstable
+       simulation or model); ``vrig reconstruct``: an error of another kind after IT00 (stop
+       kind failed); results that could not be written
 2      bad input: arguments, ``--desired`` files, rig descriptions, results folders that cannot
        be written, plugins that do not load, ``vrig bench`` without a source checkout
 3      an unexpected error (a bug: ``VRIG_DEBUG=1`` shows the traceback)
+4      ``vrig reconstruct`` stopped after IT00 on an interlock trip or a refused drive (stop
+       kind interlock, refused); the best iteration is kept
+5      ``vrig reconstruct`` stopped after IT00 on divergence: η0 grew, the inverse model
+       diverged on a response or the drive update was not finite (stop kind diverged)
+6      ``vrig reconstruct`` stopped after IT00: the rig's simulation or the re-identified
+       inverse model became unstable (stop kind unstable, model)
+7      ``vrig reconstruct`` failed before any iteration was played: the identification drive,
+       the inverse model or IT00DRV (the identification records, model and refused drive are
+       kept)
 130    interrupted (Ctrl-C)
 =====  ========================================================================================
 """
@@ -33,6 +51,7 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import enum
 import os
 import signal
 import subprocess
@@ -46,7 +65,7 @@ import numpy as np
 
 from .field import default_band, pseudo_field
 
-__all__ = ["main"]
+__all__ = ["EXIT_CODE_MEANINGS", "STOP_EXIT", "ExitCode", "main"]
 
 
 _METHODS = ("arx", "narx", "split", "frf")
@@ -55,22 +74,76 @@ DEFAULT_GAIN = 0.8  # reconstruct's iteration gain unless the rig's side-car nam
 _MAX_SECONDS = 3600.0  # longest record a command plays or reconstructs (--seconds, --desired)
 
 
+class ExitCode(enum.IntEnum):
+    """The exit codes of ``vrig`` (the table of the :mod:`vrig.cli` documentation)."""
+
+    OK = 0
+    FAILED = 1
+    BAD_INPUT = 2
+    BUG = 3
+    STOPPED_INTERLOCK = 4
+    STOPPED_DIVERGED = 5
+    STOPPED_UNSTABLE = 6
+    FAILED_IT00 = 7
+    INTERRUPTED = 130
+
+
+EXIT_OK, EXIT_FAILED, EXIT_USAGE, EXIT_BUG, EXIT_INTERRUPTED = (
+    ExitCode.OK, ExitCode.FAILED, ExitCode.BAD_INPUT, ExitCode.BUG, ExitCode.INTERRUPTED,
+)  # fmt: skip
+
+STOP_EXIT = {
+    "completed": ExitCode.OK,
+    "converged": ExitCode.OK,
+    "interlock": ExitCode.STOPPED_INTERLOCK,
+    "refused": ExitCode.STOPPED_INTERLOCK,
+    "diverged": ExitCode.STOPPED_DIVERGED,
+    "unstable": ExitCode.STOPPED_UNSTABLE,
+    "model": ExitCode.STOPPED_UNSTABLE,
+    "failed": ExitCode.FAILED,
+}
+"""``vrig reconstruct``'s exit code for each ``result.stop_kind`` of a reconstruction that played
+IT00 (one that did not exits :attr:`ExitCode.FAILED_IT00`)."""
+
+
+def _exit_code_table(doc: str | None) -> dict[int, str]:
+    """``{code: meaning}`` from the exit-code table of the module documentation (reST markup
+    removed, continuation lines joined)."""
+    lines = (doc or "").splitlines()
+    start = next((i for i, line in enumerate(lines) if line.startswith("Exit codes")), None)
+    if start is None:  # python -OO drops docstrings: the names of the constants
+        return {int(c): c.name.lower().replace("_", " ") for c in ExitCode}
+    rows: dict[int, str] = {}
+    code = None
+    for line in lines[start:]:
+        head = line[:7].strip()
+        if head.isdigit():
+            code = int(head)
+            rows[code] = line[7:].strip()
+        elif code is not None and line.startswith(" " * 7) and line.strip():
+            rows[code] += " " + line.strip()
+        elif rows and line.startswith("====="):
+            break
+    return {k: v.replace("``", "") for k, v in rows.items()}
+
+
+EXIT_CODE_MEANINGS = _exit_code_table(__doc__)
+"""``{code: meaning}``: the module documentation's table, from which the ``--help`` epilog is
+made (one table: the two cannot drift)."""
+_EXIT_CODES = "exit codes: " + "; ".join(f"{k} {v}" for k, v in EXIT_CODE_MEANINGS.items())
+
+
 class _UsageError(Exception):
     """A bad argument: reported with the command's name, exit code 2."""
 
 
 class _Failure(Exception):
-    """The rig or the iteration failed: reported with the command's name, exit code 1."""
+    """The rig or the iteration failed: reported with the command's name and exit code ``code``
+    (default 1)."""
 
-
-EXIT_OK, EXIT_FAILED, EXIT_USAGE, EXIT_BUG, EXIT_INTERRUPTED = 0, 1, 2, 3, 130
-_EXIT_CODES = (
-    "exit codes: 0 success; 1 the rig or the iteration failed (trip, unstable simulation or "
-    "model); 2 bad input (arguments, files, rig descriptions, unwritable --out, plugins); 3 an "
-    "unexpected error (VRIG_DEBUG=1 shows the traceback); 130 interrupted (Ctrl-C)"
-)
-
-
+    def __init__(self, message: str, code: int = ExitCode.FAILED):
+        super().__init__(message)
+        self.code = code
 # ---------------------------------------------------------------------------------------------
 # parser
 # ---------------------------------------------------------------------------------------------
@@ -510,10 +583,11 @@ def _check_reconstruct_args(args) -> None:
 
 
 def _cmd_reconstruct(args) -> int:
-    from .reconstruction import IterationSettings, reconstruct
+    from .progress import status
 
     t_start = time.perf_counter()
     _check_reconstruct_args(args)
+    status(f"loading rig {args.rig} (building its simulation) ...")
     rig = _load_rig(args.rig, seed=args.seed)
     if args.gain is None:  # the rig's own default (side-car "reconstruction"), else the global one
         args.gain = DEFAULT_GAIN if rig.defaults.gain is None else rig.defaults.gain
@@ -528,7 +602,7 @@ def _cmd_reconstruct(args) -> int:
     print(f"rig       {rig.name} (variant {rig.variant}): {rig.description.title}")
     print(f"method    {method_text}, gain {args.gain:g}, {args.iterations} iterations")
     print(f"band      {band[0]:g}-{band[1]:g} Hz (simulation bandwidth)")
-    print(f"desired   {source}")
+    print(f"desired   {source}", flush=True)
     settings = {
         "command": "vrig reconstruct",
         "argv": args.argv,
@@ -540,7 +614,27 @@ def _cmd_reconstruct(args) -> int:
         "desired": source,
     }
     save = {"field": field, "records": records, "settings": settings}
+    result = _reconstruct(rig, field, method, band, args, out, save)
+    _print_result(result, args)
+    _save(result, out, rig, args, save)
+    print(f"time       {time.perf_counter() - t_start:.1f} s")
+    code = STOP_EXIT.get(result.stop_kind, ExitCode.FAILED)
+    if code != ExitCode.OK:  # a script reads the code; a person reads this line
+        best = result.best_iteration
+        _say(
+            "reconstruct",
+            f"stopped: {result.stopped} ({_advice(result.stop_kind, 'after IT00', args.gain)}); "
+            f"best IT{best:02d} kept as FINDRV01/FINRES01 in {out}/",
+        )
+    return code
+
+
+def _reconstruct(rig, field, method, band, args, out: Path, save: dict):
+    """Run the reconstruction; a failure before IT00 saves what was made and raises
+    :class:`_Failure` (exit code 7)."""
     from .errors import ReconstructionError
+    from .progress import is_enabled
+    from .reconstruction import IterationSettings, reconstruct
 
     try:
         iteration = IterationSettings(
@@ -551,14 +645,20 @@ def _cmd_reconstruct(args) -> int:
             id_seed=args.seed,
             run_seed=args.seed,
         )
-        result = reconstruct(rig, field, iteration, progress=True)
-    except ValueError as exc:  # e.g. a desired record too short for the model
-        raise _Failure(str(exc)) from exc
+        return reconstruct(rig, field, iteration, progress=is_enabled())
+    except ValueError as exc:  # e.g. a desired record too short for the model: bad input
+        raise _UsageError(str(exc)) from exc
     except ReconstructionError as exc:  # nothing played: keep what was made, say what to change
         written = _save(exc.result, out, rig, args, save)
+        advice = _advice(exc.result.stop_kind, exc.stage, args.gain)
         raise _Failure(
-            f"{exc} ({_advice(exc)}); kept {', '.join(p.name for p in written)} in {out}/"
+            f"{exc} ({advice}); kept {', '.join(p.name for p in written)} in {out}/",
+            ExitCode.FAILED_IT00,
         ) from exc
+
+
+def _print_result(result, args) -> None:
+    """The per-iteration table, the best iteration's scores and why the loop stopped."""
     print()
     print(result.table())
     best = result.best_iteration
@@ -573,17 +673,17 @@ def _cmd_reconstruct(args) -> int:
         + ", ".join(f"{d:.3g}" for d in result.damage_ratio[best])
     )
     print(f"stopped   {result.stopped or f'after all {args.iterations} iterations'}")
-    written = _save(result, out, rig, args, save)
-    print(f"time       {time.perf_counter() - t_start:.1f} s")
-    return 0
 
 
 def _save(result, out: Path, rig, args, save: dict) -> list[Path]:
     """Write the test folder and the plots of a result (also one with no iteration played)."""
     from .plots import save_reconstruction_plots
+    from .progress import status
     from .testfolder import TestFolder
 
+    status(f"writing the test folder {out}/ ...")
     written = TestFolder(out).save(result, fmt=args.fmt, rig=rig, overwrite=args.overwrite, **save)
+    status("drawing the plots (overlay, zoom, PSD, error per iteration, drive vs limits) ...")
     plots = save_reconstruction_plots(result, out, rig=rig)
     names = [p.name for p in written]
     shown = names if len(names) <= 11 else [*names[:6], "...", *names[-5:]]
@@ -592,27 +692,50 @@ def _save(result, out: Path, rig, args, save: dict) -> list[Path]:
     return written + plots
 
 
-def _advice(exc) -> str:
-    """What to change after a reconstruction that could not play any iteration."""
-    from .errors import RigLimitError
+_NARROWER = "a narrower --band, a lower --order or --method frf"
+_ADVICE = {
+    # (stage, stop kind) -> what to change; stage "identification", "model", "IT00" (nothing
+    # played: the gain plays no role) or "after IT00" (an iteration stopped: the gain does)
+    ("identification", "interlock"): "the identification drive trips the rig even at 1/8 of its "
+    "amplitude (TRIPPEDID): check the rig's limits, or use a narrower --band",
+    ("identification", "refused"): "the identification drive is beyond the drives' full scale "
+    "even at 1/8 of its amplitude (REFUSEDID): check the rig's limits",
+    ("identification", "unstable"): "the rig's simulation became unstable under the "
+    "identification drive: check the rig model (time step, parameters) or use a narrower --band",
+    ("model", "diverged"): "the inverse model diverges on the desired response: try a lower "
+    "--order, --method frf or a narrower --band",
+    ("model", None): "the inverse model could not be fitted: try a lower --order, --method arx "
+    "or frf, or a narrower --band",
+    ("IT00", "refused"): "IT00DRV, the inverse model's first drive, needs more than the drive's "
+    "full scale (refused_drive_vs_limits.png): use " + _NARROWER + ", or a smaller desired "
+    "response",
+    ("IT00", "interlock"): "IT00DRV, the inverse model's first drive, tripped the rig "
+    "(TRIPPED00): use " + _NARROWER + ", or a smaller desired response",
+    ("IT00", "unstable"): "the rig's simulation became unstable under IT00DRV (TRIPPED00): use "
+    + _NARROWER + ", or a smaller desired response",
+    ("after IT00", "interlock"): "a lower --gain, e.g. {half}, overshoots less",
+    ("after IT00", "refused"): "a lower --gain, e.g. {half}, overshoots less",
+    ("after IT00", "diverged"): "a lower --gain, e.g. {half}, or --strategy adaptive "
+    "(re-identify the inverse model from each iteration)",
+    ("after IT00", "unstable"): "the rig's simulation became unstable under the drive: a lower "
+    "--gain, e.g. {half}",
+    ("after IT00", "model"): "the re-identified inverse model is unstable: a lower --order, or "
+    "the fixed strategy",
+}
 
-    cause = exc.cause
-    if exc.stage == "identification":
+
+def _advice(kind: str, stage: str, gain: float) -> str:
+    """What to change after a reconstruction that stopped (``stage`` ``"after IT00"``) or could
+    not play any iteration (``stage`` ``"identification"``, ``"model"``, ``"IT00"``), by the
+    kind of stop (``result.stop_kind``)."""
+    text = _ADVICE.get((stage, kind)) or _ADVICE.get((stage, None))
+    if text is None:
         return (
-            "the identification drive trips the rig even at 1/8 of its amplitude: check the "
-            "rig's limits, or use a narrower --band"
-        )
-    if exc.stage == "model":
-        return "the inverse model failed: try a lower --order, --method arx or frf, or a narrower --band"
-    if isinstance(cause, RigLimitError) and cause.time != cause.time:  # refused, never sent
-        return (
-            "IT00DRV needs more than the drive's full scale (drive_vs_limits: "
-            "refused_drive_vs_limits.png): use a smaller desired response or a narrower --band"
-        )
-    return (
-        "IT00DRV tripped the rig: try a smaller desired response, a narrower --band or a "
-        "lower --order"
-    )
+            "try " + _NARROWER + ", or a smaller desired response"
+            if stage != "after IT00"
+            else "try a lower --gain, e.g. {half}, or " + _NARROWER
+        ).format(half=f"{gain / 2:g}")
+    return text.format(half=f"{gain / 2:g}")
 
 
 def _cmd_repeatability(args) -> int:
@@ -777,23 +900,28 @@ def _say(command: str, text: str) -> None:
     print(f"vrig {command}: " + " ".join(str(text).split()), file=sys.stderr)
 
 
+def _progress_mode() -> bool | None:
+    """``VRIG_PROGRESS``: ``1`` progress on stderr always, ``0`` never, unset (or anything
+    else) when stderr is a terminal."""
+    return {"1": True, "0": False}.get(os.environ.get("VRIG_PROGRESS", "").strip())
+
+
 def _run(command: str, func, arg) -> int:
     """Run a command; map every error to one line on stderr and an exit code (module doc)."""
     from .errors import ERRORS, RigModelError
+    from .progress import enabled
 
     try:
-        return func(arg)
+        with enabled(_progress_mode()):
+            return func(arg)
     except (_UsageError, RigModelError) as exc:
         _say(command, exc)
         return EXIT_USAGE
-    except (_Failure, *ERRORS) as exc:  # any other vrig or identification error: the run failed
-        hint = (
-            ""
-            if isinstance(exc, _Failure)
-            else (
-                " (try a narrower --band, a lower --order or --gain, or a smaller desired response)"
-            )
-        )
+    except _Failure as exc:
+        _say(command, f"failed: {exc}")
+        return exc.code
+    except ERRORS as exc:  # any other vrig or identification error: the run failed
+        hint = " (try a narrower --band, a lower --order or --gain, or a smaller desired response)"
         _say(command, f"failed: {exc}{hint}")
         return EXIT_FAILED
     except OSError as exc:  # e.g. a disk that filled up while the results were written

@@ -43,6 +43,9 @@ def pseudo_field(rig, band: tuple[float, float], seconds: float, *, seed: int = 
     desired response made right at the following-error limit cannot be reached by any drive
     that differs from the original).
 
+    Each level tried is reported on stderr inside :func:`vrig.progress.enabled` (quiet
+    otherwise).
+
     Parameters
     ----------
     rig : Rig
@@ -63,6 +66,7 @@ def pseudo_field(rig, band: tuple[float, float], seconds: float, *, seed: int = 
     from scipy.signal.windows import tukey
 
     from .errors import RigLimitError
+    from .progress import status
     from .signals import random_drive, triangular_psd
 
     n = round(seconds * rig.fs)
@@ -71,7 +75,12 @@ def pseudo_field(rig, band: tuple[float, float], seconds: float, *, seed: int = 
     fade = tukey(n, min(1.0, 2 * _FADE_S / seconds))[:, None]
     fraction = _FIELD_FRACTION
     last_error = None
-    for _attempt in range(5):
+    for attempt in range(5):
+        status(
+            f"desired response: {seconds:g} s pseudo-field drive at {100 * fraction:.3g} % of "
+            f"full scale rms -> {rig.name}"
+            + (f" (attempt {attempt + 1} of 5: the last level was too large)" if attempt else "")
+        )
         drive = random_drive(
             triangular_psd(band),
             n,
@@ -91,6 +100,7 @@ def pseudo_field(rig, band: tuple[float, float], seconds: float, *, seed: int = 
         else:
             swing = np.abs(response.data - response.data.mean(axis=0)).max(axis=0)
             if np.all(swing <= _FIELD_HEADROOM * out_full):
+                status("desired response: checking that 1.5x that drive runs too")
                 try:  # the same headroom on the interlocks: 1.5x the drive must run too
                     rig.run(drive.with_data(drive.data / _FIELD_HEADROOM), seed=seed + 10_000)
                 except RigLimitError as exc:

@@ -23,7 +23,8 @@ made, the refused or tripped drive, and the summary with ``iterations_run`` -1 a
 
 plus the inverse model(s) (``model.npz``; ``model_low.npz``/``model_high.npz`` for split
 spectra; see :meth:`identification.Narx.load`) and ``summary.json`` (method, bandwidth,
-per-iteration errors, best iteration, stop reason, rig, files).
+per-iteration errors, best iteration, stop reason and ``stop_kind``
+(:data:`~vrig.reconstruction.result.STOP_KINDS`), rig, files).
 
 Records are RPC III by default (drives ``.drv`` with ``TIME_TYPE = DRIVE``, responses ``.rsp``,
 ``FLOATING_POINT``: float32, so they read back to float32 precision), or ``.csv``, ``.mat`` or
@@ -240,6 +241,7 @@ def _summary(result, rig, fmt: str, files: dict, models: dict, model_note: str, 
         "best_iteration": best,
         "stopped": result.stopped,
         "stop_reason": result.stopped or f"completed all {n_run - 1} iterations",
+        "stop_kind": getattr(result, "stop_kind", "") or None,
         "rejected": getattr(result, "rejected_name", "") or None,
         "best": None
         if best is None

@@ -14,6 +14,10 @@ Backends: ``serial`` (this process), ``process`` (default: a ``ProcessPoolExecut
 ``--address``, else a local one). Every backend runs the same pure function
 :func:`~.record.compute_record` on the same keys, so the records are identical; only the
 parent process writes files.
+
+Progress: one line per finished record (``log``, stdout) and, while records run, a status line
+on stderr every :data:`HEARTBEAT_S` seconds in which none finished (how many are done, how long
+the run has taken), so a long record never leaves the terminal silent.
 """
 
 from __future__ import annotations
@@ -22,6 +26,7 @@ import json
 import multiprocessing
 import os
 import sys
+import threading
 import time
 from collections.abc import Callable, Iterable
 from concurrent.futures import ProcessPoolExecutor, as_completed
@@ -34,6 +39,8 @@ from .record import SCHEMA, RecordKey, Settings, check_record, compute_record, r
 __all__ = ["BACKENDS", "SettingsMismatchError", "Store", "execute", "write_atomic"]
 
 BACKENDS = ("process", "serial", "ray")
+HEARTBEAT_S = 20.0
+"""Seconds without a finished record after which the runner prints a status line (stderr)."""
 
 
 class SettingsMismatchError(ValueError):
@@ -185,6 +192,38 @@ def _ray(keys, settings, specs, workers, address, on_done):
             ray.shutdown()
 
 
+class _Heartbeat(threading.Thread):
+    """A daemon thread printing ``benchmarks: k of N records done, T s ...`` on stderr after
+    every :data:`HEARTBEAT_S` seconds in which no record finished."""
+
+    def __init__(self, total: int, done: list, t0: float):
+        super().__init__(daemon=True, name="benchmarks-heartbeat")
+        self.total, self.done, self.t0 = total, done, t0
+        self.last = time.perf_counter()
+        self.finished = threading.Event()
+
+    def touch(self) -> None:
+        """A record finished (its own line was printed): restart the silence count."""
+        self.last = time.perf_counter()
+
+    def run(self) -> None:
+        while not self.finished.wait(min(1.0, HEARTBEAT_S / 4)):
+            now = time.perf_counter()
+            if now - self.last >= HEARTBEAT_S:
+                print(
+                    f"benchmarks: {len(self.done)} of {self.total} records done, running for "
+                    f"{now - self.t0:.0f} s ...",
+                    file=sys.stderr,
+                    flush=True,
+                )
+                self.last = now
+
+    def stop(self) -> None:
+        """End the thread (the backend returned or raised)."""
+        self.finished.set()
+        self.join(timeout=5)
+
+
 def _pct(x) -> str:
     return "n/a" if x is None else f"{x:.1f} %"
 
@@ -220,8 +259,11 @@ def execute(
             f"({backend} backend" + (f", {workers} workers)" if backend != "serial" else ")")
         )
     t0 = time.perf_counter()
+    beat = _Heartbeat(len(todo), summary["computed"], t0) if log and todo else None
 
     def on_done(rec: dict) -> None:
+        if beat:
+            beat.touch()
         store.write(rec)
         summary["computed"].append(rec["id"])
         if rec["status"] != "ok":
@@ -237,6 +279,12 @@ def execute(
             sys.stdout.flush()
 
     if todo:
-        _BACKEND_FUNCS[backend](todo, settings, list(plugin_specs), workers, address, on_done)
+        if beat:
+            beat.start()
+        try:
+            _BACKEND_FUNCS[backend](todo, settings, list(plugin_specs), workers, address, on_done)
+        finally:
+            if beat:
+                beat.stop()
     summary["wall_s"] = time.perf_counter() - t0
     return summary

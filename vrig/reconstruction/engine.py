@@ -15,6 +15,7 @@ from identification.errors import SimulationDivergedError
 
 from ..errors import RigLimitError, SimulationInstabilityError
 from ..processing import band_gains, decimate, gprepro, identification_band
+from ..progress import status
 from ..rigs.limits import check_drive_limits
 from ..signals import random_drive, triangular_psd
 from ..timehistory import TimeHistory
@@ -73,6 +74,15 @@ def _check_content(desired: TimeHistory, desres: TimeHistory, band) -> None:
             f"against a peak of {scale[k]:.3g}): a constant or out-of-band record cannot be "
             "reconstructed"
         )
+
+
+def _describe(method) -> str:
+    """``"ARX(4)"``, ``"NARX(4, degree 2)"``, ``"FRF"``, ... for status lines."""
+    name = str(getattr(method, "name", type(method).__name__)).upper()
+    order, degree = getattr(method, "order", None), getattr(method, "degree", None)
+    if order is None:
+        return name
+    return f"{name}({order}" + (f", degree {degree}" if degree else "") + ")"
 
 
 class DriveIteration:
@@ -183,7 +193,12 @@ class DriveIteration:
         shape = self.id_psd
         if shape is None:
             shape = triangular_psd((max(self.id_band[0], 0.0), self.id_band[1]))
-        for _attempt in range(4):
+        for attempt in range(4):
+            level = 100 * np.max(rms / [c.full_scale for c in rig.inputs])
+            status(
+                f"identifying: IDDRV {self.id_samples / rig.fs:g} s ({level:.3g} % of full "
+                f"scale rms{f', halved {attempt}x' if attempt else ''}) -> {rig.name}"
+            )
             iddrv = random_drive(
                 shape,
                 self.id_samples,
@@ -217,6 +232,7 @@ class DriveIteration:
         self._fit(drive, raw)
 
     def _fit(self, drive: TimeHistory, response: TimeHistory) -> None:
+        status(f"fitting the inverse model: {_describe(self.method)} ...")
         self.method.identify(
             self.down(gprepro(drive, self.id_band)), self.down(gprepro(response, self.id_band))
         )

@@ -24,7 +24,10 @@ from __future__ import annotations
 import numpy as np
 from tqdm.auto import tqdm
 
-from ..errors import ReconstructionError, RigLimitError
+from identification.errors import IdentificationError, SimulationDivergedError
+
+from ..errors import ReconstructionError, RigLimitError, SimulationInstabilityError
+from ..progress import enabled_if
 from ..timehistory import TimeHistory
 from .engine import DriveIteration
 from .result import ReconstructionResult
@@ -58,7 +61,9 @@ def reconstruct(
         Method, iterations, gain, band, identification drive, seeds, stopping rule (default:
         the defaults of :class:`~vrig.reconstruction.IterationSettings`).
     progress : bool
-        Show a progress bar over the iterations (stderr).
+        Show a progress bar over the iterations and the status of the identification, the fit
+        and long rig runs on stderr (:mod:`vrig.progress`; ``False`` leaves an outer
+        :func:`vrig.progress.enabled` in force).
     **options
         Settings by name on top of ``settings``: ``method`` (``"arx"``, ``"narx"``, ``"split"``,
         ``"frf"``, ``"error-signal"`` or a method object), ``iterations``, ``gain``,
@@ -85,6 +90,12 @@ def reconstruct(
         refused or tripped. ``exc.result`` holds what was made (identification records, model,
         the rejected drive); ``exc.cause`` the original error.
     """
+    with enabled_if(progress):  # status lines of the identification, rig run bars
+        return _reconstruct(rig, desired, settings, progress, options)
+
+
+def _reconstruct(rig, desired, settings, progress: bool, options) -> ReconstructionResult:
+    """:func:`reconstruct`'s body (progress switched on or off by the caller)."""
     settings = IterationSettings.build(settings, **options)
     gain = settings.gains_for(len(rig.inputs))
     engine = DriveIteration(rig, desired, settings)
@@ -116,13 +127,44 @@ def reconstruct(
         _iterate(engine, result, drive, gain, bar)
     finally:
         bar.close()
+    if not result.stop_kind:  # a stop that set no kind is an error of some other sort
+        result.stop_kind = "failed" if result.stopped else "completed"
     return result
+
+
+def stop_kind(exc: BaseException) -> str:
+    """The :data:`~vrig.reconstruction.result.STOP_KINDS` entry of an error that stopped a
+    reconstruction.
+
+    Parameters
+    ----------
+    exc : Exception
+        The error.
+
+    Returns
+    -------
+    str
+        ``"refused"`` (a drive beyond full scale, never sent), ``"interlock"`` (a rig trip),
+        ``"unstable"`` (the simulation), ``"diverged"`` (an inverse model's free run),
+        ``"model"`` (any other identification error: the model could not be fitted) or
+        ``"failed"``.
+    """
+    if isinstance(exc, RigLimitError):
+        return "refused" if exc.time != exc.time else "interlock"  # time NaN: never sent
+    if isinstance(exc, SimulationInstabilityError):
+        return "unstable"
+    if isinstance(exc, SimulationDivergedError):
+        return "diverged"
+    if isinstance(exc, IdentificationError):
+        return "model"
+    return "failed"
 
 
 def _fail(result: ReconstructionResult, engine: DriveIteration, where: str, exc: Exception) -> None:
     """Record in ``result`` why the loop stopped (and the drive refused or tripped, if any)."""
     what = str(exc) if isinstance(exc, RigLimitError) else f"{type(exc).__name__}: {exc}"
     result.stopped, result.error = f"{where}: {what}", exc
+    result.stop_kind = stop_kind(exc)
     if engine.rejected is not None:
         result.rejected_name, result.rejected_drive = engine.rejected
 
@@ -179,6 +221,7 @@ def _iterate(engine: DriveIteration, result, drive, gain, bar) -> None:
             result.stopped = (
                 f"IT{it:02d}: diverging (mean η0 {means[-1]:.1f} % > {divergence} x best)"
             )
+            result.stop_kind = "diverged"
             break
         if it == iterations:
             break
@@ -194,4 +237,5 @@ def _iterate(engine: DriveIteration, result, drive, gain, bar) -> None:
                 f"IT{it + 1:02d}DRV: the drive update is not finite (the inverse model diverged "
                 f"on IT{it:02d}RES): not sent"
             )
+            result.stop_kind = "diverged"
             break

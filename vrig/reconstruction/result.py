@@ -9,7 +9,32 @@ import numpy as np
 from ..timehistory import TimeHistory
 from .settings import IterationSettings
 
-__all__ = ["ReconstructionResult"]
+__all__ = ["STOP_KINDS", "ReconstructionResult"]
+
+STOP_KINDS = (
+    "completed",
+    "converged",
+    "interlock",
+    "refused",
+    "diverged",
+    "unstable",
+    "model",
+    "failed",
+)
+"""The values of :attr:`ReconstructionResult.stop_kind`, the machine-readable stop reason:
+
+``completed``  every iteration asked for was played
+``converged``  stopped early because the iteration met its tolerance
+``interlock``  a drive tripped an interlock of the rig (stroke, force, following error, range)
+``refused``    a drive beyond the drives' full scale was refused before it was sent
+``diverged``   η0 grew beyond ``divergence`` x the best, the inverse model diverged on a
+               response, or the drive update was not finite
+``unstable``   the rig's simulation became unstable (a MuJoCo warning or a non-finite state)
+``model``      the inverse model could not be (re-)fitted (e.g. an unstable model)
+``failed``     any other error
+
+``""`` while a reconstruction is running.
+"""
 
 
 @dataclass
@@ -39,6 +64,10 @@ class ReconstructionResult:
         IDDRV and IDRES (raw); ``None`` when the identification drive could not be played.
     stopped : str
         Why the loop stopped before the last iteration ("" when it ran them all).
+    stop_kind : str
+        The same, machine-readable: one of :data:`STOP_KINDS` (``"completed"`` when it ran them
+        all); for a failure before IT00 (:class:`~vrig.ReconstructionError`) the kind of the
+        error that stopped the identification, the fit or IT00.
     error : Exception or None
         The exception that stopped the loop (None when it completed or diverged).
     rejected_name, rejected_drive : str, TimeHistory or None
@@ -73,6 +102,7 @@ class ReconstructionResult:
     error: Exception | None = None
     rejected_name: str = ""
     rejected_drive: TimeHistory | None = None
+    stop_kind: str = ""
 
     @property
     def final_drive(self) -> TimeHistory:

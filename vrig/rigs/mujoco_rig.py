@@ -24,6 +24,7 @@ import numpy as np
 from mujoco import rollout
 
 from ..errors import RigLimitError, RigModelError, RigParameterError, SimulationInstabilityError
+from ..progress import RUN_BAR_DELAY_S, bar
 from ..timehistory import TimeHistory
 from . import gas_spring, hydraulics, stability
 from ._callbacks import foreign_callbacks_suspended
@@ -672,6 +673,8 @@ class MujocoRig:
         over = {}  # channel -> (first sample beyond the transducer range, value)
         hydraulics.install(m, d, self._hyd, self.timestep, states=self._hyd_states)
         gas_spring.install(m, d, self._air_bound)
+        shown = bar(total, desc=f"{self.name}: run {n / self.fs:g} s", unit="sample",
+                    delay=RUN_BAR_DELAY_S)  # fmt: skip
         try:
             for k0 in range(0, total, chunk):
                 k1 = min(k0 + chunk, total)
@@ -701,8 +704,10 @@ class MujocoRig:
                 state = np.empty(self._state0.size)
                 mujoco.mj_getState(m, d, state, _STATE)
                 warm = d.qacc_warmstart[None, :].copy()
+                shown.update(k1 - k0)
             trip = hydraulics.trip_record(d)
         finally:
+            shown.close()
             hydraulics.uninstall(d)
             gas_spring.uninstall(d)
         if trip is not None:
