@@ -11,6 +11,7 @@ from __future__ import annotations
 import argparse
 import io
 import os
+import re
 from contextlib import redirect_stdout
 
 CLI_MARK = "<!-- vrig:cli-help -->"
@@ -69,3 +70,23 @@ def on_page_markdown(markdown: str, page, config, files) -> str:
     if RIGS_MARK in markdown:
         markdown = markdown.replace(RIGS_MARK, rigs_markdown())
     return markdown
+
+
+# Docstrings use Sphinx roles (:class:`~vrig.X`, :func:`reconstruct`, ...), which Markdown renders
+# as ":class:<code>~vrig.X</code>". Turn them into autorefs cross-references (resolved by
+# mkdocs-autorefs after every page is rendered; "optional": an object that has no page of its own
+# stays plain code instead of failing the strict build).
+_ROLE = re.compile(r":(?:class|func|meth|mod|attr|data|exc|obj|py:\w+):<code>(~?)([^<]+)</code>")
+
+
+def _role(match: re.Match) -> str:
+    tilde, target = match.groups()
+    target = target.strip()
+    if target.startswith("."):
+        target = target[1:]
+    shown = target.rsplit(".", 1)[-1] if tilde else target
+    return f'<autoref identifier="{target}" optional><code>{shown}</code></autoref>'
+
+
+def on_page_content(html: str, page, config, files) -> str:
+    return _ROLE.sub(_role, html)
