@@ -12,7 +12,7 @@ import numpy as np
 
 from ._transforms import apply
 
-__all__ = ["expand_terms", "free_run", "input_coefficients"]
+__all__ = ["expand_terms", "free_run", "input_coefficients", "windowed_free_run"]
 
 
 @nb.njit(cache=True, nogil=True)
@@ -148,4 +148,37 @@ def free_run(
             mag = abs(acc)
             if not (mag <= bound[k]) or mag == np.inf:  # also catches nan
                 return k, t
+    return -1, -1
+
+
+@nb.njit(cache=True, nogil=True)
+def windowed_free_run(
+    Y, Ymeas, start, stop, k, p, A, S, reg_src, reg_lag, reg_fun, reg_bp, reg_ptr, parent, factor,
+    mono_ptr, bound,
+):  # pragma: no cover
+    """k-step-ahead prediction: :func:`free_run` restarted from measured outputs every k rows.
+
+    Windows start at ``start, start + k, ...`` (< ``stop``); the window at ``i`` copies the
+    measured rows ``Ymeas[i - p : i]`` into the scratch ``S`` (>= p + k rows), runs the free run
+    over ``min(k, stop - i)`` rows and writes them to ``Y[i : ...]``. ``A[t - start]`` holds the
+    input coefficients of row t (as for :func:`free_run`). Each window's arithmetic is exactly
+    that of a free run started at ``i`` from ``Ymeas[i - p : i]``. Returns ``(-1, -1)`` or the
+    (channel, row of ``Y``) where the bound was left (that value is left in ``Y``).
+    """
+    ny = Y.shape[1]
+    for i in range(start, stop, k):
+        n = min(k, stop - i)
+        for r in range(p):
+            for c in range(ny):
+                S[r, c] = Ymeas[i - p + r, c]
+        ch, t = free_run(
+            S, p, p + n, A[i - start : i - start + n], reg_src, reg_lag, reg_fun, reg_bp,
+            reg_ptr, parent, factor, mono_ptr, bound,
+        )
+        last = n if ch < 0 else t - p + 1
+        for r in range(last):
+            for c in range(ny):
+                Y[i + r, c] = S[p + r, c]
+        if ch >= 0:
+            return ch, i + t - p
     return -1, -1

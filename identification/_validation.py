@@ -8,7 +8,13 @@ import numpy as np
 
 from .errors import IdentificationError
 
-__all__ = ["as_signal", "check_same_length", "per_channel_int"]
+__all__ = [
+    "as_signal",
+    "check_initial_outputs",
+    "check_same_length",
+    "check_steps_ahead",
+    "per_channel_int",
+]
 
 
 def as_signal(x, name: str, *, n_channels: int | None = None) -> np.ndarray:
@@ -83,20 +89,39 @@ def per_channel_int(value, n: int, name: str, *, minimum: int) -> tuple[int, ...
 
 
 def check_initial_outputs(y0, u: np.ndarray, max_lag: int, n_outputs: int) -> np.ndarray:
-    """``y0`` (the first ``max_lag`` outputs a free run starts from) as a float array of shape
-    (max_lag, n_outputs), finite, with ``u`` at least that long; else IdentificationError."""
+    """``y0`` (the initial outputs a free run starts from: an initialisation window of
+    ``L >= max_lag`` samples, whose last ``max_lag`` are the initial state) as a float array of
+    shape (L, n_outputs), finite, with ``u`` at least ``L`` long; else IdentificationError."""
     y0 = np.asarray(y0, dtype=np.float64)
     if y0.ndim == 1 and n_outputs == 1:
         y0 = y0[:, None]
-    if y0.shape != (max_lag, n_outputs):
+    if y0.ndim != 2 or y0.shape[1] != n_outputs or y0.shape[0] < max_lag:
         raise IdentificationError(
-            f"y0 must have shape (max_lag_, ny) = {(max_lag, n_outputs)}, got {y0.shape}"
+            f"y0 must have shape (L, ny) with L >= max_lag_ = {max_lag} samples and "
+            f"ny = {n_outputs} (its last max_lag_ samples are the initial state), "
+            f"got {y0.shape}"
         )
     if not np.all(np.isfinite(y0)):
         raise IdentificationError("y0 contains NaN or inf")
-    if u.shape[0] < max_lag:
+    if u.shape[0] < y0.shape[0]:
         raise IdentificationError(
-            f"u has {u.shape[0]} samples, fewer than the {max_lag} initial outputs y0"
+            f"u has {u.shape[0]} samples, fewer than the {y0.shape[0]} initial outputs y0"
         )
     return y0
 
+
+def check_steps_ahead(steps_ahead) -> int | None:
+    """``steps_ahead`` of ``predict``: None (free run) or a positive int; else
+    IdentificationError."""
+    if steps_ahead is None:
+        return None
+    if (
+        not isinstance(steps_ahead, (int, np.integer))
+        or isinstance(steps_ahead, bool)
+        or steps_ahead < 1
+    ):
+        raise IdentificationError(
+            "steps_ahead must be None (free-run simulation from the first max_lag_ measured "
+            f"outputs), 1 (one-step-ahead) or an integer k > 1 (k-step-ahead), got {steps_ahead!r}"
+        )
+    return int(steps_ahead)

@@ -29,7 +29,13 @@ MEMORY_BUDGET_BYTES = 2 * 2**30
 
 
 def format_bytes(n: int) -> str:
-    """``n`` bytes as a short human-readable size (any size, no float overflow)."""
+    """``n`` bytes as a short human-readable size (any size, no float overflow).
+
+    Parameters
+    ----------
+    n : int
+        A size in bytes.
+    """
     n = int(n)
     if n < 2**20:
         return f"{n / 2**10:.3g} KiB"
@@ -64,5 +70,11 @@ def check_allocation(n_bytes: int, what: str, remedy: str) -> None:
 
 
 def product(*dims: int) -> int:
-    """Exact product of array dimensions as a Python integer (no int64 overflow)."""
+    """Exact product of array dimensions as a Python integer (no int64 overflow).
+
+    Parameters
+    ----------
+    *dims : int
+        Array dimensions (numbers of elements along each axis).
+    """
     return math.prod(int(d) for d in dims)

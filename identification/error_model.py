@@ -5,7 +5,12 @@ from __future__ import annotations
 import numpy as np
 
 from ._composite import load_composite, save_composite
-from ._validation import as_signal, check_initial_outputs, check_same_length
+from ._validation import (
+    as_signal,
+    check_initial_outputs,
+    check_same_length,
+    check_steps_ahead,
+)
 from .errors import IdentificationError, ModelFileError, SimulationDivergedError
 from .models import Arx, Narx
 
@@ -30,14 +35,16 @@ class ErrorSignalModel:
     Parameters
     ----------
     linear : Arx, default ``Arx(order=3)``
+        The (unfitted) linear model of the system.
     nonlinear : Narx, default ``Narx(order=2, degree=2)``
-        The text's Table 6.5 pair (ARX(3) and a quadratic NARX(2) of the error).
+        The (unfitted) model of the linear model's free-run error. Together the text's
+        Table 6.5 pair (ARX(3) and a quadratic NARX(2) of the error).
     max_radius : float, optional
         Pole radius limit given to both parts at :meth:`fit` (see :class:`Narx`); None keeps
         the parts' own setting.
 
-    Attributes (after fit)
-    ----------------------
+    Attributes
+    ----------
     max_lag_ : int, the larger of the two parts' largest lags
     n_terms_ : ndarray, terms per output channel (both parts)
     contraction_ : float, the stronger (smaller) of the two parts' pole contractions (1: none)
@@ -66,7 +73,17 @@ class ErrorSignalModel:
 
     def fit(self, u, y, *, input_names=None, output_names=None):
         """Fit the linear model to ``(u, y)``, then the non-linear one to ``(u, y - y_lin)``
-        (``y_lin``: the linear model's free run from a zero past); returns self."""
+        (``y_lin``: the linear model's free run from a zero past); returns self.
+
+        Parameters
+        ----------
+        u : array_like, shape (N, nu) or (N,)
+            Identification input record, in its physical units (time on axis 0).
+        y : array_like, shape (N, ny) or (N,)
+            Identification output record, same N, in its physical units.
+        input_names, output_names : sequence of str, optional
+            Channel names (default ``u1, u2, ...``, ``y1, y2, ...``), kept in the model.
+        """
         u = as_signal(u, "u")
         y = as_signal(y, "y")
         check_same_length(u, y, "u", "y")
@@ -116,12 +133,25 @@ class ErrorSignalModel:
     def simulate(self, u, y0=None, *, bound=None) -> np.ndarray:
         """Free run (N, ny): linear simulation plus simulated error signal.
 
-        ``y0`` (``max_lag_``, ny), optional: measured initial outputs, as for
-        :meth:`Narx.simulate <identification.Narx.simulate>`. The linear part starts from
-        them, the error part from a zero error (the linear model taken as exact at the
-        start); the first ``max_lag_`` samples of the result are ``y0``. Default: zero past.
+        ``y0`` (L, ny), L >= ``max_lag_``, optional: an initialisation window of measured
+        outputs, as for :meth:`Narx.simulate <identification.Narx.simulate>` (its last
+        ``max_lag_`` samples are the initial state; bit for bit the same as
+        ``simulate(u[L - max_lag_:], y0=y0[-max_lag_:])`` after the first ``L - max_lag_``
+        samples). The linear part starts from them, the error part from a zero error (the
+        linear model taken as exact at the start); the first ``L`` samples of the result are
+        ``y0``. Default: zero past.
         ``bound`` (per output channel): limits each part's free run and their sum; default
         each part's own ``bound_``, and the linear part's for the sum.
+
+        Parameters
+        ----------
+        u : array_like, shape (N, nu) or (N,)
+            Input record.
+        y0 : array_like, shape (max_lag_, ny), optional
+            Measured initial outputs (see above); default a zero past.
+        bound : float or array_like of shape (ny,), optional
+            Free-run magnitude bound per output channel, in the output's units, handed to both parts
+            (default each part's own ``bound_``).
 
         Raises
         ------
@@ -134,11 +164,12 @@ class ErrorSignalModel:
             out = self.linear.simulate(u, bound=bound) + self.nonlinear.simulate(u, bound=bound)
         else:
             y0 = check_initial_outputs(y0, u, self.max_lag_, self.n_outputs_)
-            e0 = np.zeros((self.nonlinear.max_lag_, self.n_outputs_))
+            shift = y0.shape[0] - self.max_lag_  # samples of y0 before the initial state
+            e0 = np.zeros((shift + self.nonlinear.max_lag_, self.n_outputs_))
             out = self.linear.simulate(
-                u, y0=y0[: self.linear.max_lag_], bound=bound
+                u, y0=y0[: shift + self.linear.max_lag_], bound=bound
             ) + self.nonlinear.simulate(u, y0=e0, bound=bound)
-            out[: self.max_lag_] = y0
+            out[: y0.shape[0]] = y0
         limit = self.bound_ if bound is None else np.broadcast_to(bound, (self.n_outputs_,))
         bad = ~(np.abs(out) <= limit)
         if bad.any():
@@ -149,13 +180,49 @@ class ErrorSignalModel:
             )
         return out
 
-    def predict(self, u, y) -> np.ndarray:
-        """Linear free run plus one-step-ahead prediction of its error from the measured error."""
+    def predict(self, u, y, *, steps_ahead: int | None = 1, bound=None) -> np.ndarray:
+        """Prediction (N, ny) from measured inputs and outputs (SysIdentPy's ``steps_ahead``;
+        the default, 1, is not SysIdentPy's: see :meth:`Narx.predict
+        <identification.Narx.predict>`).
+
+        ``steps_ahead=1`` (default) or ``k``: the linear part's free run from a zero past
+        (the signal the error model was fitted against) plus the error model's one-step or
+        k-step prediction (:meth:`Narx.predict <identification.Narx.predict>`) of the measured
+        error ``y - y_lin``. ``None``: the free run from the first ``max_lag_`` measured
+        outputs, exactly ``simulate(u, y0=y[:max_lag_])``; unlike a single-part model, a very
+        large ``k`` is not that free run (its linear part starts from a zero past).
+        ``bound``: as for :meth:`simulate` (free runs only).
+
+        Parameters
+        ----------
+        u : array_like, shape (N, nu) or (N,)
+            Measured input record.
+        y : array_like, shape (N, ny) or (N,)
+            Measured output record, same N (its past values are the regressors).
+        steps_ahead : int or None
+            ``1`` (default) one step ahead, ``k`` k steps ahead, ``None`` a free run.
+        bound : float, optional
+            Free-run bound, as for :meth:`simulate`.
+        """
         self._check_fitted()
+        steps = check_steps_ahead(steps_ahead)
+        if steps is None:
+            y = as_signal(y, "y", n_channels=self.n_outputs_)
+            u = as_signal(u, "u", n_channels=self.n_inputs_)
+            check_same_length(u, y, "u", "y")
+            if u.shape[0] <= self.max_lag_:
+                raise IdentificationError(
+                    f"need more than max_lag_ = {self.max_lag_} samples to predict"
+                )
+            return self.simulate(u, y0=y[: self.max_lag_], bound=bound)
         y_lin = self.linear.simulate(u)
-        return y_lin + self.nonlinear.predict(u, as_signal(y, "y") - y_lin)
+        if steps == 1:
+            return y_lin + self.nonlinear.predict(u, as_signal(y, "y") - y_lin)
+        err = as_signal(y, "y") - y_lin
+        return y_lin + self.nonlinear.predict(u, err, steps_ahead=steps, bound=bound)
 
     def describe(self) -> str:
+        """Summary of the two fitted parts (their :meth:`Narx.describe` texts in brackets)."""
         self._check_fitted()
         return (
             f"ErrorSignalModel: linear [{self.linear.describe()}]; "
@@ -165,7 +232,13 @@ class ErrorSignalModel:
     # ------------------------------------------------------------------ persistence
     def save(self, path):
         """Save the fitted model to one ``.npz`` model file (atomic; exact round trip: the
-        loaded model simulates bit for bit the same); returns the path."""
+        loaded model simulates bit for bit the same); returns the path.
+
+        Parameters
+        ----------
+        path : str or os.PathLike
+            Target file; ``.npz`` is appended when the name has another suffix or none.
+        """
         self._check_fitted()
         return save_composite(
             path,
@@ -177,7 +250,13 @@ class ErrorSignalModel:
     @classmethod
     def load(cls, path):
         """Load a model written by :meth:`save` (checked like :meth:`Narx.load
-        <identification.Narx.load>`; raises :class:`~identification.ModelFileError`)."""
+        <identification.Narx.load>`; raises :class:`~identification.ModelFileError`).
+
+        Parameters
+        ----------
+        path : str or os.PathLike
+            A file written by :meth:`save` (``.npz`` appended when missing).
+        """
         params, parts = load_composite(path, "ErrorSignalModel", ("linear", "nonlinear"))
         lin, nl = parts["linear"], parts["nonlinear"]
         try:

@@ -35,12 +35,12 @@ class ModelFileError(IdentificationError):
     """A model file is not one :meth:`Narx.save <identification.Narx.save>` wrote: truncated,
     corrupt, foreign, tampered, of a newer format version, not a regular file or too large.
 
-    Attributes
+    Parameters
     ----------
-    path : str
-        The file.
+    path : str or os.PathLike
+        The file (kept as the attribute ``path``, a ``str``).
     detail : str
-        What is wrong.
+        What is wrong (kept as the attribute ``detail``).
     """
 
     def __init__(self, path, detail: str):
@@ -54,10 +54,13 @@ class ModelFileError(IdentificationError):
 class UnstableModelError(IdentificationError):
     """``fit`` could not produce a model whose free run stays bounded on its identification input.
 
-    Attributes
+    Parameters
     ----------
-    cause : SimulationDivergedError or None
-        The divergence of the last model tried (channel, sample, value).
+    message : str
+        What was tried and why no model was accepted.
+    cause : SimulationDivergedError or None, optional
+        The divergence of the last model tried (channel, sample, value); kept as the attribute
+        ``cause``.
     """
 
     def __init__(self, message: str, cause=None):
@@ -82,8 +85,9 @@ class SimulationDivergedError(IdentificationError, ArithmeticError):
     one-step prediction was not finite.
 
     An :class:`IdentificationError` (hence also a ``ValueError``) and an ``ArithmeticError``.
+    Each parameter is kept as the attribute of the same name.
 
-    Attributes
+    Parameters
     ----------
     channel : int
         Zero-based index of the output channel that diverged.

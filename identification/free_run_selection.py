@@ -57,10 +57,18 @@ class SelectionPath:
 
     @property
     def selected(self) -> np.ndarray:
+        """The candidate indices of the step kept (``steps[chosen]``)."""
         return self.steps[self.chosen]
 
 
 def check_criterion(criterion) -> None:
+    """Raise :class:`IdentificationError` unless ``criterion`` is None or one of :data:`CRITERIA`.
+
+    Parameters
+    ----------
+    criterion : str or None
+        A term-count criterion name (``"aic"``, ``"aicc"``, ``"bic"``, ``"fpe"``, ``"press"``).
+    """
     if criterion is not None and criterion not in CRITERIA:
         raise IdentificationError(
             f"criterion must be one of {CRITERIA} or None, got {criterion!r}"
@@ -140,7 +148,11 @@ def simulation_selection(
     ch : ChannelStructure
         The channel's candidate structure (``X``'s columns are its terms).
     k : int
-        Output channel index; ``u`` (N, nu), ``y`` (N, ny) the identification record.
+        Output channel index.
+    u : ndarray (N, nu)
+        Identification input record.
+    y : ndarray (N, ny)
+        Identification output record (the measured past outputs of the free run's start).
     start : int
         First simulated sample (the largest lag); earlier outputs are the measured ones.
     n_terms : int, optional
@@ -198,6 +210,19 @@ def criterion_path(X, target, selected, err, criterion) -> int:
 
     The one-step residual energy after n terms is ``(1 - sum(err[:n])) * |target|^2`` (the
     error-reduction ratios add up); PRESS refits each prefix.
+
+    Parameters
+    ----------
+    X : ndarray (N, M)
+        The candidate regression matrix (one-step, measured outputs).
+    target : ndarray (N,)
+        The channel's measured output (the regression target).
+    selected : sequence of int
+        The candidate indices in the order FROLS chose them.
+    err : ndarray
+        Error-reduction ratio of each selected term, in the same order.
+    criterion : {"aic", "aicc", "bic", "fpe", "press"}
+        The criterion minimised over the prefixes.
     """
     check_criterion(criterion)
     energy = float(target @ target)

@@ -41,6 +41,19 @@ def estimate_delay(u, y, *, max_lag: int = 32, order: int = 4, tolerance: float 
     longer ones fit worse. The pair's delay is the largest nk whose one-step loss is within
     ``tolerance`` (relative) of the smallest; the earliest delay over all pairs is returned.
     Robust to band-limited inputs, unlike a raw impulse-response or cross-correlation peak.
+
+    Parameters
+    ----------
+    u : array_like, shape (N, nu) or (N,)
+        Input record(s).
+    y : array_like, shape (N, ny) or (N,)
+        Output record(s), same N.
+    max_lag : int, optional
+        Largest delay tried, in samples.
+    order : int, optional
+        Output lags of the ARX models fitted (and ``order + 1`` input lags).
+    tolerance : float, optional
+        Relative one-step loss above the smallest that still counts as fitting as well.
     """
     u = as_signal(u, "u")
     y = as_signal(y, "y")
@@ -175,7 +188,17 @@ class InverseModel:
         self.lead_domain = lead_domain
 
     def fit(self, drive, response, *, drive_names=None, response_names=None):
-        """Fit the inverse from an identification drive (N, n_drives) and response (N, n_resp)."""
+        """Fit the inverse from an identification drive (N, n_drives) and response (N, n_resp).
+
+        Parameters
+        ----------
+        drive : array_like, shape (N, n_drives) or (N,)
+            Identification drive record (the inverse model's output), in the drive's units.
+        response : array_like, shape (N, n_resp) or (N,)
+            The response measured for it (the inverse model's input), same N.
+        drive_names, response_names : sequence of str, optional
+            Channel names kept in the model.
+        """
         drive = as_signal(drive, "drive")
         response = as_signal(response, "response")
         check_same_length(drive, response, "drive", "response")
@@ -343,6 +366,16 @@ class InverseModel:
         record mirrored in time (its level and spectrum), faded in from zero with a raised
         cosine; only the record's samples are returned. ``"auto"``: ``max(64, 16 * max_lag_)``
         samples.
+
+        Parameters
+        ----------
+        response : array_like, shape (N, n_resp) or (N,)
+            Desired response record, in the response channels' units.
+        bound : float or array_like of shape (n_drives,), optional
+            Free-run magnitude bound per drive channel, in the drive's units (default the fitted
+            model's ``bound_``).
+        run_in : int or "auto", optional
+            Samples of synthetic history run before the record (see above); 0: a zero past.
         """
         if not hasattr(self, "lead_"):
             raise IdentificationError(

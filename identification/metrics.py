@@ -61,13 +61,29 @@ def _ratio(num, den, what):
 
 
 def qantim_fit(y, yhat):
-    """QanTiM fit value η (eq. 5-27): ``100 * sum|y - yhat| / sum|y|`` in %."""
+    """QanTiM fit value η (eq. 5-27): ``100 * sum|y - yhat| / sum|y|`` in %.
+
+    Parameters
+    ----------
+    y : array_like, shape (N,) or (N, channels)
+        Reference record (time on axis 0), in its physical units.
+    yhat : array_like, same shape as ``y``
+        Simulated or achieved record to compare with ``y``, in the same units.
+    """
     y, yhat = _pair(y, yhat)
     return 100.0 * _ratio(np.abs(y - yhat).sum(axis=0), np.abs(y).sum(axis=0), "qantim_fit")
 
 
 def qantim_fit_dc(y, yhat):
-    """DC-corrected QanTiM fit value η0 (eq. 5-28) in %: both records' means removed first."""
+    """DC-corrected QanTiM fit value η0 (eq. 5-28) in %: both records' means removed first.
+
+    Parameters
+    ----------
+    y : array_like, shape (N,) or (N, channels)
+        Reference record (time on axis 0), in its physical units.
+    yhat : array_like, same shape as ``y``
+        Simulated or achieved record to compare with ``y``, in the same units.
+    """
     y, yhat = _pair(y, yhat)
     y0 = y - y.mean(axis=0)
     e0 = y0 - (yhat - yhat.mean(axis=0))
@@ -75,7 +91,15 @@ def qantim_fit_dc(y, yhat):
 
 
 def rms_error_percent(y, yhat):
-    """RMS error in % of the reference RMS, means removed: ``100 * rms(e0) / rms(y0)``."""
+    """RMS error in % of the reference RMS, means removed: ``100 * rms(e0) / rms(y0)``.
+
+    Parameters
+    ----------
+    y : array_like, shape (N,) or (N, channels)
+        Reference record (time on axis 0), in its physical units.
+    yhat : array_like, same shape as ``y``
+        Simulated or achieved record to compare with ``y``, in the same units.
+    """
     y, yhat = _pair(y, yhat)
     y0 = y - y.mean(axis=0)
     e0 = y0 - (yhat - yhat.mean(axis=0))
@@ -85,13 +109,31 @@ def rms_error_percent(y, yhat):
 
 
 def rmse(y, yhat):
-    """Root mean square error ``sqrt(mean((y - yhat)^2))`` in the units of y."""
+    """Root mean square error ``sqrt(mean((y - yhat)^2))`` in the units of y.
+
+    Parameters
+    ----------
+    y : array_like, shape (N,) or (N, channels)
+        Reference record (time on axis 0), in its physical units.
+    yhat : array_like, same shape as ``y``
+        Simulated or achieved record to compare with ``y``, in the same units.
+    """
     y, yhat = _pair(y, yhat)
     return np.sqrt(((y - yhat) ** 2).mean(axis=0))
 
 
 def nrmse(y, yhat, *, norm: str = "std"):
-    """Normalised RMSE: ``rmse / std(y)`` (``norm="std"``) or ``rmse / (max y - min y)``."""
+    """Normalised RMSE: ``rmse / std(y)`` (``norm="std"``) or ``rmse / (max y - min y)``.
+
+    Parameters
+    ----------
+    y : array_like, shape (N,) or (N, channels)
+        Reference record (time on axis 0), in its physical units.
+    yhat : array_like, same shape as ``y``
+        Simulated or achieved record to compare with ``y``, in the same units.
+    norm : {"std", "range"}, optional
+        Normalise by the standard deviation of ``y`` (default) or by its range (max - min).
+    """
     y, yhat = _pair(y, yhat)
     if norm == "std":
         den = y.std(axis=0)
@@ -103,7 +145,15 @@ def nrmse(y, yhat, *, norm: str = "std"):
 
 
 def rrse(y, yhat):
-    """Root relative squared error ``sqrt(sum (y - yhat)^2 / sum (y - mean y)^2)``."""
+    """Root relative squared error ``sqrt(sum (y - yhat)^2 / sum (y - mean y)^2)``.
+
+    Parameters
+    ----------
+    y : array_like, shape (N,) or (N, channels)
+        Reference record (time on axis 0), in its physical units.
+    yhat : array_like, same shape as ``y``
+        Simulated or achieved record to compare with ``y``, in the same units.
+    """
     y, yhat = _pair(y, yhat)
     return np.sqrt(
         _ratio(((y - yhat) ** 2).sum(axis=0), ((y - y.mean(axis=0)) ** 2).sum(axis=0), "rrse")
@@ -111,5 +161,13 @@ def rrse(y, yhat):
 
 
 def fit_percent(y, yhat):
-    """Fit in % as MATLAB ``compare`` reports it: ``100 * (1 - ||y - yhat|| / ||y - mean(y)||)``."""
+    """Fit in % as MATLAB ``compare`` reports it: ``100 * (1 - ||y - yhat|| / ||y - mean(y)||)``.
+
+    Parameters
+    ----------
+    y : array_like, shape (N,) or (N, channels)
+        Reference record (time on axis 0), in its physical units.
+    yhat : array_like, same shape as ``y``
+        Simulated or achieved record to compare with ``y``, in the same units.
+    """
     return 100.0 * (1.0 - rrse(y, yhat))

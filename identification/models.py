@@ -17,7 +17,13 @@ import numpy as np
 
 from ._files import atomic_write, read_npz
 from ._transforms import FUNCTIONS
-from ._validation import as_signal, check_initial_outputs, check_same_length, per_channel_int
+from ._validation import (
+    as_signal,
+    check_initial_outputs,
+    check_same_length,
+    check_steps_ahead,
+    per_channel_int,
+)
 from .budget import check_allocation, product
 from .errors import (
     IdentificationError,
@@ -31,7 +37,7 @@ from .free_run_selection import check_criterion, criterion_path, simulation_sele
 from .output_error import FlatModel, refine
 from .regression import regression_matrix
 from .selection import forward_regression
-from .simulation import compile_plan, simulate_plan
+from .simulation import compile_plan, predict_plan_k_step, simulate_plan
 from .solvers import get_solver
 from .structure import (
     AUTO_BREAKPOINTS,
@@ -284,8 +290,8 @@ class Narx:
         high-passed response to a displacement drive puts poles at ``z ~ 1`` that estimation
         noise pushes outside the unit circle; 0.995 turns them into leaky integrators.
 
-    Attributes (after fit)
-    ----------------------
+    Attributes
+    ----------
     channels_ : tuple of ChannelStructure
     coef_ : tuple of ndarray, one coefficient vector per output channel
     n_terms_ : ndarray of int, terms per output channel
@@ -460,6 +466,15 @@ class Narx:
         regression and then re-estimated with ``solver``. With ``focus="simulation"`` the
         coefficients are then refined on the free-run error. Either way the stability contract
         (see ``stability_margin``) is enforced before the model is returned.
+
+        Parameters
+        ----------
+        u : array_like, shape (N, nu) or (N,)
+            Identification input record, in its physical units (time on axis 0).
+        y : array_like, shape (N, ny) or (N,)
+            Identification output record, same N, in its physical units.
+        input_names, output_names : sequence of str, optional
+            Channel names (default ``u1, u2, ...``, ``y1, y2, ...``), kept in the model.
         """
         t0 = time.perf_counter()
         u, y = self._fit_least_squares(u, y, input_names, output_names)
@@ -745,6 +760,11 @@ class Narx:
         the LPC "bandwidth expansion". It is how an inverse model with near-integrator poles
         (an acceleration response inverted to a displacement drive) is kept bounded: a pole at
         ``z = 1.002`` becomes a leaky integrator whose corner lies below the identification band.
+
+        Parameters
+        ----------
+        max_radius : float, optional
+            Largest pole radius allowed, in (0, 1]; default 0.995.
         """
         if not 0 < max_radius <= 1:
             raise IdentificationError(f"max_radius must lie in (0, 1], got {max_radius!r}")
@@ -780,10 +800,12 @@ class Narx:
         ----------
         u : array (N, nu) or (N,)
             Input record.
-        y0 : array (max_lag_, ny), optional
-            Initial outputs: the first ``max_lag_`` samples are set to ``y0`` and simulation
-            starts at sample ``max_lag_``. Default: zero past (inputs and outputs before sample
-            0 are zero) and every sample is simulated.
+        y0 : array (L, ny) or (L,), L >= max_lag_, optional
+            Initialisation window of measured outputs (nonlinear_benchmarks' convention, e.g.
+            ``y0 = y[:50]``): the first ``L`` samples of the result are ``y0`` and simulation
+            starts at sample ``L`` from its last ``max_lag_`` samples (the same numbers, bit for
+            bit, as ``simulate(u[L - max_lag_:], y0=y0[-max_lag_:])``). Default: zero past
+            (inputs and outputs before sample 0 are zero) and every sample is simulated.
         bound : float or array (ny,), optional
             Magnitude bound per channel; default ``bound_``. ``np.inf`` checks finiteness only.
 
@@ -796,31 +818,70 @@ class Narx:
         u = as_signal(u, "u", n_channels=self.n_inputs_)
         if y0 is not None:
             y0 = check_initial_outputs(y0, u, self.max_lag_, self.n_outputs_)
+        return simulate_plan(self.plan_, u, y0, self._bound(bound), self.output_names_)
+
+    def _bound(self, bound) -> np.ndarray:
         if bound is None:
             bound = self.bound_
         bound = np.broadcast_to(np.asarray(bound, dtype=np.float64), (self.n_outputs_,)).copy()
         if np.any(np.isnan(bound)) or np.any(bound <= 0):
             raise IdentificationError(f"bound must be positive, got {bound}")
-        return simulate_plan(self.plan_, u, y0, bound, self.output_names_)
+        return bound
 
-    def predict(self, u, y) -> np.ndarray:
-        """One-step-ahead prediction from measured inputs and outputs, shape (N, ny).
+    def predict(self, u, y, *, steps_ahead: int | None = 1, bound=None) -> np.ndarray:
+        """Prediction from measured inputs and outputs, shape (N, ny): one step ahead by
+        default, k steps ahead, or a free run (SysIdentPy's ``steps_ahead``).
 
-        The first ``max_lag_`` samples cannot be predicted and are copies of ``y``.
+        .. note:: **The default differs from SysIdentPy's.** SysIdentPy's ``predict`` defaults
+           to ``steps_ahead=None``, a free run; here the default is ``steps_ahead=1`` (what
+           ``predict(u, y)`` has always returned). One-step-ahead errors are far smaller than
+           free-run errors: to score a model as SysIdentPy's default does, pass
+           ``steps_ahead=None`` (or call :meth:`simulate`).
+
+        The first ``max_lag_`` samples cannot be predicted and are copies of ``y`` (as in
+        SysIdentPy).
+
+        Parameters
+        ----------
+        u : array (N, nu) or (N,)
+            Measured inputs.
+        y : array (N, ny) or (N,)
+            Measured outputs, time-aligned with ``u``; N > ``max_lag_``.
+        steps_ahead : None, 1 or int k > 1 (keyword only)
+            ``1``: one-step-ahead prediction (every regressor from measured data).
+            ``None``: free-run simulation from the first ``max_lag_`` measured outputs,
+            exactly ``simulate(u, y0=y[:max_lag_])``.
+            ``k``: k-step-ahead prediction as SysIdentPy's: from sample ``max_lag_`` on the
+            record is cut into windows of k samples (the last one may be shorter); each window
+            is a free run re-initialised from the measured outputs just before it, so sample
+            ``max_lag_ + j k + i`` is predicted ``i + 1`` steps ahead (``i < k``). A ``k`` of at
+            least ``N - max_lag_`` is the free run.
+        bound : float or array (ny,), optional
+            For ``None`` and ``k > 1`` (free runs): as for :meth:`simulate`, default
+            ``bound_``. The one-step prediction only checks finiteness.
 
         Raises
         ------
         SimulationDivergedError
-            (``kind = "one-step prediction"``) when a prediction is not finite: the data are
-            so large that the model's terms overflow. The result never holds NaN or inf.
+            ``kind = "one-step prediction"`` when a one-step prediction is not finite (the data
+            are so large that the model's terms overflow: the result never holds NaN or inf);
+            ``"free-run simulation"`` / ``"k-step prediction"`` when a free run leaves
+            ``bound``.
         """
         self._check_fitted()
+        steps = check_steps_ahead(steps_ahead)
         u = as_signal(u, "u", n_channels=self.n_inputs_)
         y = as_signal(y, "y", n_channels=self.n_outputs_)
         check_same_length(u, y, "u", "y")
         p = self.max_lag_
         if u.shape[0] <= p:
             raise IdentificationError(f"need more than max_lag_ = {p} samples to predict")
+        if steps is None:
+            return self.simulate(u, y0=y[:p], bound=bound)
+        if steps > 1:
+            return predict_plan_k_step(
+                self.plan_, u, y, steps, self._bound(bound), self.output_names_
+            )
         out = y.copy()
         X, shared_with = None, None
         with np.errstate(over="ignore", invalid="ignore"):  # overflow is reported below
@@ -915,6 +976,11 @@ class Narx:
 
         The file is replaced atomically (temporary ``.NAME.tmp-XXXXXXXX`` in the same folder,
         ``fsync``, rename): a kill during the save leaves the previous file or the new one.
+
+        Parameters
+        ----------
+        path : str or os.PathLike
+            Target file; ``.npz`` is appended when the name has another suffix or none.
         """
         self._check_fitted()
         path = npz_path(path)
@@ -961,6 +1027,11 @@ class Narx:
         counts and names) and every channel's structure against it (regressor sources and lags
         in range, term indices, coefficient count, finite coefficients, positive bounds).
 
+        Parameters
+        ----------
+        path : str or os.PathLike
+            A file written by :meth:`save` (``.npz`` appended when missing).
+
         Raises
         ------
         FileNotFoundError
@@ -988,7 +1059,13 @@ MAX_MODEL_FILE_BYTES = 2**30
 
 
 def npz_path(path) -> Path:
-    """``path`` with the ``.npz`` suffix model files carry (added when missing)."""
+    """``path`` with the ``.npz`` suffix model files carry (added when missing).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        A model file name.
+    """
     path = Path(path)
     if path.suffix != ".npz":
         path = path.with_suffix(path.suffix + ".npz") if path.suffix else path.with_suffix(".npz")
@@ -997,7 +1074,15 @@ def npz_path(path) -> Path:
 
 def model_from_arrays(arrays: dict, path: Path):
     """The Narx/Arx stored in ``arrays`` (a model file's, or one part of a composite model
-    file's), checked (see :meth:`Narx.load`); raises :class:`ModelFileError` naming ``path``."""
+    file's), checked (see :meth:`Narx.load`); raises :class:`ModelFileError` naming ``path``.
+
+    Parameters
+    ----------
+    arrays : dict of str to ndarray
+        The arrays of a model file (or of one part of a composite model file).
+    path : Path
+        The file they were read from, named in the error when they are not a valid model.
+    """
     meta = _model_meta(arrays, path)
     target = {"Narx": Narx, "Arx": Arx}[meta["class"]]
     params = dict(meta["params"])
@@ -1127,6 +1212,49 @@ class Arx(Narx):
     """Linear ARX model (eq. 4-8 / 4-13), full-order MIMO structure: ``Narx(degree=1)``.
 
     Adds :meth:`to_statespace`, the MIMO discrete state-space form of eq. 4-14.
+
+    Parameters
+    ----------
+    order : int or sequence of int, optional
+        Full-order model order n_k per output channel (na = n_k, nb = n_k + 1, nk = 0), as for
+        :class:`Narx`. Give either ``order`` or ``na``/``nb``/``nk``.
+    na, nb, nk : int, sequence or 2-D table, optional
+        Explicit ARX orders instead of ``order`` (output lags 1..na, input lags nk..nk + nb - 1,
+        in samples), as for :class:`Narx`.
+    constant : bool
+        Include a constant term.
+    solver : str or callable
+        Least-squares solver (a name in :data:`~identification.solvers.SOLVERS` or a function).
+    rcond : float, optional
+        Relative singular-value threshold for rank decisions (default ``max(N, M) * eps``).
+    n_terms : int, optional
+        Select at most this many terms per channel (by ``selection``).
+    err_tol : float, optional
+        With FROLS, stop when the unexplained output fraction drops below this.
+    bound_factor : float
+        Free-run divergence bound: ``bound_factor * max|y|`` of the identification output.
+    focus : {"prediction", "simulation"}
+        Minimise the one-step error (least squares) or the free-run error (output-error
+        refinement), as for :class:`Narx`.
+    horizon : int, optional
+        With ``focus="simulation"``: a truncated horizon in samples (default the whole record).
+    max_iter : int
+        With ``focus="simulation"``: Levenberg-Marquardt iterations per horizon stage.
+    holdout : float
+        With ``focus="simulation"``: fraction of the record (its end) held out for early stopping.
+    stability_margin : float
+        The free run is checked on the identification input and on this multiple of it.
+    max_radius : float, optional
+        Contract the fitted poles inside this radius (:meth:`Narx.stabilise`); None: untouched.
+    selection : {"frols", "simulation"}
+        How terms are chosen: one-step error reduction ratio or free-run error (SEMP).
+    criterion : {"aic", "aicc", "bic", "fpe", "press"}, optional
+        Choose the number of terms along the selection path by this criterion.
+    functions : None
+        Must be None or empty: ARX takes no regressor functions (use ``Narx(degree=1,
+        functions=...)``); anything else raises :class:`IdentificationError`.
+    function_sources : str
+        Accepted for the same signature as :class:`Narx` and ignored (no functions).
     """
 
     def __init__(
@@ -1187,6 +1315,11 @@ class Arx(Narx):
         State ``x(t) = [y(t-1); ...; y(t-p); u(t-1); ...; u(t-p)]`` with p the largest lag
         (a non-minimal but exact realisation): ``x(t+1) = A x(t) + B u(t)``,
         ``y(t) = C x(t) + D u(t)``. Simulating it from ``x = 0`` equals :meth:`simulate`.
+
+        Parameters
+        ----------
+        dt : float, optional
+            Sample time of the state-space model in s (> 0; default 1.0, i.e. time in samples).
         """
         import control
 

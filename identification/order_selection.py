@@ -21,11 +21,13 @@ class OrderScan:
     Attributes
     ----------
     orders : ndarray (n_orders,)
+        The model orders tried.
     errors : ndarray (n_orders, ny)
         Free-run η0 [%] (eq. 5-28) per order and output channel, the free run started from the
         record's own first ``order`` outputs and scored after them; ``inf`` where the model's free
         run diverged (see ``diverged``) or the record was too short for that order.
     diverged : ndarray of bool (n_orders, ny)
+        True where that order's free run left its bound on that channel.
     n_terms : ndarray (n_orders,)
         Terms per channel at each order.
     best : ndarray (ny,)
@@ -39,7 +41,13 @@ class OrderScan:
     best: np.ndarray
 
     def table(self, output_names=None) -> str:
-        """Plain-text table: one row per order, one column per channel."""
+        """Plain-text table: one row per order, one column per channel.
+
+        Parameters
+        ----------
+        output_names : sequence of str, optional
+            Column headings, one per output channel (default ``y1, y2, ...``).
+        """
         ny = self.errors.shape[1]
         names = output_names or [f"y{k + 1}" for k in range(ny)]
         head = f"{'order':>5} {'terms':>6} " + " ".join(f"{n:>10}" for n in names)
@@ -66,6 +74,10 @@ def order_scan(u, y, orders, *, degree: int = 1, validation=None, solver="qr", k
         Polynomial degree (1 = ARX).
     validation : tuple (u_val, y_val), optional
         Records the error is measured on (default: the identification data).
+    solver : str or callable
+        Least-squares solver (see :func:`~identification.solvers.get_solver`).
+    kind : {"full", "pure", "quasi-static", "input-polynomial"}
+        Term set of the models (see :class:`~identification.Narx`).
     """
     u = as_signal(u, "u")
     y = as_signal(y, "y")

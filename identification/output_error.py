@@ -42,7 +42,29 @@ __all__ = ["FlatModel", "RefinementResult", "refine", "simulation_error"]
 
 @dataclass(frozen=True, eq=False)
 class FlatModel:
-    """All channels of a condensed model as flat arrays for the compiled kernel."""
+    """All channels of a condensed model as flat arrays for the compiled kernel.
+
+    Parameters
+    ----------
+    ny : int
+        Number of output channels.
+    max_lag : int
+        Largest lag of any regressor, in samples.
+    reg_src, reg_lag, reg_fn, reg_bp : ndarray (R,)
+        Every channel's regressors, concatenated: source index (outputs first, then inputs), lag
+        in samples, function code (0: identity) and breakpoint (in the source's units).
+    reg_ptr : ndarray (ny + 1,)
+        Channel k's regressors are ``reg_ptr[k]:reg_ptr[k + 1]``.
+    terms : ndarray (P, L_max)
+        Every channel's terms as 1-based regressor indices, left-padded with 0 (the constant
+        factor) to the largest degree.
+    term_ptr : ndarray (ny + 1,)
+        Channel k's terms (and coefficients) are ``term_ptr[k]:term_ptr[k + 1]``.
+    channels : tuple of ChannelStructure
+        The structure of each output channel (for the fast plan-based free run).
+    nu : int
+        Number of input channels.
+    """
 
     ny: int
     max_lag: int
@@ -58,6 +80,15 @@ class FlatModel:
 
     @classmethod
     def from_channels(cls, channels, ny: int, nu: int) -> FlatModel:
+        """Build the flat arrays from one :class:`ChannelStructure` per output channel.
+
+        Parameters
+        ----------
+        channels : sequence of ChannelStructure
+            The structure of each output channel.
+        ny, nu : int
+            Numbers of output and input channels.
+        """
         L = max(ch.degree for ch in channels)
         src, lag, fn, bp, rptr = [], [], [], [], [0]
         rows, tptr = [], [0]
@@ -89,10 +120,17 @@ class FlatModel:
 
     @property
     def n_params(self) -> int:
+        """Number of coefficients over all channels (P)."""
         return int(self.term_ptr[-1])
 
     def split(self, theta: np.ndarray) -> tuple[np.ndarray, ...]:
-        """Flat parameter vector -> one coefficient vector per channel."""
+        """Flat parameter vector -> one coefficient vector per channel.
+
+        Parameters
+        ----------
+        theta : ndarray (P,)
+            Coefficients of all channels, flat.
+        """
         return tuple(
             np.ascontiguousarray(theta[a:b])
             for a, b in zip(self.term_ptr[:-1], self.term_ptr[1:], strict=True)
@@ -115,6 +153,26 @@ def simulation_error(
     Returns ``(e, J, yhat)``: ``e`` (rows,) with rows ``(t - max_lag) * ny + k``, ``J`` (rows, P)
     ``= d yhat / d theta`` weighted like ``e`` (None unless ``jacobian``), ``yhat`` (N, ny) with
     the first ``max_lag`` rows equal to ``y``. ``e`` is None when the free run left ``bound``.
+
+    Parameters
+    ----------
+    flat : FlatModel
+        The condensed model structure.
+    theta : ndarray (P,)
+        Coefficients of all channels, flat.
+    u : ndarray (N, nu)
+        Input record.
+    y : ndarray (N, ny)
+        Measured output record (the start of every segment and the reference of ``e``).
+    horizon : int, optional
+        Truncated horizon in samples: segments restarted from the measured outputs (default
+        the whole record).
+    weight : ndarray (ny,), optional
+        Weight of each output channel's residuals (default 1).
+    bound : ndarray (ny,), optional
+        Free-run magnitude bound per channel, in the output's units (default finite only).
+    jacobian : bool, optional
+        Also compute the sensitivity Jacobian ``J``.
     """
     N, ny = y.shape
     p = flat.max_lag
@@ -185,6 +243,7 @@ class RefinementResult:
         Asymptotic covariance of the estimate, ``sigma^2 (J^T J)^-1`` at the optimum with
         ``sigma^2`` the residual variance (output-error noise model), in the original units.
     converged : bool
+        True when the last stage stopped on ``tol`` (not on ``max_iter`` or early stopping).
     history : list of float
         Cost after each accepted step.
     kept_step : int or None
@@ -341,6 +400,7 @@ def refine(
     Parameters
     ----------
     flat : FlatModel
+        The condensed model structure (all channels).
     theta0 : ndarray (P,)
         Starting coefficients (the least-squares estimate).
     u, y : ndarray (N, nu), (N, ny)

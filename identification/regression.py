@@ -31,6 +31,22 @@ def lagged_regressors(
     Row ``i`` corresponds to time ``t = start + i``; regressor (source, lag) is
     ``y[t - lag, source]`` for outputs and ``u[t - lag, source - ny]`` for inputs, passed through
     ``g = functions[r]`` with breakpoint ``breakpoints[r]`` when given (code 0: identity).
+
+    Parameters
+    ----------
+    u : ndarray (N, nu)
+        Input record.
+    y : ndarray (N, ny)
+        Output record, same N.
+    regressors : ndarray (R, 2) of int
+        ``(source, lag)`` of each regressor: source < ny an output, else input ``source - ny``;
+        lag in samples.
+    start : int
+        First row's time index (at least the largest lag).
+    functions : ndarray (R,) of int, optional
+        Static function code per regressor (0: identity; default all identity).
+    breakpoints : ndarray (R,), optional
+        Breakpoint per regressor, in its source's units (used by the dead-zone/saturation codes).
     """
     N = u.shape[0]
     ny = y.shape[1]

@@ -136,6 +136,16 @@ def qr(X, Y, tol, norms):
 
     Q is never formed; all output channels are solved with the one factorisation. ``X`` (the
     wrapper's scaled copy) is factorised in place.
+
+    Parameters
+    ----------
+    X : array_like, shape (N, M)
+        Regression matrix: N samples (equations) of M terms, N >= M, finite.
+    Y : array_like, shape (N,) or (N, k)
+        Targets; k output channels that share ``X`` are solved with one factorisation.
+    rcond : float, optional
+        Relative singular value (of the column-scaled matrix) below which a direction counts as
+        zero, in [0, 1); default ``max(N, M) * eps``.
     """
     M = X.shape[1]
     lwork = int(lapack.dgeqrf(X, lwork=-1)[2][0])
@@ -153,7 +163,18 @@ def qr(X, Y, tol, norms):
 
 @_solver
 def householder(X, Y, tol, norms):
-    """Least squares by explicit Householder reflections on ``[X | Y]`` (Algorithm C.8)."""
+    """Least squares by explicit Householder reflections on ``[X | Y]`` (Algorithm C.8).
+
+    Parameters
+    ----------
+    X : array_like, shape (N, M)
+        Regression matrix: N samples (equations) of M terms, N >= M, finite.
+    Y : array_like, shape (N,) or (N, k)
+        Targets; k output channels that share ``X`` are solved with one factorisation.
+    rcond : float, optional
+        Relative singular value (of the column-scaled matrix) below which a direction counts as
+        zero, in [0, 1); default ``max(N, M) * eps``.
+    """
     M = X.shape[1]
     A = np.hstack([X, Y])
     for j in range(M):
@@ -178,7 +199,18 @@ def _gram_schmidt_to_r(W_norms_sq, Amat, g):
 
 @_solver
 def mgs(X, Y, tol, norms):
-    """Least squares by modified Gram-Schmidt orthogonalisation (Algorithms C.5 and C.6)."""
+    """Least squares by modified Gram-Schmidt orthogonalisation (Algorithms C.5 and C.6).
+
+    Parameters
+    ----------
+    X : array_like, shape (N, M)
+        Regression matrix: N samples (equations) of M terms, N >= M, finite.
+    Y : array_like, shape (N,) or (N, k)
+        Targets; k output channels that share ``X`` are solved with one factorisation.
+    rcond : float, optional
+        Relative singular value (of the column-scaled matrix) below which a direction counts as
+        zero, in [0, 1); default ``max(N, M) * eps``.
+    """
     M = X.shape[1]
     Xk = X.copy()
     Yk = Y.copy()
@@ -207,6 +239,16 @@ def cgs(X, Y, tol, norms):
     (the reference text notes its sensitivity to round-off); here each column is orthogonalised
     twice ("twice is enough", CGS2: Giraud, Langou & Rozloznik 2005), which makes it as accurate
     as modified Gram-Schmidt while keeping the classical, matrix-vector form of Algorithm C.4.
+
+    Parameters
+    ----------
+    X : array_like, shape (N, M)
+        Regression matrix: N samples (equations) of M terms, N >= M, finite.
+    Y : array_like, shape (N,) or (N, k)
+        Targets; k output channels that share ``X`` are solved with one factorisation.
+    rcond : float, optional
+        Relative singular value (of the column-scaled matrix) below which a direction counts as
+        zero, in [0, 1); default ``max(N, M) * eps``.
     """
     M = X.shape[1]
     W = np.empty_like(X)
@@ -239,6 +281,16 @@ def svd(X, Y, tol, norms):
     Singular values below ``rcond * s_max`` of the column-scaled matrix are treated as zero
     (eq. C-5); with a rank deficiency the minimum-norm solution of the original problem is
     computed from the SVD of the unscaled matrix truncated at that rank.
+
+    Parameters
+    ----------
+    X : array_like, shape (N, M)
+        Regression matrix: N samples (equations) of M terms, N >= M, finite.
+    Y : array_like, shape (N,) or (N, k)
+        Targets; k output channels that share ``X`` are solved with one factorisation.
+    rcond : float, optional
+        Relative singular value (of the column-scaled matrix) below which a direction counts as
+        zero, in [0, 1); default ``max(N, M) * eps``.
     """
     coef, _res, rank, _s = sla.lstsq(X, Y, cond=tol, lapack_driver="gelsd", check_finite=False)
     if rank == X.shape[1]:
@@ -258,6 +310,16 @@ def normal(X, Y, tol, norms):
     cond(X^T X) > 1/sqrt(eps) (more than half the digits lost). When X^T X is not numerically
     positive definite, its eigenvalues below ``rcond`` times the largest are treated as zero
     (the rank the normal equations can resolve) and the minimum-norm solution is returned.
+
+    Parameters
+    ----------
+    X : array_like, shape (N, M)
+        Regression matrix: N samples (equations) of M terms, N >= M, finite.
+    Y : array_like, shape (N,) or (N, k)
+        Targets; k output channels that share ``X`` are solved with one factorisation.
+    rcond : float, optional
+        Relative singular value (of the column-scaled matrix) below which a direction counts as
+        zero, in [0, 1); default ``max(N, M) * eps``.
     """
     G = X.T @ X
     b = X.T @ Y
@@ -300,7 +362,14 @@ SOLVERS = {
 
 
 def get_solver(name):
-    """Return the solver function for ``name`` (or ``name`` itself if it is callable)."""
+    """Return the solver function for ``name`` (or ``name`` itself if it is callable).
+
+    Parameters
+    ----------
+    name : str or callable
+        One of the names in :data:`SOLVERS` (``"qr"``, ``"householder"``, ``"mgs"``, ``"cgs"``,
+        ``"svd"``, ``"normal"``), or a solver function ``solver(X, Y, *, rcond=None) -> coef``.
+    """
     if callable(name):
         return name
     try:

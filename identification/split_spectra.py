@@ -16,7 +16,7 @@ import numpy as np
 from scipy import signal
 
 from ._composite import load_composite, save_composite
-from ._validation import as_signal, check_same_length
+from ._validation import as_signal, check_same_length, check_steps_ahead
 from .errors import IdentificationError, InsufficientDataError, SimulationDivergedError
 from .models import Arx, Narx
 
@@ -44,7 +44,17 @@ def _check_split(split_hz, fs) -> tuple[float, float]:
 
 def split_filter(split_hz: float, fs: float, order: int = 4) -> np.ndarray:
     """Second-order sections of the split's Butterworth low-pass (``order`` poles, -3 dB at
-    ``split_hz`` for one pass; applied forward and backward, -6 dB and ``2 * order`` poles)."""
+    ``split_hz`` for one pass; applied forward and backward, -6 dB and ``2 * order`` poles).
+
+    Parameters
+    ----------
+    split_hz : float
+        Split (-3 dB per pass) frequency in Hz, in (0, fs/2).
+    fs : float
+        Sample rate in Hz.
+    order : int, optional
+        Poles of the low-pass (per pass).
+    """
     split_hz, fs = _check_split(split_hz, fs)
     if not isinstance(order, (int, np.integer)) or isinstance(order, bool) or order < 1:
         raise IdentificationError(f"filter order must be a positive integer, got {order!r}")
@@ -69,6 +79,17 @@ def band_split(x, split_hz: float, fs: float, *, order: int = 4) -> tuple[np.nda
     reproduces the whole record when each band model is exact, and a linear system split this
     way is the sum of its band responses. Two separately designed filters (a low-pass and a
     high-pass) would leave a notch or a bump at the crossover.
+
+    Parameters
+    ----------
+    x : array_like, shape (N, channels) or (N,)
+        Records sampled at ``fs``.
+    split_hz : float
+        Split frequency in Hz, in (0, fs/2).
+    fs : float
+        Sample rate in Hz.
+    order : int, optional
+        Poles of the Butterworth low-pass (per pass).
 
     Raises
     ------
@@ -146,8 +167,8 @@ class SplitSpectraModel:
         window beta 14 (``UPSAMPLE_WINDOW``), zero phase, ends extended by a fitted line):
         within 5e-7 of the amplitude for content up to a tenth of the low rate.
 
-    Attributes (after fit)
-    ----------------------
+    Attributes
+    ----------
     low_, high_ : the fitted band models
     factor_ : int, the low band's decimation factor (1: none)
     n_inputs_, n_outputs_, input_names_, output_names_, max_lag_ (samples at ``fs``)
@@ -178,7 +199,13 @@ class SplitSpectraModel:
 
     # ------------------------------------------------------------------ bands
     def split(self, x) -> tuple[np.ndarray, np.ndarray]:
-        """The low and high bands of records ``x`` (N, channels) at this model's split."""
+        """The low and high bands of records ``x`` (N, channels) at this model's split.
+
+        Parameters
+        ----------
+        x : array_like, shape (N, channels) or (N,)
+            Records sampled at ``fs``.
+        """
         return band_split(x, self.split_hz, self.fs, order=self.filter_order)
 
     def _down(self, x: np.ndarray) -> np.ndarray:
@@ -194,7 +221,17 @@ class SplitSpectraModel:
 
     # ------------------------------------------------------------------ fit / use
     def fit(self, u, y, *, input_names=None, output_names=None):
-        """Split ``u`` (N, nu) and ``y`` (N, ny) at ``split_hz`` and fit one model per band."""
+        """Split ``u`` (N, nu) and ``y`` (N, ny) at ``split_hz`` and fit one model per band.
+
+        Parameters
+        ----------
+        u : array_like, shape (N, nu) or (N,)
+            Identification input record, in its physical units (time on axis 0).
+        y : array_like, shape (N, ny) or (N,)
+            Identification output record, same N, in its physical units.
+        input_names, output_names : sequence of str, optional
+            Channel names (default ``u1, u2, ...``, ``y1, y2, ...``), kept in the model.
+        """
         u = as_signal(u, "u")
         y = as_signal(y, "y")
         check_same_length(u, y, "u", "y")
@@ -241,42 +278,91 @@ class SplitSpectraModel:
         past. ``bound`` (per output channel, default each band model's own ``bound_``) limits
         each band's free run.
 
+        Parameters
+        ----------
+        u : array_like, shape (N, nu) or (N,)
+            Input record at ``fs``.
+        bound : float or array_like of shape (ny,), optional
+            Free-run magnitude bound per output channel, in the output's units, for each band.
+
         Raises
         ------
         SimulationDivergedError
             when a band's free run leaves its bound (names the channel, sample and band).
         """
         u_lo, u_hi, n = self._input(u)
-        y_lo = self._band("low", self.low_, self._down(u_lo), bound, self.factor_)
-        y_hi = self._band("high", self.high_, u_hi, bound, 1)
+        kw = {"bound": bound}
+        y_lo = self._band("low", self.low_.simulate, (self._down(u_lo),), kw, self.factor_)
+        y_hi = self._band("high", self.high_.simulate, (u_hi,), kw, 1)
         return self._up(y_lo, n) + y_hi
 
     @staticmethod
-    def _band(band: str, model: Narx, u: np.ndarray, bound, factor: int) -> np.ndarray:
+    def _band(band: str, run, args: tuple, kwargs: dict, factor: int) -> np.ndarray:
+        """``run(*args, **kwargs)`` (a band model's simulate or predict), a divergence
+        re-raised with its sample counted at ``fs`` and the band named."""
         try:
-            return model.simulate(u, bound=bound)
+            return run(*args, **kwargs)
         except SimulationDivergedError as exc:  # the sample counted at fs
+            what = "free run" if exc.kind == "free-run simulation" else exc.kind
             raise SimulationDivergedError(
                 exc.channel,
                 exc.channel_name,
                 exc.sample * factor,
                 exc.value,
                 exc.bound,
-                f"{band}-band free run",
+                f"{band}-band {what}",
             ) from None
 
-    def predict(self, u, y) -> np.ndarray:
-        """One-step-ahead prediction (N, ny): each band model's prediction from the measured
-        band of ``u`` and ``y`` (the low band at its own rate, one low-rate step ahead,
-        interpolated back to ``fs``), summed."""
+    def predict(self, u, y, *, steps_ahead: int | None = 1, bound=None) -> np.ndarray:
+        """Prediction (N, ny): each band model's prediction from the measured band of ``u``
+        and ``y`` (the low band at its own rate, interpolated back to ``fs``), summed.
+
+        ``steps_ahead`` (SysIdentPy's meaning, see :meth:`Narx.predict
+        <identification.Narx.predict>`; the default, 1, is not SysIdentPy's): ``1`` one step
+        ahead (the low band one low-rate step); ``k`` k steps ahead (the low band
+        ``ceil(k / factor_)`` low-rate steps, i.e. at least k samples at ``fs``); ``None`` each
+        band's free run from the first ``max_lag_`` samples of its measured band. The bands of
+        ``y`` need the whole record, so that free run has no :meth:`simulate` counterpart
+        (``simulate`` starts both bands from a zero past). ``bound``: for the free runs, as
+        for :meth:`simulate`.
+
+        Parameters
+        ----------
+        u : array_like, shape (N, nu) or (N,)
+            Measured input record.
+        y : array_like, shape (N, ny) or (N,)
+            Measured output record, same N (its past values are the regressors).
+        steps_ahead : int or None
+            ``1`` (default) one step ahead, ``k`` k steps ahead, ``None`` a free run.
+        bound : float, optional
+            Free-run bound, as for :meth:`simulate`.
+
+        Raises
+        ------
+        SimulationDivergedError
+            when a band's prediction is not finite or its free run leaves ``bound`` (the sample
+            counted at ``fs``).
+        """
+        steps = check_steps_ahead(steps_ahead)
         u_lo, u_hi, n = self._input(u)
         y = as_signal(y, "y", n_channels=self.n_outputs_)
         check_same_length(u_lo, y, "u", "y")
         y_lo, y_hi = self.split(y)
-        p_lo = self.low_.predict(self._down(u_lo), self._down(y_lo))
-        return self._up(p_lo, n) + self.high_.predict(u_hi, y_hi)
+        if steps == 1:
+            p_lo = self.low_.predict(self._down(u_lo), self._down(y_lo))
+            return self._up(p_lo, n) + self.high_.predict(u_hi, y_hi)
+        low_steps = None if steps is None else -(-steps // self.factor_)
+        kw = {"bound": bound}
+        p_lo = self._band(
+            "low", self.low_.predict, (self._down(u_lo), self._down(y_lo)),
+            {"steps_ahead": low_steps, **kw}, self.factor_,
+        )
+        p_hi = self._band("high", self.high_.predict, (u_hi, y_hi), {"steps_ahead": steps, **kw}, 1)
+        return self._up(p_lo, n) + p_hi
 
     def describe(self) -> str:
+        """One-line summary: split frequency (Hz), filter order, each band model's rate and
+        summary."""
         self._check_fitted()
         rate = self.fs / self.factor_
         return (
@@ -296,7 +382,13 @@ class SplitSpectraModel:
 
     def save(self, path):
         """Save the fitted model to one ``.npz`` model file (atomic; exact round trip: the
-        loaded model simulates bit for bit the same); returns the path."""
+        loaded model simulates bit for bit the same); returns the path.
+
+        Parameters
+        ----------
+        path : str or os.PathLike
+            Target file; ``.npz`` is appended when the name has another suffix or none.
+        """
         self._check_fitted()
         return save_composite(
             path, "SplitSpectraModel", self._params(), {"low": self.low_, "high": self.high_}
@@ -305,7 +397,13 @@ class SplitSpectraModel:
     @classmethod
     def load(cls, path):
         """Load a model written by :meth:`save` (checked like :meth:`Narx.load
-        <identification.Narx.load>`; raises :class:`~identification.ModelFileError`)."""
+        <identification.Narx.load>`; raises :class:`~identification.ModelFileError`).
+
+        Parameters
+        ----------
+        path : str or os.PathLike
+            A file written by :meth:`save` (``.npz`` appended when missing).
+        """
         from .errors import ModelFileError
 
         params, parts = load_composite(path, "SplitSpectraModel", ("low", "high"))

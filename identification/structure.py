@@ -111,14 +111,17 @@ class ChannelStructure:
 
     @property
     def n_regressors(self) -> int:
+        """Number of regressors (R)."""
         return int(self.regressors.shape[0])
 
     @property
     def n_terms(self) -> int:
+        """Number of terms (coefficients) of the channel."""
         return int(self.terms.shape[0])
 
     @property
     def max_lag(self) -> int:
+        """Largest lag of any regressor, in samples (0 for a static model)."""
         return int(self.regressors[:, 1].max()) if self.regressors.size else 0
 
     @property
@@ -128,7 +131,13 @@ class ChannelStructure:
 
     def same_as(self, other: ChannelStructure) -> bool:
         """True when both channels have identical regressors, functions and terms (one shared
-        regression matrix)."""
+        regression matrix).
+
+        Parameters
+        ----------
+        other : ChannelStructure
+            The structure to compare with.
+        """
         return (
             np.array_equal(self.regressors, other.regressors)
             and np.array_equal(self.functions, other.functions)
@@ -137,7 +146,13 @@ class ChannelStructure:
         )
 
     def regressor_names(self, output_names, input_names) -> list[str]:
-        """Regressor names, e.g. ``y1(t-1)``, ``abs(u1(t))``, ``deadzone(u1(t-1), 0.1)``."""
+        """Regressor names, e.g. ``y1(t-1)``, ``abs(u1(t))``, ``deadzone(u1(t-1), 0.1)``.
+
+        Parameters
+        ----------
+        output_names, input_names : sequence of str
+            Names of the output and input channels the regressors' sources index.
+        """
         ny = len(output_names)
         names = []
         for (src, lag), code, b in zip(
@@ -153,7 +168,13 @@ class ChannelStructure:
         return names
 
     def term_names(self, output_names, input_names) -> list[str]:
-        """Human-readable term names, e.g. ``y1(t-1)*u2(t)``; the constant is ``1``."""
+        """Human-readable term names, e.g. ``y1(t-1)*u2(t)``; the constant is ``1``.
+
+        Parameters
+        ----------
+        output_names, input_names : sequence of str
+            Names of the output and input channels the regressors' sources index.
+        """
         regs = self.regressor_names(output_names, input_names)
         out = []
         for row in self.terms:
@@ -225,6 +246,13 @@ def full_order_regressors(ny: int, nu: int, order: int) -> np.ndarray:
 
     ``y_1(t-1) .. y_1(t-n), ..., y_ny(t-n), u_1(t) .. u_1(t-n), ..., u_nu(t-n)``:
     na = n for every output, nb = n + 1 terms for every input, nk = 0.
+
+    Parameters
+    ----------
+    ny, nu : int
+        Numbers of output and input channels.
+    order : int
+        The model order n (output lags 1..n, input lags 0..n, in samples).
     """
     if order < 0:
         raise IdentificationError(f"order must be >= 0, got {order}")
@@ -242,6 +270,17 @@ def explicit_regressors(ny: int, nu: int, na, nb, nk) -> np.ndarray:
 
     ``na[i]`` output lags 1..na[i] of output i; ``nb[j]`` input terms of input j starting at delay
     ``nk[j]``: lags nk[j] .. nk[j] + nb[j] - 1 (MATLAB ``arx`` convention).
+
+    Parameters
+    ----------
+    ny, nu : int
+        Numbers of output and input channels.
+    na : array_like of int (ny,)
+        Output lags per output channel (lags 1..na[i], in samples).
+    nb : array_like of int (nu,)
+        Input terms per input channel.
+    nk : array_like of int (nu,)
+        Input delay per input channel, in samples.
     """
     na = np.asarray(na, dtype=np.int64).reshape(ny)
     nb = np.asarray(nb, dtype=np.int64).reshape(nu)
@@ -279,7 +318,13 @@ def _comb(n: int, k: int, what: str) -> int:
 
 
 def format_count(n: int) -> str:
-    """A (possibly huge) integer count, readable: ``1,471,442,973`` or ``3.45e+92``."""
+    """A (possibly huge) integer count, readable: ``1,471,442,973`` or ``3.45e+92``.
+
+    Parameters
+    ----------
+    n : int
+        A count (a Python int of any size).
+    """
     s = str(int(n))
     if len(s) <= 16:
         return f"{int(n):,}"
@@ -295,6 +340,19 @@ def polynomial_term_count(
     ``R + S (L - 1)`` with S the lag-0 input regressors; ``"input-polynomial"``: ``R + C(I + L, L)
     - 1 - I`` with I the input regressors; plus 1 with ``constant``. Same arguments as
     :func:`polynomial_terms`.
+
+    Parameters
+    ----------
+    regressors : ndarray (R, 2) of int
+        ``(source, lag)`` of each regressor (source < ny: an output).
+    degree : int
+        Polynomial degree L >= 1.
+    kind : {"full", "pure", "quasi-static", "input-polynomial"}, optional
+        Term set (see :func:`polynomial_terms`).
+    constant : bool, optional
+        Count the constant term.
+    ny : int, optional
+        Number of output channels (sources below it are outputs).
     """
     R, L = int(regressors.shape[0]), int(degree)
     what = f"a {kind!r} structure of degree {L} on {R:,} regressors"
@@ -418,6 +476,15 @@ def term_count(ny: int, nu: int, order: int, degree: int) -> int:
     count the monomials of degree 1..L in R variables, so they are evaluated in closed form,
     ``C(R + L, L) - 1`` (no recursion, no loop over R).
 
+    Parameters
+    ----------
+    ny, nu : int
+        Numbers of output and input channels.
+    order : int
+        Full-order model order n_k (samples).
+    degree : int
+        Polynomial degree L >= 1.
+
     Raises
     ------
     IdentificationError
@@ -444,7 +511,17 @@ def term_count(ny: int, nu: int, order: int, degree: int) -> int:
 
 def term_count_combinatorial(ny: int, nu: int, order: int, degree: int) -> int:
     """Closed form of eq. 5-10: the number of monomials of degree 1..L in R variables,
-    ``C(R + L, L) - 1``, for any size (no memory budget; counts beyond 10^4000 are refused)."""
+    ``C(R + L, L) - 1``, for any size (no memory budget; counts beyond 10^4000 are refused).
+
+    Parameters
+    ----------
+    ny, nu : int
+        Numbers of output and input channels.
+    order : int
+        Full-order model order n_k (samples).
+    degree : int
+        Polynomial degree L >= 1.
+    """
     R = _check_counts(ny, nu, order, degree)
     what = f"term_count_combinatorial(ny={ny}, nu={nu}, order={order}, degree={degree})"
     return _comb(R + int(degree), int(degree), what) - 1

@@ -17,6 +17,17 @@ def band_limited_noise(n_samples: int, n_channels: int = 1, *, cutoff: float = 0
     """Gaussian noise low-pass filtered at ``cutoff`` (fraction of Nyquist), unit RMS per channel.
 
     Channels are independent. ``seed`` is an int or a ``numpy.random.Generator``.
+
+    Parameters
+    ----------
+    n_samples : int
+        Number of samples.
+    n_channels : int, optional
+        Number of independent channels.
+    cutoff : float, optional
+        Low-pass cutoff as a fraction of the Nyquist frequency, in (0, 1).
+    seed : int or numpy.random.Generator, optional
+        Random seed or generator (default: fresh entropy).
     """
     if not 0 < cutoff < 1:
         raise IdentificationError(f"cutoff must be a fraction of Nyquist in (0, 1), got {cutoff!r}")
@@ -84,13 +95,16 @@ def random_narx(
         Numbers of outputs and inputs.
     order, degree : int or sequence of int
         Full-order model order and polynomial degree per output channel.
-    seed : int or Generator
+    seed : int or Generator, optional
+        Random seed or generator (default: fresh entropy).
     n_samples : int
         Length of the pseudo data sets.
     cutoff : float
         Band limit of the pseudo drive, fraction of Nyquist.
     nonlinearity : float
         Target RMS of the polynomial part relative to the output RMS (0 = linear).
+    max_tries : int
+        Pseudo data sets drawn before giving up with :class:`IdentificationError`.
     """
     if ny < 1 or nu < 0:
         raise IdentificationError("need ny >= 1 and nu >= 0")

@@ -308,7 +308,9 @@ class CorrelationTests:
     Attributes
     ----------
     max_lag, n_samples : int
+        The largest lag tested (samples) and the record length the correlations used.
     confidence : float
+        Confidence level of the band (e.g. 0.95).
     band : float
         Half-width of the confidence band, ``norm.ppf((1 + confidence) / 2) / sqrt(N)``.
     lags : ndarray (2 max_lag + 1,)
@@ -356,7 +358,13 @@ class CorrelationTests:
         return all(bool(np.all(v)) for v in self.passed.values())
 
     def lags_of(self, name: str) -> np.ndarray:
-        """Lag axis of the correlation function ``name`` (one of :data:`CORRELATION_TESTS`)."""
+        """Lag axis of the correlation function ``name`` (one of :data:`CORRELATION_TESTS`).
+
+        Parameters
+        ----------
+        name : str
+            One of :data:`CORRELATION_TESTS`.
+        """
         if name not in CORRELATION_TESTS:
             raise IdentificationError(f"name must be one of {CORRELATION_TESTS}, got {name!r}")
         return self.lags_positive if name in ("phi_ee", "phi_e_eu") else self.lags
@@ -372,7 +380,13 @@ class CorrelationTests:
                     yield j, i, name, idx
 
     def table(self, input_names=None, output_names=None) -> str:
-        """Plain-text summary: one row per test and pair (max |phi|, lags outside, verdict)."""
+        """Plain-text summary: one row per test and pair (max |phi|, lags outside, verdict).
+
+        Parameters
+        ----------
+        input_names, output_names : sequence of str, optional
+            Channel names for the rows (default ``u1, u2, ...`` and ``e1, e2, ...``).
+        """
         ny, nu = self.phi_ue.shape[:2]
         unames = input_names or [f"u{i + 1}" for i in range(nu)]
         enames = output_names or [f"e{j + 1}" for j in range(ny)]
@@ -401,6 +415,11 @@ class CorrelationTests:
 
         One row of five panels per (output, input) pair. ``axes`` (optional) is a sequence or
         array of at least ``5 * ny * nu`` matplotlib Axes, filled row by row.
+
+        Parameters
+        ----------
+        axes : sequence or array of matplotlib Axes, optional
+            At least ``5 * ny * nu`` Axes, filled row by row (default: a new figure).
         """
         from matplotlib.figure import Figure  # lazy: matplotlib is only needed for plotting
 

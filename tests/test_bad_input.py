@@ -109,7 +109,9 @@ def test_simulate_checks_input_channels_and_initial_conditions(data):
     with pytest.raises(IdentificationError, match="u has 1 channel\\(s\\) but the model expects 2"):
         m.simulate(u[:, :1])
     with pytest.raises(IdentificationError, match=r"y0 must have shape"):
-        m.simulate(u, y0=np.zeros((3, 1)))
+        m.simulate(u, y0=np.zeros((1, 1)))  # shorter than max_lag_ = 2
+    with pytest.raises(IdentificationError, match=r"y0 must have shape"):
+        m.simulate(u, y0=np.zeros((3, 2)))  # two output channels for one
     with pytest.raises(IdentificationError, match="bound must be positive"):
         m.simulate(u, bound=-1.0)
 

@@ -17,6 +17,7 @@ from vrig.plots import (
     psd_compare,
     repeatability_plot,
     save_reconstruction_plots,
+    worst_error_window,
 )
 
 FS = 200.0
@@ -149,3 +150,140 @@ def test_save_reconstruction_plots_writes_pngs(tmp_path):
     for p in paths:
         assert p.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert len(save_reconstruction_plots(res, tmp_path / "norig", dpi=40)) == 4
+
+
+def _captured(monkeypatch, res, rig):
+    """``{file name: figure}`` that save_reconstruction_plots would write."""
+    import vrig.plots as plots
+
+    figures = {}
+
+    def fake_save(fig, path, *, dpi=110):
+        figures[path.name] = fig
+        return path
+
+    monkeypatch.setattr(plots, "save_figure", fake_save)
+    plots.save_reconstruction_plots(res, "unused-folder-never-written", rig=rig)
+    return figures
+
+
+def _injected_pair(n=4000, at=700, at_loud=3000):
+    """Two channels of very different scale (1000 N and 0.01 m/s²) tracked with a small error
+    everywhere, plus two injected error bursts of 0.2 s: on the small channel at sample ``at``
+    (0.5 x its desired RMS) and on the large channel at ``at_loud`` (10 N absolute, far more than
+    the first burst in absolute terms but only 0.01 x that channel's RMS)."""
+    rng = np.random.default_rng(3)
+    t = np.arange(n) / FS
+    x = np.column_stack(
+        [1000 * np.sin(2 * np.pi * 2.0 * t), 0.01 * np.sin(2 * np.pi * 7.0 * t + 1.0)]
+    )
+    rms = np.sqrt(np.mean(x**2, axis=0))
+    y = x + 0.001 * rms * rng.standard_normal(x.shape)
+    burst = int(0.2 * FS)
+    y[at : at + burst, 1] += 0.5 * rms[1]
+    y[at_loud : at_loud + burst, 0] += 10.0
+    desired = TimeHistory(x, FS, ["load", "accel"], ["N", "m/s²"])
+    return desired, desired.with_data(y)
+
+
+def test_worst_error_window_finds_the_injected_error_normalised_per_channel():
+    desired, achieved = _injected_pair(at=700)
+    t0, t1 = worst_error_window(desired, achieved, width=1.0)
+    assert t1 - t0 == pytest.approx(1.0)
+    # the whole 0.2 s burst at 3.5-3.7 s lies in the window, not the louder-in-newtons one
+    assert t0 <= 700 / FS and (700 + 40) / FS <= t1
+    # a record shorter than the window: all of it
+    short = TimeHistory(desired.data[:100], FS, desired.names, desired.units)
+    assert worst_error_window(short, short.with_data(short.data + 1.0)) == (0.0, 0.5)
+    with pytest.raises(ValueError, match="width"):
+        worst_error_window(desired, achieved, width=0.0)
+
+
+def test_zoom_plot_shows_the_worst_error_second_and_says_so(monkeypatch):
+    desired, achieved = _injected_pair(at=700)  # 3.5 s of a 20 s record: far from the middle
+    res = _result()
+    res.desired, res.final_response = desired, achieved
+    figures = _captured(monkeypatch, res, rig=None)
+    zoom = figures["overlay_zoom.png"]
+    t = zoom.axes[0].get_lines()[0].get_xdata()
+    assert t.min() <= 700 / FS <= t.max()
+    assert t.max() - t.min() == pytest.approx(1.0, abs=2 / FS)
+    assert f"zoom: {t.min():.1f}-{t.min() + 1:.1f} s, worst error" in zoom.get_suptitle()
+    # the whole-record overlay shades the same window
+    (span,) = figures["overlay.png"].axes[0].patches
+    assert span.get_x() == pytest.approx(t.min())
+
+
+def test_overlay_and_psd_draw_desired_on_top_of_achieved():
+    desired, achieved = _records(2)
+    figures = (
+        overlay(desired, achieved),
+        overlay(desired, achieved, window=(1.0, 2.0)),
+        psd_compare(desired, achieved),
+    )
+    for fig in figures:
+        for ax in fig.axes:
+            des, ach = ax.get_lines()
+            assert to_rgba(des.get_color()) == to_rgba("red")
+            assert des.get_zorder() > ach.get_zorder()
+            assert des.get_linewidth() < ach.get_linewidth()  # the blue band shows around it
+
+
+def test_small_drive_axes_scaled_to_the_drive_with_limits_noted():
+    full = 0.05
+    x = 0.01 * full * np.sin(np.arange(2000) / 20.0)  # 1 % of full scale
+    drive = TimeHistory(x, FS, ["disp"], ["m"])
+    fig = drive_vs_limits(drive, (ChannelSpec("disp", "m", full, "hydraulic"),))
+    (ax,) = fig.axes
+    peak = np.abs(x).max()
+    lo, hi = ax.get_ylim()
+    assert peak < hi <= 3 * peak and -3 * peak <= lo < -peak
+    assert len(ax.get_lines()) == 1  # the drive; no limit line far off the axes
+    (note,) = ax.texts
+    assert note.get_text() == "full scale ±0.05 m, off axis"
+    # at half of full scale the lines are drawn and inside the axes
+    fig = drive_vs_limits(drive.with_data(50 * x), (ChannelSpec("disp", "m", full, "hydraulic"),))
+    (ax,) = fig.axes
+    assert sorted(line.get_ydata()[0] for line in ax.get_lines()[1:]) == [-full, full]
+    assert ax.get_ylim()[1] > full and ax.get_ylim()[0] < -full and not ax.texts
+
+
+def _rejected(name, error, x):
+    res = _result()
+    res.errors = np.empty((0, 2))  # nothing played: only the rejected-drive figure
+    res.rejected_name, res.rejected_drive = name, TimeHistory(x, FS, ["disp"], ["m"])
+    res.error, res.stopped = error, f"IT02: {error}"
+    return res
+
+
+def test_tripped_drive_marks_the_interlock_that_tripped(monkeypatch):
+    from vrig.errors import RigLimitError
+
+    rig = SimpleNamespace(inputs=(ChannelSpec("disp", "m", 0.05, "hydraulic"),))
+    x = 0.04 * np.sin(np.arange(2000) / 20.0)
+    trip = RigLimitError("stroke", "disp", 1.5, 0.0751, 0.075, "m")
+    (fig,) = _captured(monkeypatch, _rejected("TRIPPED02", trip, x), rig).values()
+    (ax,) = fig.axes
+    levels = sorted(line.get_ydata()[0] for line in ax.get_lines()[1:] if line.get_xdata()[0] == 0)
+    assert levels == [-0.075, -0.05, 0.05, 0.075]  # full scale and the stroke limit
+    assert any(list(line.get_xdata()) == [1.5, 1.5] for line in ax.get_lines())  # trip time
+    assert "stroke interlock" in ax.get_title() and "0.075 m limit" in ax.get_title()
+    assert ax.get_ylim()[1] > 0.075
+    # an interlock on a response channel: the trip time is still marked
+    trip = RigLimitError("transducer range", "damper_load", 0.7, 1.2e4, 1e4, "N")
+    (fig,) = _captured(monkeypatch, _rejected("TRIPPED02", trip, x), rig).values()
+    assert any(list(line.get_xdata()) == [0.7, 0.7] for line in fig.axes[0].get_lines())
+
+
+def test_refused_drive_marks_the_samples_beyond_full_scale(monkeypatch):
+    from vrig.errors import RigLimitError
+
+    rig = SimpleNamespace(inputs=(ChannelSpec("disp", "m", 0.05, "hydraulic"),))
+    x = 0.04 * np.sin(np.arange(2000) / 20.0)
+    x[1000] = 0.06  # the one sample beyond the full scale
+    refused = RigLimitError("drive", "disp", float("nan"), 0.06, 0.05, "m")
+    figures = _captured(monkeypatch, _rejected("REFUSED02", refused, x), rig)
+    (ax,) = figures["refused_drive_vs_limits.png"].axes
+    (marks,) = [line for line in ax.get_lines() if line.get_marker() == "x"]
+    assert list(marks.get_xdata()) == [1000 / FS] and list(marks.get_ydata()) == [0.06]
+    assert "drive interlock" in ax.get_title()

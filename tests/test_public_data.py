@@ -1,4 +1,4 @@
-"""Public benchmark data (benchmarks/public_data.py): loaders, splits, scoring protocol.
+"""Public benchmark data (benchmarks/public_data/): loaders, splits, scoring protocol.
 
 Expected values come from outside this code: the SOURCE.md of each data folder (sample counts,
 sampling rates), the split indices of the official ``nonlinear_benchmarks`` loader, the figures
@@ -9,6 +9,7 @@ and known synthetic systems. Tests that need a data folder skip when it is absen
 
 from __future__ import annotations
 
+import dataclasses
 import sys
 from pathlib import Path
 
@@ -268,7 +269,7 @@ def test_two_fold_validation_uses_both_ends_of_the_training_record(monkeypatch):
         calls.append((fit, val, len(u), len(y)))
         return (1.0 if len(calls) == 1 else 3.0), 4
 
-    monkeypatch.setattr(pdata, "_fit_and_score", fake)
+    monkeypatch.setattr(pdata.search, "_fit_and_score", fake)
     u, y = np.zeros(1000), np.zeros(1000)
     cand = pdata.Candidate(1, 1, 1, None)
     assert pdata.validation_score(cand, u, y, "rmse", 5) == (1.0, 4)
@@ -340,6 +341,11 @@ def test_mr_inputs_velocity_is_a_backward_difference():
         pdata.mr_inputs(d, 0, 100, "v,abs")
 
 
+def _replace_loader(monkeypatch, key, load):
+    """The table's record ``key`` with another loader, for this test only."""
+    monkeypatch.setitem(pdata.DATASETS, key, dataclasses.replace(pdata.DATASETS[key], load=load))
+
+
 def _poisoned_tanks(d):
     d = dict(d)
     rng = np.random.default_rng(0)
@@ -356,7 +362,7 @@ def test_tanks_simulation_row_is_chosen_on_training_data_only(tanks, monkeypatch
     one_step = [r for r in real.rows if r.dataset == "Cascaded Tanks" and r not in sim]
     assert sim[0].vrig < one_step[0].vrig  # the simulation focus beats the one-step search
     assert any(n.startswith("goal Cascaded Tanks / validation") for n in real.notes)
-    monkeypatch.setattr(pdata, "load_cascaded_tanks", lambda p: _poisoned_tanks(tanks))
+    _replace_loader(monkeypatch, "tanks", lambda p: _poisoned_tanks(tanks))
     poisoned = pdata.run(quick=True, only=["tanks"], use_sysidentpy=False)
     assert [r.model for r in poisoned.rows] == [r.model for r in real.rows]
     assert [r.terms for r in poisoned.rows] == [r.terms for r in real.rows]
@@ -378,7 +384,7 @@ def test_mr_damper_simulation_rows_are_chosen_on_training_data_only(mr_damper, m
     poisoned = {k: (v.copy() if isinstance(v, np.ndarray) else v) for k, v in mr_damper.items()}
     for key in ("D", "Y", "F"):
         poisoned[key][cut:] = poisoned[key][cut:][::-1] * 1.7
-    monkeypatch.setattr(pdata, "load_mr_damper", lambda p: poisoned)
+    _replace_loader(monkeypatch, "mr", lambda p: poisoned)
     other = pdata.run(quick=True, only=["mr"], use_sysidentpy=False)
     assert [r.model for r in other.rows] == [r.model for r in real.rows]
     assert [r.vrig for r in _sim_rows(other, "MR damper")] != [r.vrig for r in sim]
@@ -396,3 +402,102 @@ def test_simulation_rows_reach_the_goal(only):
     first = _sim_rows(report, names[only])[0]
     assert first.vrig <= {"silverbox": 0.4, "f16": 0.2}[only]
     assert any(n.startswith(f"goal {names[only]}") and n.endswith("reached") for n in report.notes)
+
+
+# ---------------------------------------------------------------- the table and the pipeline
+def test_every_data_set_record_is_complete():
+    # one record per data set, in the order of the table and of the --only names
+    assert list(pdata.DATASETS) == ["silverbox", "tanks", "f16", "mr"]
+    assert pdata.BENCHES is pdata.DATASETS
+    for key, ds in pdata.DATASETS.items():
+        assert callable(ds.load) and callable(ds.split), key
+        assert ds.folder and ds.file and ds.name and ds.test and ds.label, key
+        assert ds.metric in ("rmse_mv", "rmse", "rrse", "nrmse") and ds.skip > 0, key
+        # a non-empty model grid; --quick searches a subset of it
+        assert ds.grid and all(isinstance(c, pdata.Candidate) for c in ds.grid), key
+        assert ds.quick_grid and set(ds.quick_grid) <= set(ds.grid), key
+        for s in ds.simulation:
+            assert s.full and s.quick and set(s.quick) <= set(s.full), (key, s.test)
+        # published figures with their sources, or the stated reason why there is none
+        assert ds.published or ds.unpublished, key
+        for p in ds.published:
+            assert np.isfinite(p.value) and p.value > 0 and len(p.source) > 20, (key, p)
+        if ds.budget or ds.config:  # these rows print the published model's size beside it
+            assert ds.figure() is not None and ds.figure().terms, key
+        for name in ds.transfer.tests if ds.transfer else ():
+            assert ds.figure(name) is not None, (key, name)
+    # the figures printed beside the rows are the ones the tutorials print (module docstring)
+    assert pdata.DATASETS["silverbox"].figure().value == pytest.approx(7.727682, abs=1e-5)
+    assert pdata.DATASETS["f16"].figure().value == pytest.approx(0.2910090, abs=1e-6)
+    assert pdata.DATASETS["f16"].figure().terms == 30
+    assert pdata.DATASETS["tanks"].figure() is None  # the literature figures are goal quotes
+    assert not pdata.DATASETS["mr"].published and "no published" in pdata.DATASETS["mr"].unpublished
+
+
+def _toy_arx_record(tmp_path):
+    """A synthetic data set: y(t) = 0.6 y(t-1) - 0.2 y(t-2) + 0.5 u(t-1) + 0.3 u(t-2),
+    noise-free, written as a CSV file and run through the generic pipeline."""
+    rng = np.random.default_rng(11)
+    u = rng.uniform(-1, 1, 2000)
+    y = np.zeros_like(u)
+    for t in range(2, len(u)):
+        y[t] = 0.6 * y[t - 1] - 0.2 * y[t - 2] + 0.5 * u[t - 1] + 0.3 * u[t - 2]
+    (tmp_path / "toy").mkdir()
+    np.savetxt(tmp_path / "toy" / "arx.csv", np.column_stack([u, y]), delimiter=",")
+
+    def split(data):
+        u, y = data
+        test = pdata.ScoredRecord(
+            u, y, 1500, 2000, 5, "train 0:1500, test 1500:2000", continues=True
+        )
+        return pdata.Problem(u[:1500], y[:1500], test)
+
+    return pdata.DataSet(
+        name="toy ARX",
+        folder="toy",
+        file="arx.csv",
+        load=lambda path: tuple(np.loadtxt(path, delimiter=",").T),
+        split=split,
+        metric="rrse",
+        label="RRSE",
+        test="test",
+        skip=5,
+        grid=tuple(pdata.grid((1, 2), (1, 2, 3), (2, 4, 6))),
+        quick_grid=tuple(pdata.grid((1,), (2,), (4,))),
+        unpublished="synthetic",
+        simulation=(pdata.SimSearch("test", pdata._sim((1,), (2,), (None,)), (), None, "none"),),
+    )
+
+
+def test_pipeline_recovers_a_known_arx_model(tmp_path):
+    truth = {"y1(t-1)": 0.6, "y1(t-2)": -0.2, "u1(t-1)": 0.5, "u1(t-2)": 0.3}
+    ds = _toy_arx_record(tmp_path)
+    report = pdata.Report()
+    fitted = pdata.run_dataset(report, ds, None, False, tmp_path)
+    models = [fitted.one_step[0].model, fitted.simulation[0].model]
+    for m in models:
+        coef = dict(zip(m.term_names()[0], m.coef_[0], strict=True))
+        for term, value in truth.items():
+            assert coef.pop(term) == pytest.approx(value, abs=1e-9), term
+        assert all(abs(c) < 1e-9 for c in coef.values()), coef  # any other term: zero
+    one_step, sim = report.rows
+    assert (one_step.dataset, one_step.test, one_step.metric) == ("toy ARX", "test", "RRSE")
+    assert one_step.split == "train 0:1500, test 1500:2000" and one_step.published is None
+    assert one_step.vrig < 1e-9 and sim.vrig < 1e-9  # the free run reproduces the test record
+    assert "sim. focus" in sim.model and "sim. focus" not in one_step.model
+    # an absent file is a skipped row, as for the real data sets
+    other = pdata.Report()
+    assert pdata.run_dataset(other, ds, None, False, tmp_path / "absent") is None
+    assert other.rows[0].status == "skipped: toy/arx.csv not found"
+
+
+def test_no_function_of_the_package_is_longer_than_80_lines():
+    # the standard of tests/test_code_shape.py (vrig/, identification/), counted with docstrings
+    import ast
+
+    files = sorted((ROOT / "benchmarks" / "public_data").glob("*.py"))
+    assert len(files) > 5
+    for path in files:
+        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+            if isinstance(node, ast.FunctionDef | ast.AsyncFunctionDef):
+                assert node.end_lineno - node.lineno < 80, f"{path.name}: {node.name}"

@@ -164,7 +164,7 @@ def test_a_mujoco_instability_is_an_error_not_nan():
 
 def test_a_non_finite_drive_is_refused_before_it_is_sent():
     from vrig.rigs import ChannelSpec
-    from vrig.rigs.spec import check_drive_limits
+    from vrig.rigs.limits import check_drive_limits
 
     chans = [ChannelSpec("u", "m", 1.0, "hydraulic")]
     drive = np.zeros((10, 1))

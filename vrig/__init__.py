@@ -22,6 +22,8 @@ from .rigs import ChannelSpec, FileRig, MujocoRig, list_rigs, load_rig, rig_path
 from .testfolder import TestFolder
 from .timehistory import TimeHistory
 
+# the one place the version is written: pyproject.toml reads it ([tool.setuptools.dynamic]),
+# `vrig --version` prints it, importlib.metadata.version("vrig") gives it for an installed package
 __version__ = "0.1.0"
 
 __all__ = [

@@ -34,8 +34,11 @@ from __future__ import annotations
 import argparse
 import contextlib
 import os
+import signal
+import subprocess
 import sys
 import tempfile
+import threading
 import time
 from pathlib import Path
 
@@ -89,6 +92,9 @@ def _parser() -> argparse.ArgumentParser:
         "identification and dynamic response reconstruction",
         epilog=_EXIT_CODES,
     )
+    from . import __version__  # the package's one version (pyproject reads it from there)
+
+    p.add_argument("--version", action="version", version=f"%(prog)s {__version__}")
     sub = p.add_subparsers(dest="command", required=True)
     _add_demo_parser(sub)
     _add_rig_info_parsers(sub)
@@ -732,7 +738,8 @@ def _benchmarks_dir() -> Path:
 
 def _cmd_bench(argv: list[str]) -> int:
     """Forward to the benchmark runner, which lives in the source checkout's ``benchmarks/``
-    (found next to the ``vrig`` package, whatever the current directory)."""
+    (found next to the ``vrig`` package, whatever the current directory), run in a child
+    interpreter; returns its exit code."""
     bench = _benchmarks_dir()
     if not (bench / "runner" / "cli.py").is_file():
         raise _UsageError(
@@ -740,21 +747,29 @@ def _cmd_bench(argv: list[str]) -> int:
             "wheel ships none); clone the vrig repository (git clone ...), run `pip install -e .` "
             "in it, and run `vrig bench ...` again"
         )
+    # a separate interpreter: vrig (the library) never imports the benchmarks (the floor above
+    # it); the runner and the workers it spawns import them from the checkout root
     root = str(bench.parent)
-    if root not in sys.path:  # the runner (and the workers it spawns) import `benchmarks`
-        sys.path.insert(0, root)
+    env = dict(os.environ)
+    env["PYTHONPATH"] = os.pathsep.join(p for p in (root, env.get("PYTHONPATH")) if p)
+    code = (
+        "import sys; from pathlib import Path; import benchmarks\n"
+        "if Path(benchmarks.__file__).resolve().parent != Path(sys.argv[1]):\n"
+        "    sys.exit(f'vrig bench: another package named benchmarks ({benchmarks.__file__}) "
+        "hides the benchmark runner at {sys.argv[1]}')\n"
+        "from benchmarks.runner.cli import main\n"
+        "sys.exit(main(sys.argv[2:], prog='vrig bench'))"
+    )
+    child = subprocess.Popen([sys.executable, "-c", code, str(bench), *argv], env=env)
+    # Ctrl-C reaches the whole foreground process group: the child says "interrupted" and exits
+    # 130, so this process waits for it instead of printing a second line
+    main_thread = threading.current_thread() is threading.main_thread()
+    previous = signal.signal(signal.SIGINT, signal.SIG_IGN) if main_thread else None
     try:
-        import benchmarks
-
-        if Path(benchmarks.__file__).resolve().parent != bench:
-            raise _UsageError(
-                f"another package named benchmarks ({benchmarks.__file__}) hides the benchmark "
-                f"runner at {bench}"
-            )
-        from benchmarks.runner.cli import main as bench_main
-    except ImportError as exc:
-        raise _UsageError(f"the benchmark runner at {bench} is not importable ({exc})") from None
-    return bench_main(argv, prog="vrig bench")
+        return child.wait()
+    finally:
+        if main_thread:
+            signal.signal(signal.SIGINT, previous)
 
 
 def _say(command: str, text: str) -> None:
@@ -796,7 +811,14 @@ def _run(command: str, func, arg) -> int:
 
 
 def main(argv: list[str] | None = None) -> int:
-    """The ``vrig`` command (see the module docstring); returns the exit code."""
+    """The ``vrig`` command (see the module docstring); returns the exit code.
+
+    Parameters
+    ----------
+    argv : list of str, optional
+        The command-line arguments after the program name (``["reconstruct", "--rig",
+        "shock-absorber"]``); ``None`` (default): ``sys.argv[1:]``.
+    """
     raw = list(sys.argv[1:] if argv is None else argv)
     command = raw[0] if raw else "vrig"
     try:

@@ -35,8 +35,12 @@ ERRORS = (VrigError, IdentificationError)
 class RigLimitError(VrigError, RuntimeError):
     """An interlock tripped: the rig stopped, as a real controller would.
 
-    Attributes
+    Each parameter but ``hint`` is kept as the attribute of the same name.
+
+    Parameters
     ----------
+    kind : str
+        ``"stroke"``, ``"force"``, ``"following error"``, ``"transducer range"``, ``"drive"``.
     channel : str
         The actuator or transducer channel whose limit was exceeded.
     time : float
@@ -45,9 +49,11 @@ class RigLimitError(VrigError, RuntimeError):
     value : float
         The offending value, in the channel's unit.
     limit : float
-        The limit in force.
-    kind : str
-        ``"stroke"``, ``"force"``, ``"following error"``, ``"transducer range"``, ``"drive"``.
+        The limit in force, in the channel's unit.
+    unit : str, optional
+        The channel's unit, for the message.
+    hint : str, optional
+        What to change, appended to the message.
     """
 
     def __init__(
@@ -81,13 +87,15 @@ class RigParameterError(RigModelError):
     """A rig value (a side-car entry or a ``load_rig`` override) is missing its type, is not a
     finite number, lies outside its allowed range, or is an unknown key.
 
-    Attributes
+    Parameters
     ----------
-    key : str
+    message : str
+        The error message.
+    key : str, optional
         Where the value sits, e.g. ``"outputs[0].transducer.noise_rms"`` or ``"moving_mass"``.
-    value : object
+    value : object, optional
         The offending value.
-    allowed : str
+    allowed : str, optional
         The allowed range or values, e.g. ``"a finite number > 0"``.
     """
 
@@ -105,8 +113,12 @@ class ReconstructionError(VrigError, RuntimeError):
     (:meth:`vrig.TestFolder.save` writes it). Failures after IT00 do not raise: they stop the
     loop and :func:`vrig.reconstruct` returns the iterations played (``result.stopped``).
 
-    Attributes
+    Each parameter but ``message`` is kept as the attribute of the same name.
+
+    Parameters
     ----------
+    message : str
+        The error message.
     result : ReconstructionResult
         A result with zero iterations (``drives == []``, ``errors`` of shape (0, n_outputs),
         ``best_iteration == -1``): the identification drive and response (``None`` when the

@@ -23,6 +23,11 @@ def default_band(rig) -> tuple[float, float]:
     The rig's side-car band (``rig.defaults.band``, side-car ``"reconstruction": {"band": ...}``)
     where it differs from the test band (e.g. the shaker's 10-60 Hz: its README), else the test
     band ``rig.bandwidth`` (also for a rig without a side-car, e.g. a user's own :class:`vrig.rigs.Rig`).
+
+    Parameters
+    ----------
+    rig : Rig
+        Any rig with a ``bandwidth`` (low, high) [Hz]; a ``defaults.band`` [Hz] wins when given.
     """
     band = getattr(getattr(rig, "defaults", None), "band", None)
     return tuple(rig.bandwidth if band is None else band)
@@ -37,6 +42,18 @@ def pseudo_field(rig, band: tuple[float, float], seconds: float, *, seed: int = 
     1.5 times the drive without an interlock trip (room for the iterations to overshoot: a
     desired response made right at the following-error limit cannot be reached by any drive
     that differs from the original).
+
+    Parameters
+    ----------
+    rig : Rig
+        The rig that makes the record; run up to ten times (two runs per level tried).
+    band : (float, float)
+        Frequency band (low, high) of the triangular drive PSD [Hz].
+    seconds : float
+        Record length [s], fades included; ``round(seconds * rig.fs)`` samples.
+    seed : int
+        Seed of the random drive; the rig runs with ``seed + 10_000`` (its noise realisation).
+        The same seed gives the same record, bit for bit.
 
     Returns
     -------

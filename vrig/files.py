@@ -80,7 +80,13 @@ _TEMP = re.compile(r"^\..+\.(tmp|old|del)-[0-9a-f]{8}$")
 
 def is_temporary(path) -> bool:
     """True for a name made by :func:`atomic_write` or :func:`staged_directory`
-    (``.NAME.tmp-XXXXXXXX``, ``.NAME.old-XXXXXXXX``, ``.NAME.del-XXXXXXXX``)."""
+    (``.NAME.tmp-XXXXXXXX``, ``.NAME.old-XXXXXXXX``, ``.NAME.del-XXXXXXXX``).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        A file or folder name (only its last component is looked at).
+    """
     return bool(_TEMP.match(Path(path).name))
 
 
@@ -112,6 +118,11 @@ def recover_directory(path) -> bool:
     When ``path`` does not exist but ``.NAME.old-XXXXXXXX`` (exactly one) does, the kill came
     between the two renames of :func:`staged_directory`: the set-aside folder is the old folder,
     whole, and is renamed back to ``path``.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The folder a :func:`staged_directory` swap was replacing.
 
     Returns
     -------
@@ -309,6 +320,15 @@ def read_bytes(path, fmt: str, *, limit: int | None = None) -> bytes:
 
     Memory is allocated for the bytes the file holds, not for ``limit``. A file that grows
     beyond the limit while it is read raises :class:`~vrig.errors.FileFormatError` too.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The file to read.
+    fmt : str
+        The format expected, for the error message (e.g. ``"RPC III"``).
+    limit : int, optional
+        Largest file size accepted, in bytes; default :data:`MAX_FILE_BYTES`.
     """
     limit = MAX_FILE_BYTES if limit is None else int(limit)
     with open_regular(path, fmt, limit=limit) as f:
@@ -331,6 +351,7 @@ def read_npz(path, fmt: str, *, limit: int | None = None) -> dict[str, np.ndarra
     Parameters
     ----------
     path : str or Path
+        The file to read.
     fmt : str
         The format expected, for the error message (``"vrig .npz"``).
     limit : int, optional

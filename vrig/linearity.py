@@ -137,6 +137,27 @@ def linearity_drives(
     steady state (to within ``exp(-settle / τ)`` for its longest time constant τ), whose mean
     response is exactly the static gain times 0. ``b`` is ``offset`` (default: ``rms``) per
     channel, faded in over the ramp.
+
+    Parameters
+    ----------
+    fs : float
+        Sample rate in Hz.
+    band : tuple of float
+        ``(low, high)`` band of ``u`` in Hz.
+    rms : float or array_like
+        RMS of ``u`` per drive channel, in the drive unit.
+    seconds : float, optional
+        Length of the analysis window in s.
+    offset : float or array_like, optional
+        The offset b per drive channel, in the drive unit (default ``rms``).
+    ramp : float, optional
+        Fade-in, in s.
+    settle : float, optional
+        Settling time after the fade-in, in s.
+    seed : int, optional
+        Seed of the random signal (the same for every record).
+    names, units : sequence of str, optional
+        Drive channel names and units.
     """
     from .signals import flat_psd, random_drive
 
@@ -169,6 +190,57 @@ class LinearityResult:
 
     Arrays are (n_outputs,) unless noted; NaN where a test was not run. ``verdict`` is
     ``"linear"`` or ``"non-linear"``.
+
+    Attributes
+    ----------
+    names, units : tuple of str
+        Response channel names and units.
+    fs : float
+        Sample rate in Hz.
+    band : tuple of float
+        ``(low, high)`` analysis band in Hz.
+    window_s : float
+        Length of the analysis window in s.
+    repeat_error : ndarray
+        ``rms(y_u - y_repeat) / rms(ỹ_u)`` in %.
+    noise_rms : ndarray
+        Per-run noise RMS σ, in the response unit.
+    mean_delta, mean_se : ndarray
+        Mean-level test (a): Δ and its standard error, in the response unit.
+    mean_z : ndarray
+        ``|Δ| / se`` [-].
+    offset : ndarray or None
+        The offset b per drive channel, in the drive unit (None without the ``b`` records).
+    scaling : dict
+        Scaling test (b) per record key (``"2u"``, ``"-u"``): ``{"factor", "error" [%],
+        "noise" [%], "ratio" (array)}``.
+    coherence_f : ndarray (F,)
+        Frequencies of the coherence in Hz.
+    coherence, coherence_noise : ndarray (F, ny)
+        Multiple coherence γ² and the γ² that noise alone would leave [-].
+    coherence_mean : ndarray
+        Mean γ² in the band [-].
+    coherence_ratio : ndarray
+        Coherence test (c): ``sqrt(incoherent / noise power)`` [-].
+    arx_order : int or None
+        ARX order chosen on the held-out data (None: test (d) not run or no ARX fitted).
+    eta_arx, eta_narx, eta_noise : ndarray
+        Held-out free-run η0 of the ARX, of the NARX and of the noise alone, in %.
+    narx_kind : str
+        Which NARX counted, e.g. ``"degree 2, input-polynomial"``.
+    evidence : dict of str to ndarray of bool
+        Per test name: whether each response channel shows evidence.
+    channel_verdict : list of str
+        ``"linear"`` or ``"non-linear"`` per response channel.
+    verdict : str
+        ``"non-linear"`` if any channel is, else ``"linear"``.
+    notes : list of str
+        What could not be run, and why.
+    info : dict
+        How the records were made (rig, drive), when known.
+    heldout : dict
+        The held-out records of test (d) for the first channel: ``"t"``, ``"measured"``,
+        ``"arx"``, ``"narx"``.
     """
 
     names: tuple[str, ...]
@@ -378,7 +450,13 @@ class LinearityResult:
         return fig
 
     def plot(self, path) -> Path:
-        """Write :meth:`figure` to ``path`` atomically (its suffix gives the format)."""
+        """Write :meth:`figure` to ``path`` atomically (its suffix gives the format).
+
+        Parameters
+        ----------
+        path : str or os.PathLike
+            The image file; its suffix gives the format.
+        """
         from .plots import save_figure
 
         return save_figure(self.figure(), path)
@@ -825,6 +903,23 @@ def check_rig_linearity(
     every run its own rig noise seed (``seed + 10_000 + i``). If a run trips an interlock the
     level is halved (at most three times) and every record is made again: the level used is in
     ``result.info``. Seven runs of ``seconds + 2`` s each.
+
+    Parameters
+    ----------
+    rig : Rig
+        The rig to play the drives on.
+    level : float, optional
+        RMS of ``u`` as a fraction of each drive channel's full scale.
+    seconds : float, optional
+        Length of the analysis window in s.
+    band : tuple of float, optional
+        ``(low, high)`` drive band in Hz (default the rig's simulation band).
+    seed : int, optional
+        Drive seed; run ``i``'s noise seed is ``seed + 10_000 + i``.
+    models : bool, optional
+        Run the ARX vs NARX comparison (d) (the slowest test).
+    progress : bool, optional
+        Show a progress bar over the runs.
     """
     from .errors import RigLimitError
     from .field import default_band

@@ -9,7 +9,10 @@ Agg canvas): show one in a notebook by leaving it as the cell's value, or save i
 * :func:`overlay` — desired vs achieved time histories, one axes per channel;
 * :func:`psd_compare` — their PSDs (Welch, log scale);
 * :func:`error_vs_iteration` — η0 per channel against the iteration, best iteration marked;
-* :func:`drive_vs_limits` — a drive with the ± full-scale lines of the rig's drive channels;
+* :func:`drive_vs_limits` — a drive on axes scaled to it, with the ± full-scale lines of the rig's
+  drive channels (or a note that they are off the axes) and, for a drive that tripped the rig,
+  the interlock that tripped;
+* :func:`worst_error_window` — the second of a record with the largest desired-achieved error;
 * :func:`repeatability_plot` — ``R_f(f)`` and the signal-to-noise ratio against frequency;
 * :func:`save_reconstruction_plots` — the PNGs of a :class:`~vrig.reconstruction.ReconstructionResult`;
 * :func:`save_figure` — ``fig.savefig`` that replaces the file atomically (:mod:`vrig.files`).
@@ -19,6 +22,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from pathlib import Path
+from textwrap import wrap
 
 import numpy as np
 from matplotlib.figure import Figure
@@ -37,6 +41,7 @@ __all__ = [
     "repeatability_plot",
     "save_figure",
     "save_reconstruction_plots",
+    "worst_error_window",
 ]
 
 DESIRED_COLOR = "red"
@@ -44,6 +49,9 @@ DESIRED_COLOR = "red"
 ACHIEVED_COLOR = "blue"
 """Colour of achieved records (ITxxRES, FINRES)."""
 _LIMIT_COLOR = "black"
+_TRIP_COLOR = "darkorange"
+_TRIP_FIELDS = ("kind", "channel", "time", "value", "limit", "unit")  # of a RigLimitError
+_LIMIT_SPAN = 3.0  # limit lines are drawn when within this many times the drive's peak
 _ROW_HEIGHT = 2.2
 _WIDTH = 10.0
 
@@ -86,8 +94,13 @@ def overlay(
     errors: Sequence[float] | None = None,
     labels: tuple[str, str] = ("desired", "achieved"),
     title: str | None = None,
+    mark: tuple[float, float] | None = None,
 ) -> Figure:
     """Desired (red) and achieved (blue) time histories, one axes per channel.
+
+    The achieved line is wide and drawn first, the desired line thin and drawn on top of it
+    (higher ``zorder``): when the two agree the red line runs inside the blue band and both stay
+    visible, where they differ the blue band leaves the red line.
 
     Parameters
     ----------
@@ -102,11 +115,14 @@ def overlay(
         Legend entries of the desired and the achieved record.
     title : str, optional
         Figure title.
+    mark : (start, stop) seconds, optional
+        Shade this interval in every axes (e.g. the window shown in a detail plot).
 
     Returns
     -------
     Figure
-        ``n_channels`` axes, each with two lines: desired first (red), achieved second (blue).
+        ``n_channels`` axes, each with two lines: desired first (red, on top), achieved second
+        (blue, beneath).
     """
     _check_pair(desired, achieved)
     if errors is not None and len(errors) != desired.n_channels:
@@ -125,8 +141,25 @@ def overlay(
             raise ValueError(f"window {window} s holds no samples of the {t[-1]:g} s records")
     fig, axes = _rows(desired.n_channels)
     for k, ax in enumerate(axes):
-        ax.plot(t[sel], desired.data[:n, k][sel], color=DESIRED_COLOR, lw=0.9, label=labels[0])
-        ax.plot(t[sel], achieved.data[:n, k][sel], color=ACHIEVED_COLOR, lw=0.9, label=labels[1])
+        ax.plot(
+            t[sel],
+            desired.data[:n, k][sel],
+            color=DESIRED_COLOR,
+            lw=0.7,
+            zorder=3,
+            label=labels[0],
+        )
+        ax.plot(
+            t[sel],
+            achieved.data[:n, k][sel],
+            color=ACHIEVED_COLOR,
+            lw=2.0,
+            alpha=0.55,
+            zorder=2,
+            label=labels[1],
+        )
+        if mark is not None:
+            ax.axvspan(*mark, color="gold", alpha=0.3, zorder=1, lw=0)
         ax.set_ylabel(_label(desired.names[k], desired.units[k]))
         ax.grid(True, alpha=0.3)
         if errors is not None:
@@ -136,6 +169,50 @@ def overlay(
     if title:
         fig.suptitle(title)
     return fig
+
+
+def worst_error_window(
+    desired: TimeHistory, achieved: TimeHistory, *, width: float = 1.0
+) -> tuple[float, float]:
+    """The ``width``-second window of the records with the largest tracking error.
+
+    The error of channel ``k`` is ``(desired_k - achieved_k) / rms(desired_k)`` (each channel
+    normalised by its desired RMS, so that channels in N and in m/s² weigh alike); its square,
+    averaged over the channels, is averaged over every window of ``width`` seconds (a sliding
+    window, one sample apart) and the window with the largest mean — the largest RMS error — is
+    returned. A channel whose desired record is all zero is normalised by its achieved RMS (or
+    not at all when that is zero too); non-finite samples count as zero error.
+
+    Parameters
+    ----------
+    desired, achieved : TimeHistory
+        Same sample rate and number of channels (compared over the shorter record).
+    width : float
+        Window length [s], > 0; a record shorter than that gives the whole record.
+
+    Returns
+    -------
+    (start, stop) : tuple of float
+        Seconds from the start of the records, ``stop - start == width`` (sample-rounded).
+    """
+    _check_pair(desired, achieved)
+    if not (np.isfinite(width) and width > 0):
+        raise ValueError(f"width must be a positive number of seconds, got {width!r}")
+    n = min(desired.n_samples, achieved.n_samples)
+    fs = desired.fs
+    w = max(1, round(width * fs))
+    if n <= w:
+        return 0.0, n / fs
+    d, a = desired.data[:n], achieved.data[:n]
+    with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
+        scale = np.sqrt(np.nanmean(d**2, axis=0))
+        scale = np.where(scale > 0, scale, np.sqrt(np.nanmean(a**2, axis=0)))
+        scale = np.where(np.isfinite(scale) & (scale > 0), scale, 1.0)
+        e2 = np.mean(((d - a) / scale) ** 2, axis=1)
+    e2 = np.where(np.isfinite(e2), e2, 0.0)
+    c = np.concatenate(([0.0], np.cumsum(e2)))
+    i0 = int(np.argmax(c[w:] - c[:-w]))  # start sample of the worst window
+    return i0 / fs, (i0 + w) / fs
 
 
 def psd_compare(
@@ -152,15 +229,21 @@ def psd_compare(
     Parameters
     ----------
     desired, achieved : TimeHistory
+        The two records to compare (same channels and sample rate).
     nperseg : int, optional
         Welch segment length (default: about 0.5 Hz resolution, at most the record length).
     band : (low, high) Hz, optional
         The simulation band: shaded, and the frequency axis ends at twice its upper edge.
+    labels : tuple of str, optional
+        Legend labels of the desired and achieved lines.
+    title : str, optional
+        Figure title.
 
     Returns
     -------
     Figure
-        ``n_channels`` axes with two lines each (desired first).
+        ``n_channels`` axes with two lines each: desired first (thin, on top), achieved second
+        (a wide band beneath), as in :func:`overlay`.
     """
     _check_pair(desired, achieved)
     fs = desired.fs
@@ -178,14 +261,17 @@ def psd_compare(
             f[keep],
             np.maximum(p_des[keep, k], 1e-300),
             color=DESIRED_COLOR,
-            lw=1.0,
+            lw=0.8,
+            zorder=3,
             label=labels[0],
         )
         ax.semilogy(
             f[keep],
             np.maximum(p_ach[keep, k], 1e-300),
             color=ACHIEVED_COLOR,
-            lw=1.0,
+            lw=2.2,
+            alpha=0.55,
+            zorder=2,
             label=labels[1],
         )
         if band is not None:
@@ -207,6 +293,8 @@ def error_vs_iteration(result, *, title: str | None = None) -> Figure:
     ----------
     result : ReconstructionResult
         Uses ``errors`` (iterations + 1, n_outputs), ``best_iteration`` and ``desired.names``.
+    title : str, optional
+        Axes title (default: what is plotted).
 
     Returns
     -------
@@ -241,53 +329,117 @@ def error_vs_iteration(result, *, title: str | None = None) -> Figure:
     return fig
 
 
-def drive_vs_limits(drive: TimeHistory, rig_inputs, *, title: str | None = None) -> Figure:
-    """A drive with the ± full-scale lines of the rig's drive channels.
+def drive_vs_limits(
+    drive: TimeHistory, rig_inputs, *, title: str | None = None, trip=None
+) -> Figure:
+    """A drive on axes scaled to it, with the rig's limits marked.
+
+    Each channel's axes are scaled to the drive's own peak (a drive at 1 % of full scale is not a
+    flat line). The ± full-scale lines (dashed black) are drawn when the full scale is within
+    about three times the drive's peak, and then the axes include them; otherwise the axes say
+    "full scale ±X unit, off axis". A channel that is all zero is shown against its full scale.
+    Samples beyond the full scale (a refused drive) are marked with black crosses.
 
     Parameters
     ----------
     drive : TimeHistory
+        The drive to show, in the drive channels' units.
     rig_inputs : sequence of ChannelSpec
         ``rig.inputs``; matched to the drive's channels by name, else by position.
+    title : str, optional
+        Figure title.
+    trip : RigLimitError, optional
+        The interlock that tripped (or refused) this drive: its time is marked with a vertical
+        orange line in every axes (when known), the channel it names gets the limit in its title,
+        and a stroke limit on a drive channel of the same unit is drawn as ± orange lines (with the
+        same three-times rule).
 
     Returns
     -------
     Figure
-        One axes per drive channel: the drive (blue) then the +full-scale and -full-scale lines.
+        One axes per drive channel: the drive (blue) first, then the limit lines.
     """
     if not isinstance(drive, TimeHistory):
         raise TypeError(f"drive must be a vrig.TimeHistory, got {type(drive).__name__}")
-    specs = list(rig_inputs)
-    by_name = {c.name: c for c in specs}
-    if all(n in by_name for n in drive.names):
-        specs = [by_name[n] for n in drive.names]
-    elif len(specs) != drive.n_channels:
-        raise ValueError(
-            f"the drive has {drive.n_channels} channels {list(drive.names)} but the rig has "
-            f"{len(specs)} drives {[c.name for c in specs]}"
-        )
+    specs = _match_specs(drive, rig_inputs)
     fig, axes = _rows(drive.n_channels)
-    t = drive.time
     for k, ax in enumerate(axes):
-        c = specs[k]
-        x = drive.data[:, k]
-        ax.plot(t, x, color=ACHIEVED_COLOR, lw=0.8, label=drive.names[k])
-        ax.axhline(c.full_scale, color=_LIMIT_COLOR, ls="--", lw=1.0, label="± full scale")
-        ax.axhline(-c.full_scale, color=_LIMIT_COLOR, ls="--", lw=1.0)
-        ax.set_ylim(-1.15 * c.full_scale, 1.15 * c.full_scale)
-        ax.set_ylabel(_label(drive.names[k], drive.units[k]))
-        peak = float(np.abs(x).max())
-        ax.set_title(
-            f"{drive.names[k]}: peak {peak:.4g} {drive.units[k]} = "
-            f"{100 * peak / c.full_scale:.1f} % of full scale ±{c.full_scale:g} {c.unit}",
-            fontsize="medium",
-        )
-        ax.grid(True, alpha=0.3)
-    axes[0].legend(loc="upper right", fontsize="small")
+        _drive_axes(ax, drive, k, specs[k], trip)
     axes[-1].set_xlabel("time [s]")
     if title:
         fig.suptitle(title)
     return fig
+
+
+def _drive_axes(ax, drive: TimeHistory, k: int, c, trip) -> None:
+    """Channel ``k`` of ``drive`` against its spec ``c`` (and the interlock ``trip``, if any)."""
+    t, x, unit = drive.time, drive.data[:, k], drive.units[k]
+    ax.plot(t, x, color=ACHIEVED_COLOR, lw=0.8, label=drive.names[k])
+    finite = x[np.isfinite(x)]
+    peak = float(np.abs(finite).max()) if finite.size else 0.0
+    title = (
+        f"{drive.names[k]}: peak {peak:.4g} {unit} = "
+        f"{100 * peak / c.full_scale:.1f} % of full scale ±{c.full_scale:g} {c.unit}"
+    )
+    limits = [(c.full_scale, c.unit, "full scale", _LIMIT_COLOR, "--")]
+    ours = trip is not None and getattr(trip, "channel", None) == c.name
+    if ours:
+        title += (
+            f"\n{trip.kind} interlock: {trip.value:.6g} {trip.unit} exceeds the "
+            f"{trip.limit:.6g} {trip.unit} limit"
+        )
+        if trip.kind == "stroke" and trip.unit == c.unit:
+            limits.append((trip.limit, c.unit, "stroke limit", _TRIP_COLOR, "-."))
+    reach = _limit_lines(ax, peak or c.full_scale, limits)
+    ax.set_title(title, fontsize="medium", color=_TRIP_COLOR if ours else "black")
+    if trip is not None and np.isfinite(getattr(trip, "time", np.nan)):
+        ax.axvline(trip.time, color=_TRIP_COLOR, lw=1.5, label=f"{trip.kind} trip")
+    over = np.flatnonzero(~(np.abs(x) <= c.full_scale) & np.isfinite(x))
+    if over.size:
+        ax.plot(t[over], x[over], "x", color=_LIMIT_COLOR, ms=5, label="beyond full scale")
+    ax.set_ylim(-1.15 * reach, 1.15 * reach)
+    ax.set_ylabel(_label(drive.names[k], unit))
+    ax.grid(True, alpha=0.3)
+    ax.legend(loc="upper right", fontsize="small")
+
+
+def _match_specs(drive: TimeHistory, rig_inputs) -> list:
+    """The rig's drive channel specs in the drive's channel order (by name, else by position)."""
+    specs = list(rig_inputs)
+    by_name = {c.name: c for c in specs}
+    if all(n in by_name for n in drive.names):
+        return [by_name[n] for n in drive.names]
+    if len(specs) != drive.n_channels:
+        raise ValueError(
+            f"the drive has {drive.n_channels} channels {list(drive.names)} but the rig has "
+            f"{len(specs)} drives {[c.name for c in specs]}"
+        )
+    return specs
+
+
+def _limit_lines(ax, peak: float, limits) -> float:
+    """Draw each ``±limit`` of ``limits`` ((limit, unit, what, colour, line style) tuples) that is
+    within ``_LIMIT_SPAN`` times ``peak``; note the others as off the axes (one text box).
+    Returns the level the axes must reach."""
+    reach, off = peak, []
+    for limit, unit, what, color, ls in limits:
+        if limit <= _LIMIT_SPAN * peak:
+            ax.axhline(limit, color=color, ls=ls, lw=1.0, label=f"± {what} ({limit:g} {unit})")
+            ax.axhline(-limit, color=color, ls=ls, lw=1.0)
+            reach = max(reach, limit)
+        else:
+            off.append(f"{what} ±{limit:g} {unit}, off axis")
+    if off:
+        ax.annotate(
+            "\n".join(off),
+            xy=(0.01, 0.97),
+            xycoords="axes fraction",
+            ha="left",
+            va="top",
+            fontsize="small",
+            bbox={"boxstyle": "round", "fc": "white", "ec": "0.3", "alpha": 0.85},
+        )
+    return reach
 
 
 def repeatability_plot(
@@ -307,9 +459,12 @@ def repeatability_plot(
         Frequencies [Hz] (from :func:`vrig.repeatability.repeatability_function`).
     rf, snr : arrays (F, channels)
         ``R_f`` [%] and :func:`vrig.repeatability.signal_to_noise` [dB].
-    names : channel names.
+    names : sequence of str
+        Channel names (legend).
     band : (low, high) Hz, optional
         Shaded; the frequency axis ends at twice its upper edge.
+    title : str, optional
+        Figure title.
 
     Returns
     -------
@@ -345,14 +500,27 @@ def repeatability_plot(
 def save_reconstruction_plots(result, folder, rig=None, *, dpi: int = 110) -> list[Path]:
     """Write the PNGs of a reconstruction into ``folder`` (created if missing).
 
-    Files: ``overlay.png`` (FINRES vs DESRES, whole record), ``overlay_zoom.png`` (a few
-    seconds in the middle), ``psd.png``, ``error_vs_iteration.png`` and, when ``rig`` is given,
+    Files: ``overlay.png`` (FINRES vs DESRES, whole record, the zoom window shaded),
+    ``overlay_zoom.png`` (the second with the largest error, :func:`worst_error_window`; its
+    title says which), ``psd.png``, ``error_vs_iteration.png`` and, when ``rig`` is given,
     ``drive_vs_limits.png`` (FINDRV against the rig's drive full scales). When the loop stopped on
     a drive that was refused or tripped the rig (``result.rejected_drive``) and ``rig`` is given,
     that drive is plotted against the limits too: ``refused_drive_vs_limits.png`` or
-    ``tripped_drive_vs_limits.png``. A result with no iteration played (from a
+    ``tripped_drive_vs_limits.png``, with the interlock that tripped when ``result.error`` is a
+    :class:`~vrig.errors.RigLimitError`. A result with no iteration played (from a
     :class:`~vrig.ReconstructionError`) gets only that plot. Existing files of these names are
     replaced.
+
+    Parameters
+    ----------
+    result : ReconstructionResult
+        The reconstruction (or the result carried by a :class:`~vrig.ReconstructionError`).
+    folder : str or os.PathLike
+        Where the PNGs go (created if missing).
+    rig : rig, optional
+        The rig whose drive full scales are plotted against the drives.
+    dpi : int, optional
+        Resolution of the PNGs, in dots per inch.
 
     Returns
     -------
@@ -374,10 +542,15 @@ def _rejected_figure(result, rig) -> dict:
         return {}
     name = result.rejected_name
     kind = "refused" if name.startswith("REFUSED") else "tripped"
-    verb = "refused before it was sent" if kind == "refused" else "tripped the rig"
+    verb = "was refused before it was sent" if kind == "refused" else "tripped the rig"
+    error = getattr(result, "error", None)
+    trip = error if all(hasattr(error, a) for a in _TRIP_FIELDS) else None
     return {
         f"{kind}_drive_vs_limits.png": drive_vs_limits(
-            drive, rig.inputs, title=f"{name}: the drive that {verb}\n{result.stopped[:150]}"
+            drive,
+            rig.inputs,
+            title="\n".join([f"{name}: the drive that {verb}", *wrap(result.stopped[:300], 110)]),
+            trip=trip,
         )
     }
 
@@ -389,24 +562,26 @@ def _result_figures(result, rig) -> dict:
     errors = np.asarray(result.errors)[best]
     labels = ("desired (DESRES)", f"achieved (IT{best:02d}RES = FINRES)")
     band = tuple(result.bandwidth) if result.bandwidth is not None else None
+    zoom = worst_error_window(desired, achieved, width=1.0)
+    where = f"zoom: {zoom[0]:.1f}-{zoom[1]:.1f} s, worst error"
     figures = {
         "overlay.png": overlay(
             desired,
             achieved,
             errors=errors,
             labels=labels,
-            title=f"response reconstruction: best iteration IT{best:02d}",
+            title=f"response reconstruction: best iteration IT{best:02d} (shaded: {where})",
+            mark=zoom,
         ),
     }
-    span = min(desired.duration, max(0.5, 30.0 / band[1] if band and band[1] > 0 else 2.0))
-    mid = desired.duration / 2
     figures["overlay_zoom.png"] = overlay(
         desired,
         achieved,
-        window=(max(0.0, mid - span / 2), mid + span / 2),
+        window=zoom,
         errors=errors,
         labels=labels,
-        title=f"response reconstruction (detail): IT{best:02d}",
+        title=f"response reconstruction (detail): IT{best:02d}, {where}\n"
+        "(the 1 s of largest RMS error, each channel normalised by its desired RMS)",
     )
     figures["psd.png"] = psd_compare(
         desired, achieved, band=band, labels=labels, title="PSD of desired and achieved response"
@@ -427,9 +602,11 @@ def save_figure(fig: Figure, path, *, dpi: int = 110) -> Path:
     Parameters
     ----------
     fig : Figure
+        The matplotlib figure to save.
     path : str or Path
         The image file; its suffix gives the format (``.png``, ``.pdf``, ``.svg``...).
     dpi : int
+        Resolution of raster formats, in dots per inch.
 
     Returns
     -------

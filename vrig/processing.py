@@ -54,6 +54,7 @@ def gprepro(
     Parameters
     ----------
     th : TimeHistory
+        The record to process (any units; its sample rate sets the filter).
     band : (low, high) Hz
         Simulation bandwidth; ``low = 0`` gives a low-pass, ``high >= fs/2`` a high-pass.
     order : int
@@ -79,7 +80,17 @@ def gprepro(
 def identification_band(band: tuple[float, float], *, widen: float = 0.2, fs: float | None = None):
     """The identification band: the simulation band widened by ``widen`` (20 %) at both edges.
 
-    The low edge moves down by ``widen`` of itself, the high edge up (capped below Nyquist)."""
+    The low edge moves down by ``widen`` of itself, the high edge up (capped below Nyquist).
+
+    Parameters
+    ----------
+    band : tuple of float
+        ``(low, high)`` simulation band in Hz.
+    widen : float, optional
+        Fraction of each edge by which the band is widened (0.2: 20 %).
+    fs : float, optional
+        Sample rate in Hz; when given the high edge is kept below Nyquist.
+    """
     lo, hi = band
     if widen < 0:
         raise ValueError("widen must be >= 0")
@@ -98,6 +109,15 @@ def band_split(
     ``low + high == th`` exactly. The split is :func:`identification.split_spectra.band_split`,
     the one the forward :class:`identification.SplitSpectraModel` uses (its docstring says why
     the split is complementary).
+
+    Parameters
+    ----------
+    th : TimeHistory
+        The record to split.
+    split_hz : float
+        Split frequency in Hz, in (0, fs/2).
+    order : int, optional
+        Poles of the Butterworth low-pass (per pass).
     """
     _check(th)
     if not 0 < split_hz < th.fs / 2:
@@ -109,7 +129,15 @@ def band_split(
 
 
 def decimate(th: TimeHistory, factor: int) -> TimeHistory:
-    """Reduce the sample rate by an integer ``factor`` (zero-phase anti-alias FIR)."""
+    """Reduce the sample rate by an integer ``factor`` (zero-phase anti-alias FIR).
+
+    Parameters
+    ----------
+    th : TimeHistory
+        The record to decimate.
+    factor : int
+        Decimation factor (>= 1; 1 returns ``th`` itself); the new rate is ``fs / factor`` Hz.
+    """
     _check(th)
     if not isinstance(factor, (int, np.integer)) or factor < 1:
         raise ValueError(f"factor must be a positive integer, got {factor!r}")
@@ -127,6 +155,13 @@ def f2d(
     ``transform`` maps a TimeHistory to a TimeHistory (editing, scaling, channel mapping,
     resampling); it must keep the record finite. Without one, the field record is the desired
     response.
+
+    Parameters
+    ----------
+    field : TimeHistory
+        The field (or pseudo-field) record.
+    transform : callable, optional
+        ``transform(field) -> TimeHistory``; None: the field record unchanged.
     """
     _check(field)
     out = field if transform is None else transform(field)

@@ -42,6 +42,11 @@ def repeatability_number(runs) -> np.ndarray:
     """Scalar repeatability per channel [%]: ``100 - mean_i η0(mean response, run i)``.
 
     ``runs``: a sequence of TimeHistory or arrays (N,) / (N, channels) of the same drive.
+
+    Parameters
+    ----------
+    runs : sequence of TimeHistory or array_like
+        Two or more records of the same drive, each (N,) or (N, channels), same shape.
     """
     a = _runs(runs)
     mean = a.mean(axis=0)
@@ -54,7 +59,17 @@ def _psd(x, fs, nperseg):
 
 
 def repeatability_function(runs, fs: float, *, nperseg: int = 256):
-    """Frequency-related repeatability ``R_f(f)`` [%] per channel: ``(f, R_f)`` with R_f (F, ch)."""
+    """Frequency-related repeatability ``R_f(f)`` [%] per channel: ``(f, R_f)`` with R_f (F, ch).
+
+    Parameters
+    ----------
+    runs : sequence of TimeHistory or array_like
+        Two or more records of the same drive, each (N,) or (N, channels), same shape.
+    fs : float
+        Sample rate in Hz.
+    nperseg : int, optional
+        Welch segment length in samples (sets the frequency resolution ``fs / nperseg`` Hz).
+    """
     a = _runs(runs)
     f, P = _psd(a, fs, nperseg)  # (n_runs, F, channels)
     Pm = P.mean(axis=0)
@@ -64,7 +79,17 @@ def repeatability_function(runs, fs: float, *, nperseg: int = 256):
 
 
 def signal_to_noise(runs, fs: float, *, nperseg: int = 256):
-    """Per-frequency repeatable-to-non-repeatable ratio [dB]: ``(f, snr)`` with snr (F, ch)."""
+    """Per-frequency repeatable-to-non-repeatable ratio [dB]: ``(f, snr)`` with snr (F, ch).
+
+    Parameters
+    ----------
+    runs : sequence of TimeHistory or array_like
+        Two or more records of the same drive, each (N,) or (N, channels), same shape.
+    fs : float
+        Sample rate in Hz.
+    nperseg : int, optional
+        Welch segment length in samples (sets the frequency resolution ``fs / nperseg`` Hz).
+    """
     a = _runs(runs)
     n = a.shape[0]
     mean = a.mean(axis=0)

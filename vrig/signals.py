@@ -52,7 +52,13 @@ def _band(f, band):
 
 
 def flat_psd(band: tuple[float, float]) -> Callable[[np.ndarray], np.ndarray]:
-    """Flat (white) PSD inside ``band`` (Hz), zero outside."""
+    """Flat (white) PSD inside ``band`` (Hz), zero outside.
+
+    Parameters
+    ----------
+    band : tuple of float
+        ``(low, high)`` edges of the band, in Hz.
+    """
 
     def psd(f):
         return _band(f, band).astype(float)
@@ -62,7 +68,13 @@ def flat_psd(band: tuple[float, float]) -> Callable[[np.ndarray], np.ndarray]:
 
 def triangular_psd(band: tuple[float, float]) -> Callable[[np.ndarray], np.ndarray]:
     """Triangular PSD: largest at the band's low edge, falling linearly to zero at its high edge
-    (the identification PSD QanTiM prefers, §3.3, Fig. 3.18b)."""
+    (the identification PSD QanTiM prefers, §3.3, Fig. 3.18b).
+
+    Parameters
+    ----------
+    band : tuple of float
+        ``(low, high)`` edges of the band, in Hz.
+    """
     lo, hi = band
 
     def psd(f):
@@ -75,6 +87,13 @@ def one_over_f_psd(band: tuple[float, float], n: float = 1.0) -> Callable[[np.nd
     """``1/f^n`` PSD inside ``band`` (Hz) (the frequency-domain tools' default, §3.3, Fig. 3.18a).
 
     A band starting at 0 Hz is held flat below its first non-zero line.
+
+    Parameters
+    ----------
+    band : tuple of float
+        ``(low, high)`` edges of the band, in Hz.
+    n : float, optional
+        Exponent of the frequency (1: pink, 2: brown).
     """
     lo = band[0]
 
@@ -109,8 +128,12 @@ def random_drive(
         Number of uncorrelated channels (independent random phases).
     rms, peak : float or sequence, optional
         Scale each channel to this RMS or this peak magnitude (give one; default RMS 1).
-    seed : int or numpy.random.Generator
-    names, unit : channel names and unit of the returned TimeHistory.
+    seed : int or numpy.random.Generator, optional
+        Random seed or generator of the phases (default: fresh entropy).
+    names : sequence of str, optional
+        Channel names of the returned TimeHistory (default ``drive1, drive2, ...``).
+    unit : str, optional
+        Unit of every channel of the returned TimeHistory.
     """
     if not isinstance(channels, (int, np.integer)) or isinstance(channels, bool) or channels < 1:
         raise ValueError(f"channels must be a positive integer, got {channels!r}")
@@ -162,7 +185,26 @@ def sine_sweep(
     name: str = "sweep",
     unit: str = "-",
 ) -> TimeHistory:
-    """Linear or logarithmic sine sweep from ``f0`` to ``f1`` Hz (scipy.signal.chirp)."""
+    """Linear or logarithmic sine sweep from ``f0`` to ``f1`` Hz (scipy.signal.chirp).
+
+    Parameters
+    ----------
+    f0, f1 : float
+        Start and end frequencies in Hz (``0 <= f0 < fs/2``, ``0 < f1 <= fs/2``; ``f0 > 0`` for a
+        logarithmic sweep).
+    duration : float
+        Length of the sweep in s.
+    fs : float
+        Sample rate in Hz.
+    amplitude : float, optional
+        Peak amplitude, in ``unit``.
+    kind : {"linear", "log"}, optional
+        Linear or logarithmic frequency progression.
+    name : str, optional
+        Channel name of the returned TimeHistory.
+    unit : str, optional
+        Channel unit of the returned TimeHistory.
+    """
     if kind not in ("linear", "log"):
         raise ValueError(f"kind must be 'linear' or 'log', got {kind!r}")
     if not (np.isfinite(duration) and duration > 0):
@@ -193,6 +235,10 @@ def rig_specific_psd(sweep_drive, sweep_response, *, nperseg: int = 256, floor: 
     sweep_drive, sweep_response : TimeHistory
         The sweep drives and the rig's responses (same number of channels: channel k of the
         response is paired with drive k, as in the text).
+    nperseg : int, optional
+        Welch segment length in samples.
+    floor : float, optional
+        Lowest PSD value, as a fraction of the mean drive PSD.
 
     Returns
     -------

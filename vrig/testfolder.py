@@ -324,6 +324,7 @@ class TestFolder:
         Parameters
         ----------
         result : ReconstructionResult
+            The reconstruction to write (or the result of a :class:`~vrig.ReconstructionError`).
         field : TimeHistory, optional
             The field (or pseudo-field) response the desired response was made from: FIELD01.
         fmt : {"rsp", "csv", "mat", "npz"}
@@ -413,7 +414,13 @@ class TestFolder:
         return {k: found[k] for k in sorted(found, key=_order_key)}
 
     def read(self, name: str) -> TimeHistory:
-        """One record by QanTiM name (``"IDDRV"``, ``"IT03RES"``, ``"FINDRV01"``...)."""
+        """One record by QanTiM name (``"IDDRV"``, ``"IT03RES"``, ``"FINDRV01"``...).
+
+        Parameters
+        ----------
+        name : str
+            A QanTiM record name.
+        """
         files = self.files()
         key = name.upper()
         if key not in files:
@@ -453,7 +460,13 @@ class TestFolder:
         )
 
     def load_iteration(self, xx: int) -> IterationRecord:
-        """ITxxDRV, RITxxRES, ITxxRES and the iteration's scores."""
+        """ITxxDRV, RITxxRES, ITxxRES and the iteration's scores.
+
+        Parameters
+        ----------
+        xx : int
+            Iteration number, 0..99 (0: IT00).
+        """
         if not isinstance(xx, (int, np.integer)) or not 0 <= xx <= 99:
             raise ValueError(f"iteration must be an integer 0..99, got {xx!r}")
         its = self.iterations

@@ -50,6 +50,19 @@ class ActionLayout:
     .reshape(n_inputs, n_bands)``); ``"channels"``: one gain per drive channel; ``"scalar"``: one
     gain. With ``reidentify`` the last element (in [0, 1]) is the re-identify flag (>= 0.5: re-fit
     the inverse model from the latest drive and raw response before computing the update).
+
+    Parameters
+    ----------
+    mode : {"bands", "channels", "scalar"}
+        Gain resolution: per drive channel and band, per drive channel, or one gain.
+    n_inputs : int
+        Number of drive channels of the rig.
+    n_bands : int
+        Number of gain bands (used by ``mode="bands"`` only).
+    reidentify : bool
+        Whether the action ends with the re-identify flag.
+    low, high : float
+        Bounds of every gain (dimensionless; the flag's bounds are [0, 1] whatever these are).
     """
 
     mode: str
@@ -61,17 +74,34 @@ class ActionLayout:
 
     @property
     def n_gains(self) -> int:
+        """Number of gains in the action (``n_inputs * n_bands``, ``n_inputs`` or 1)."""
         return {"bands": self.n_inputs * self.n_bands, "channels": self.n_inputs, "scalar": 1}[
             self.mode
         ]
 
     @property
     def size(self) -> int:
+        """Length of the flat action: :attr:`n_gains`, plus 1 for the re-identify flag."""
         return self.n_gains + int(self.reidentify)
 
     def action(self, gains, reidentify: bool = False) -> np.ndarray:
         """A flat action from gains (scalar, per channel or (channels, bands), broadcast to the
-        mode's shape) and the re-identify flag."""
+        mode's shape) and the re-identify flag.
+
+        Parameters
+        ----------
+        gains : float or array_like
+            Gains (dimensionless): a scalar, one per drive channel (``(n_inputs,)``, repeated
+            over the bands in ``"bands"`` mode) or ``(n_inputs, n_bands)``; broadcast to the
+            mode's shape. Not clipped to ``[low, high]`` here (the env clips).
+        reidentify : bool
+            The re-identify flag (1.0 when true, else 0.0); ignored unless the layout has one.
+
+        Returns
+        -------
+        ndarray
+            The flat float64 action of length :attr:`size`.
+        """
         g = np.asarray(gains, dtype=float)
         shape = {"bands": (self.n_inputs, self.n_bands), "channels": (self.n_inputs,)}.get(
             self.mode, (1,)
@@ -154,28 +184,57 @@ class DriveIterationEnv(gym.Env):
         ``id_seed``, ...); the keyword arguments below, when given, override its values. The
         iteration's gains come from the actions and the run seed from ``reset``.
     method : str, optional
-        Inverse-model method (default ``"arx"``); ``method_options`` (dict) go to it, e.g.
-        ``{"order": 4}``.
+        Inverse-model method (default ``"arx"``).
+    method_options : dict, optional
+        Options of the method, e.g. ``{"order": 4}``.
     fast : bool
-        Reduced-fidelity rig (``fidelity="fast"``) and 6 s desired segments instead of the
-        full-fidelity rig and 20 s (overridden by explicit ``fidelity`` / ``seconds``).
-    seconds : float
-        Length of the pseudo-field desired responses and of the identification drive.
+        Reduced-fidelity rig (``fidelity="fast"``), :data:`FAST_SECONDS` (4 s) desired segments
+        and a :data:`FAST_ID_SECONDS` (12 s) identification drive instead of the full-fidelity
+        rig and 20 s for both (overridden by explicit ``fidelity`` / ``seconds`` /
+        ``id_duration``).
+    fidelity : {"full", "fast"}, optional
+        Rig fidelity of a named rig (default: ``"fast"`` with ``fast=True``, else ``"full"``).
+    seconds : float, optional
+        Length of the pseudo-field desired responses [s] and, unless ``id_duration`` (or
+        ``fast``) sets it, of the identification drive (default 20 s, 4 s with ``fast``).
     desired : sequence of TimeHistory or paths, optional
         Desired responses to draw from instead of pseudo-field records (RPC III, CSV, MAT, NPZ
         files are read with :func:`vrig.io.read`).
     n_bands : int
-        Number of observation / gain bands (default 4).
+        Number of observation / gain bands (default 4), log-spaced over the simulation band.
+    action_mode : {"bands", "channels", "scalar"}
+        Gains per drive channel and band (default), per drive channel, or one gain
+        (:class:`ActionLayout`).
+    reidentify_action : bool
+        Append the re-identify flag to the action (default False).
+    gain_range : (float, float)
+        Bounds ``(low, high)`` of every gain, ``0 <= low < high`` (default (0, 2)).
     max_iterations : int
         Iteration budget (steps) before truncation; keep ``max_episode_steps`` of ``make`` equal.
     tolerance : float, optional
         η0 tolerance [%] (default: the rig's side-car tolerance ``rig.defaults.tolerance``,
         else :data:`FALLBACK_TOLERANCE`, 2 %; the rule: :mod:`vrig.envs`).
+    trip_penalty : float
+        Reward of a step whose drive was refused, tripped the rig or went unstable (the
+        episode terminates), negated: the reward is ``-trip_penalty`` (default 5, >= 0).
+    energy_penalty : float
+        Weight of the drive-energy growth ``max(0, ln(E_after / E_before))`` in the reward,
+        ``E = sum_channels (drive RMS / full scale)^2`` (default 0.1, >= 0).
+    step_penalty : float
+        Constant subtracted from every step's reward (default 0, >= 0).
     model_seed : int, optional
         Identification seed (``settings.id_seed``, default 0; fixed per env, so the identified
         model is reused).
     bandwidth, id_duration, id_rms, decimation
         As in :func:`vrig.reconstruct`.
+    rig_seed : int
+        Seed of a named rig (its noise realisation; default 0).
+    rig_options : dict, optional
+        Further ``load_rig`` options of a named rig (``variant``, ``severity``, documented
+        parameters).
+    render_mode : None
+        Must be ``None``: the environment does not render (``metadata["render_modes"]`` is
+        empty).
     """
 
     metadata: ClassVar[dict] = {"render_modes": []}
@@ -336,6 +395,39 @@ class DriveIterationEnv(gym.Env):
 
     # ------------------------------------------------------------------ API
     def reset(self, *, seed: int | None = None, options: dict | None = None):
+        """Start an episode: draw a desired response, compute IT00DRV and play it.
+
+        As :meth:`gymnasium.Env.reset`; a reset that raises leaves no episode (``step`` then
+        raises until a reset succeeds).
+
+        Parameters
+        ----------
+        seed : int, optional
+            Seeds ``self.np_random`` (Gymnasium's rule: once, then leave it ``None``); the
+            pseudo-field seed (or the index into ``desired``) and the run seed are drawn from it.
+        options : dict, optional
+            ``"desired"``: the desired response of this episode (a TimeHistory or a file, one
+            column per rig output at the rig's fs); ``"field_seed"``: the pseudo-field seed (or
+            the index, modulo its length, into the env's ``desired`` set); ``"run_seed"``: the
+            run seed (rig noise of the iteration runs: ``run_seed + 1 + n``). Any other key is a
+            ``ValueError``.
+
+        Returns
+        -------
+        observation : dict
+            The observation of IT00 (see the class docstring).
+        info : dict
+            ``eta0``, ``rms_error`` [%] and ``damage_ratio`` (per output), ``mean_eta0`` [%],
+            ``iteration`` (0), ``success``, ``reason`` (``""``), ``trip`` (``""``),
+            ``action_clipped`` (False), ``field_seed`` (the one played, after any redraw) and
+            ``run_seed``.
+
+        Raises
+        ------
+        RigLimitError
+            The IT00 drive of an explicit ``desired``/``field_seed``, of the ``desired`` set or
+            of the last of :data:`FIELD_REDRAWS` redrawn targets exceeds a limit.
+        """
         # the episode is over until this reset succeeds: a reset that raises leaves no episode
         # for ``step`` to continue (it would mix the old drive with the new target)
         self._done = True
@@ -380,6 +472,40 @@ class DriveIterationEnv(gym.Env):
         return self._observe(None), self._info(self.scores)
 
     def step(self, action):
+        """One iteration: update the drive with the action's gains and play it.
+
+        As :meth:`gymnasium.Env.step`.
+
+        Parameters
+        ----------
+        action : array_like
+            The flat action of :class:`ActionLayout` (``self.layout``), shape
+            ``self.action_space.shape``; gains outside ``gain_range`` are clipped, a wrong shape
+            or a non-finite value is a ``ValueError``.
+
+        Returns
+        -------
+        observation : dict
+            The observation after the iteration (after a failure: the errors of the last
+            played iteration, ``band_error_change`` 0, and the new iteration count).
+        reward : float
+            See the class docstring; ``-trip_penalty`` on a failure.
+        terminated : bool
+            Every channel's η0 <= ``tolerance``, or a failure (drive beyond the limits, rig trip,
+            unstable simulation or free run).
+        truncated : bool
+            ``max_iterations`` steps reached without termination.
+        info : dict
+            As :meth:`reset`'s, for this iteration: ``reason`` ``"tolerance"``, ``"budget"``,
+            ``"limit"``, ``"unstable"`` or ``""`` (the episode goes on); ``trip`` the failure's
+            message; ``action_clipped`` whether a gain was clipped. After a failure the errors are
+            the last played iteration's and ``success`` is False.
+
+        Raises
+        ------
+        RuntimeError
+            No episode in progress (it ended, or the last ``reset`` raised).
+        """
         if self._done:
             raise RuntimeError(
                 "no episode in progress (it ended, or the last reset() raised): call reset() first"
@@ -429,5 +555,7 @@ class DriveIterationEnv(gym.Env):
         )
 
     def close(self):
+        """End the episode and drop the engine (the rig and the cached inverse model stay);
+        ``reset`` starts a new episode."""
         self.engine = None
         self._done = True

@@ -109,7 +109,14 @@ class IterationPhysics:
 
     def pseudo_field(self, seed: int) -> TimeHistory:
         """A pseudo-field desired response (the rig's response to a seeded road-like drive);
-        the last few are kept (a seed always gives the same record, bit for bit)."""
+        the last few are kept (a seed always gives the same record, bit for bit).
+
+        Parameters
+        ----------
+        seed : int
+            Seed of :func:`vrig.field.pseudo_field` (over ``self.band``, ``self.seconds`` long);
+            the last 256 records are kept by seed.
+        """
         seed = int(seed)
         record = self._fields.get(seed)
         if record is None:
@@ -122,6 +129,15 @@ class IterationPhysics:
     def start(self, desired: TimeHistory, run_seed: int) -> DriveIteration:
         """An engine for ``desired`` with the (cached) identified inverse model; its rig runs use
         the seeds ``run_seed + 1 + iteration`` (as :func:`vrig.reconstruct` with ``seed=run_seed``).
+
+        Parameters
+        ----------
+        desired : TimeHistory
+            The desired response, one column per rig output, at the rig's fs.
+        run_seed : int
+            The engine's run seed (:attr:`IterationSettings.run_seed`); the identification seed
+            stays the physics' own (the inverse model is identified once, then copied from the
+            cache).
         """
         engine = DriveIteration(self.rig, desired, self.settings.replace(run_seed=int(run_seed)))
         cached = _MODELS.get(self._key)

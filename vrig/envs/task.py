@@ -29,6 +29,13 @@ def band_edges(band: tuple[float, float], n_bands: int) -> np.ndarray:
     the first band reaching down to DC); otherwise ``geomspace(lo, hi, n_bands + 1)``. As in
     :func:`vrig.reconstruction.band_gains`, the first band also holds everything below
     ``edges[1]`` and the last everything above ``edges[-2]``.
+
+    Parameters
+    ----------
+    band : tuple of float
+        ``(low, high)`` simulation band in Hz, ``0 <= low < high``.
+    n_bands : int
+        Number of bands (>= 1).
     """
     if not isinstance(n_bands, (int, np.integer)) or n_bands < 1:
         raise ValueError(f"n_bands must be a positive integer, got {n_bands!r}")
@@ -46,6 +53,17 @@ def band_error_ratios(desired: np.ndarray, response: np.ndarray, fs: float, edge
     Returns (n_channels, n_bands); bands are assigned as in :func:`band_edges` (the first from
     0 Hz, the last to Nyquist). A band where the desired response has no power gets the ratio of
     the error's band power to the desired response's total power.
+
+    Parameters
+    ----------
+    desired : ndarray (N, n_channels)
+        Desired response.
+    response : ndarray (N, n_channels)
+        Achieved response, same shape and units.
+    fs : float
+        Sample rate in Hz.
+    edges : array_like
+        ``n_bands + 1`` band edges in Hz (from :func:`band_edges`).
     """
     d = np.asarray(desired, dtype=float)
     e = d - np.asarray(response, dtype=float)
@@ -106,9 +124,21 @@ class IterationTask:
 
     @property
     def n_bands(self) -> int:
+        """Number of observation bands (``len(edges) - 1``)."""
         return len(self.edges) - 1
 
     def observation_space(self, n_inputs: int, n_outputs: int, max_iterations: int) -> spaces.Dict:
+        """The gymnasium observation space of an episode: band errors and their change
+        (n_outputs, n_bands), η0 and RMS error per output [%], drive RMS and peak per input (fractions
+        of full scale) and the iteration number.
+
+        Parameters
+        ----------
+        n_inputs, n_outputs : int
+            Numbers of drive and response channels.
+        max_iterations : int
+            The episode's iteration budget (upper bound of ``iteration``).
+        """
         f32 = np.float32
         nb = self.n_bands
         return spaces.Dict(
@@ -126,7 +156,17 @@ class IterationTask:
         )
 
     def measure(self, desres: np.ndarray, response: np.ndarray, fs: float) -> np.ndarray:
-        """log10 band-error ratios (n_outputs, n_bands), unclipped."""
+        """log10 band-error ratios (n_outputs, n_bands), unclipped.
+
+        Parameters
+        ----------
+        desres : ndarray (N, n_outputs)
+            Desired response.
+        response : ndarray (N, n_outputs)
+            Achieved response, same shape and units.
+        fs : float
+            Sample rate in Hz.
+        """
         ratio = band_error_ratios(desres, response, fs, self.edges)
         return np.log10(np.maximum(ratio, 1e-300))
 
@@ -141,7 +181,25 @@ class IterationTask:
         full_scale: np.ndarray,
         iteration: int,
     ) -> dict:
-        """The observation dictionary (fresh float32 arrays, clipped to the space)."""
+        """The observation dictionary (fresh float32 arrays, clipped to the space).
+
+        Parameters
+        ----------
+        log_band_error : ndarray (n_outputs, n_bands)
+            This iteration's log10 band-error ratios (from :meth:`measure`).
+        previous_log_band_error : ndarray (n_outputs, n_bands) or None
+            The previous iteration's (None at IT00: the change is zero).
+        eta0 : ndarray (n_outputs,)
+            QanTiM error η0 per response channel, in %.
+        rms_error : ndarray (n_outputs,)
+            RMS error per response channel, in % of the desired RMS.
+        drive : ndarray (N, n_inputs)
+            The drive played, in the drive channels' units.
+        full_scale : ndarray (n_inputs,)
+            Full scale of each drive channel, same units.
+        iteration : int
+            The iteration number (0: IT00).
+        """
         change = (
             np.zeros_like(log_band_error)
             if previous_log_band_error is None
@@ -165,6 +223,15 @@ class IterationTask:
 
     @staticmethod
     def drive_energy(drive: np.ndarray, full_scale: np.ndarray) -> float:
+        """Drive energy ``E = sum_channels (drive RMS / full scale)^2`` (dimensionless).
+
+        Parameters
+        ----------
+        drive : ndarray (N, n_inputs)
+            A drive, in the drive channels' units.
+        full_scale : ndarray (n_inputs,)
+            Full scale of each drive channel, same units.
+        """
         return float(np.sum(np.mean(np.asarray(drive) ** 2, axis=0) / full_scale**2))
 
     def reward(
@@ -175,7 +242,15 @@ class IterationTask:
         energy_after: float,
     ) -> float:
         """``ln(mean η0 before) - ln(mean η0 after) - energy_penalty * max(0, ln(E_after /
-        E_before)) - step_penalty``."""
+        E_before)) - step_penalty``.
+
+        Parameters
+        ----------
+        eta_before, eta_after : ndarray (n_outputs,)
+            η0 per response channel before and after the step, in %.
+        energy_before, energy_after : float
+            Drive energy (:meth:`drive_energy`) before and after the step.
+        """
         gain = np.log(max(float(np.mean(eta_before)), 1e-12)) - np.log(
             max(float(np.mean(eta_after)), 1e-12)
         )
@@ -183,4 +258,11 @@ class IterationTask:
         return float(gain - self.energy_penalty * growth - self.step_penalty)
 
     def success(self, eta0: np.ndarray) -> bool:
+        """True when every channel's η0 is at or below ``tolerance``.
+
+        Parameters
+        ----------
+        eta0 : ndarray (n_outputs,)
+            η0 per response channel, in %.
+        """
         return bool(np.all(np.asarray(eta0) <= self.tolerance))

@@ -31,6 +31,7 @@ def write_csv(path, history: TimeHistory) -> Path:
     Parameters
     ----------
     path : str or Path
+        Target file (replaced atomically).
     history : TimeHistory
         Names and units must not contain line breaks, units no square brackets.
 
@@ -127,6 +128,7 @@ def read_csv(path, *, fs: float | None = None) -> TimeHistory:
     Parameters
     ----------
     path : str or Path
+        The file to read.
     fs : float, optional
         Sample rate in Hz. When omitted it is inferred from the first column (``time`` in
         seconds, uniformly spaced within 1 ppm of a step) and rounded to 10 significant digits

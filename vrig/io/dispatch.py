@@ -62,7 +62,9 @@ def write(path, history: TimeHistory, **kwargs) -> Path:
     Parameters
     ----------
     path : str or Path
+        Target file; its suffix chooses the format (see :func:`read`).
     history : TimeHistory
+        The record to write.
     **kwargs
         Passed to the format's writer (e.g. ``data_type`` for :func:`~vrig.io.write_rpc3`).
 

@@ -23,6 +23,13 @@ def write_mat(path, history: TimeHistory) -> Path:
     """Write a MATLAB (v5) ``.mat`` file with ``data`` (N x channels), ``fs``, ``names`` and
     ``units`` (cell arrays of char).
 
+    Parameters
+    ----------
+    path : str or os.PathLike
+        Target file (replaced atomically).
+    history : TimeHistory
+        The record to write.
+
     Returns
     -------
     Path
@@ -66,6 +73,11 @@ def read_mat(path) -> TimeHistory:
     MATLAB level-5 files (``save -v6``/``-v7``, the default) and level-4 files are read with
     :func:`scipy.io.loadmat`, after a structural check of every data element that keeps a
     corrupt file from crashing SciPy's reader (see :mod:`vrig.io._mat5`).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The file to read.
 
     Raises
     ------

@@ -15,7 +15,7 @@ from identification.errors import SimulationDivergedError
 
 from ..errors import RigLimitError, SimulationInstabilityError
 from ..processing import band_gains, decimate, gprepro, identification_band
-from ..rigs.spec import check_drive_limits
+from ..rigs.limits import check_drive_limits
 from ..signals import random_drive, triangular_psd
 from ..timehistory import TimeHistory
 from .methods import make_method
@@ -85,6 +85,12 @@ class DriveIteration:
     >>> drv, raw, res, (eta0, rms, damage) = it.play(drive, 0)  # RIT00RES, IT00RES # doctest: +SKIP
     >>> drive = it.next_drive(drive, res, gain=0.8)  # IT01DRV                # doctest: +SKIP
 
+    ``play`` raises :class:`~vrig.RigLimitError` for a drive beyond the rig's limits *before*
+    sending it, or when the rig trips. A drive that was refused or tripped the rig (in ``play``
+    or ``identify``) is kept in ``rejected`` as ``("REFUSEDxx" | "TRIPPEDxx", drive)`` (``xx``
+    the iteration, ``ID`` for the identification drive) until the next drive is played; a drive
+    that is not finite is refused but not kept.
+
     Parameters
     ----------
     rig : Rig
@@ -96,14 +102,6 @@ class DriveIteration:
         ones and ``id_seed`` / ``run_seed``, the loop's (gain, iterations, ...) are the caller's.
     **options
         Settings by name applied on top of ``settings`` (see :meth:`IterationSettings.build`).
-
-    Notes
-    -----
-    ``play`` raises :class:`~vrig.RigLimitError`
-    for a drive beyond the rig's limits *before* sending it, or when the rig trips. A drive that
-    was refused or tripped the rig (in ``play`` or ``identify``) is kept in ``rejected`` as
-    ``("REFUSEDxx" | "TRIPPEDxx", drive)`` (``xx`` the iteration, ``ID`` for the identification
-    drive) until the next drive is played; a drive that is not finite is refused but not kept.
     """
 
     def __init__(
@@ -207,7 +205,15 @@ class DriveIteration:
         self._fit(iddrv, idres)
 
     def reidentify(self, drive: TimeHistory, raw: TimeHistory) -> None:
-        """Adaptive strategy: re-fit the inverse from the latest drive / raw response pair."""
+        """Adaptive strategy: re-fit the inverse from the latest drive / raw response pair.
+
+        Parameters
+        ----------
+        drive : TimeHistory
+            The drive last played (ITxxDRV).
+        raw : TimeHistory
+            The rig's raw response to it (RITxxRES).
+        """
         self._fit(drive, raw)
 
     def _fit(self, drive: TimeHistory, response: TimeHistory) -> None:
@@ -230,7 +236,15 @@ class DriveIteration:
 
     def use_identified(self, method, id_drive: TimeHistory, id_response: TimeHistory) -> None:
         """Take an already identified method (e.g. a cached inverse model, identified by
-        :meth:`identify` on the same rig, band and settings) instead of identifying again."""
+        :meth:`identify` on the same rig, band and settings) instead of identifying again.
+
+        Parameters
+        ----------
+        method : Method
+            The identified method.
+        id_drive, id_response : TimeHistory
+            The identification records it was identified from (IDDRV, IDRES).
+        """
         self.method = make_method(method)
         self.id_drive, self.id_response = id_drive, id_response
         self.target = self._inverse(self.desres, "DESRES")
@@ -240,7 +254,17 @@ class DriveIteration:
         band (zero-phase, as every other record: what the model does outside the band it was
         identified in is drift, not information) and tapered to zero over the first and last
         ``taper`` seconds (the rig starts and ends at rest; a step at the start would trip the
-        following-error interlock)."""
+        following-error interlock).
+
+        Parameters
+        ----------
+        x : ndarray (n, n_inputs)
+            A drive or correction at the rig rate, in the drives' units.
+
+        Returns
+        -------
+        ndarray (n, n_inputs)
+        """
         th = TimeHistory(x, self.rig.fs, self.names, self.units)
         y = np.array(gprepro(th, self.id_band, detrend=False).data)
         m = min(round(self.taper * self.rig.fs), self.n // 4)
@@ -267,7 +291,23 @@ class DriveIteration:
     def play(self, drive: np.ndarray, iteration: int):
         """Check and send ``drive`` (ITxxDRV); returns (drive, raw, processed, (η0, rms, damage)).
 
-        Raises RigLimitError (nothing is sent when the drive itself is beyond the limits)."""
+        Raises RigLimitError (nothing is sent when the drive itself is beyond the limits).
+
+        Parameters
+        ----------
+        drive : ndarray (n, n_inputs) or TimeHistory
+            The drive, at the rig rate.
+        iteration : int
+            Its iteration number xx (names the records; the rig run is seeded with
+            ``run_seed + 1 + xx``).
+
+        Returns
+        -------
+        drive, raw, processed : TimeHistory
+            ITxxDRV, RITxxRES and ITxxRES (GPREPRO over the simulation band).
+        scores : (eta0, rms_error, damage_ratio)
+            Per response channel (:func:`~vrig.reconstruction.scores.scores`).
+        """
         what = f"IT{iteration:02d}DRV"
         run_seed = self.settings.rig_run_seed + 1 + iteration
         drv, raw = self._send(drive, f"{iteration:02d}", what, run_seed)
@@ -300,14 +340,38 @@ class DriveIteration:
 
     def correction(self, response: TimeHistory) -> np.ndarray:
         """``inverse(DESRES) - inverse(ITxxRES)`` at the rig rate (the un-scaled update),
-        band-limited and tapered like the drive (:meth:`shape`)."""
+        band-limited and tapered like the drive (:meth:`shape`).
+
+        Parameters
+        ----------
+        response : TimeHistory
+            The processed response of the last iteration (ITxxRES).
+
+        Returns
+        -------
+        ndarray (n, n_inputs)
+        """
         return self.shape(self.up(self.target - self._inverse(response, "the response")))
 
     def next_drive(self, drive: np.ndarray, response: TimeHistory, gain, edges=None) -> np.ndarray:
         """``ITn+1DRV = ITnDRV + gain * (inverse(DESRES) - inverse(ITnRES))``.
 
-        ``gain`` is a scalar, one value per drive channel, or (channels, bands) with band
-        ``edges`` [Hz] (see :func:`band_gains`)."""
+        Parameters
+        ----------
+        drive : ndarray (n, n_inputs)
+            ITnDRV.
+        response : TimeHistory
+            ITnRES (processed).
+        gain : float, sequence or ndarray (n_inputs, n_bands)
+            A scalar, one value per drive channel, or one per channel and band.
+        edges : sequence of float, optional
+            Band edges [Hz] of per-band gains (see :func:`~vrig.processing.band_gains`).
+
+        Returns
+        -------
+        ndarray (n, n_inputs)
+            ITn+1DRV.
+        """
         corr = self.correction(response)
         g = np.asarray(gain, dtype=float)
         if g.ndim == 2:

@@ -130,7 +130,18 @@ class _InverseTimeDomain:
 
 
 class InverseArx(_InverseTimeDomain):
-    """Time-domain inverse ARX model (the QanTiM method, full-order structure eq. 4-15)."""
+    """Time-domain inverse ARX model (the QanTiM method, full-order structure eq. 4-15).
+
+    Parameters
+    ----------
+    order : int, optional
+        Full-order ARX order of the inverse (output lags 1..order, input lags 0..order).
+    **kw
+        Options of every time-domain inverse: ``lead`` (``"auto"``, default, or a number of
+        samples >= 0), ``max_lead`` (samples, default 32), ``responses`` (the response channel
+        names the inverse uses; default all) and ``max_radius`` (pole radius limit, default 0.995;
+        None: none); see :class:`identification.InverseModel`.
+    """
 
     name = "arx"
     _OPTIONS = ("order",)
@@ -175,6 +186,34 @@ class InverseNarx(_InverseTimeDomain):
     and peak): a model checked only to Narx's default 1.5x can be bounded on its record and
     diverge on the desired response (a bilinear drive x response feedback whose pole moves with
     the response amplitude).
+
+    Parameters
+    ----------
+    order : int, optional
+        Full-order model order of the inverse (samples).
+    degree : int, optional
+        Polynomial degree (1: linear).
+    kind : {"input-polynomial", "full", "pure", "quasi-static"}, optional
+        Term set (see above).
+    focus : {"prediction", "simulation"}, optional
+        Fit the one-step error (least squares) or refine on the free-run error.
+    selection : {"frols", "simulation"}, optional
+        How terms are chosen when ``n_terms`` or ``criterion`` is given.
+    n_terms : int, optional
+        Most terms per drive channel.
+    criterion : {"aic", "aicc", "bic", "fpe", "press"}, optional
+        Term-count criterion along the selection path.
+    functions : sequence, optional
+        Non-polynomial terms of the responses (see :class:`identification.Narx`).
+    function_sources : {"inputs", "outputs", "all"}, optional
+        Which regressors get the function terms (the inverse's inputs are the responses).
+    stability_margin : float, optional
+        Multiple of the identification response the free run is checked at (see above).
+    **kw
+        Options of every time-domain inverse: ``lead`` (``"auto"``, default, or a number of
+        samples >= 0), ``max_lead`` (samples, default 32), ``responses`` (the response channel
+        names the inverse uses; default all) and ``max_radius`` (pole radius limit, default 0.995;
+        None: none); see :class:`identification.InverseModel`.
     """
 
     name = "narx"
@@ -228,6 +267,26 @@ class InverseErrorSignal(_InverseTimeDomain):
     the past drive errors linear for the reason :class:`InverseNarx` gives (the inverse runs
     free, and products of past drives make its free run escape); ``"full"`` is the text's
     condensed NARX. ``stability_margin`` (default 3) as for :class:`InverseNarx`.
+
+    Parameters
+    ----------
+    linear_order : int, optional
+        Order of the inverse ARX.
+    nonlinear_order : int, optional
+        Order of the error NARX.
+    degree : int, optional
+        Polynomial degree of the error NARX.
+    kind : {"input-polynomial", "full", "pure", "quasi-static"}, optional
+        Term set of the error NARX (see above).
+    focus : {"prediction", "simulation"}, optional
+        Fit of the error NARX: one-step error or free-run error.
+    stability_margin : float, optional
+        Multiple of the identification response the free run is checked at.
+    **kw
+        Options of every time-domain inverse: ``lead`` (``"auto"``, default, or a number of
+        samples >= 0), ``max_lead`` (samples, default 32), ``responses`` (the response channel
+        names the inverse uses; default all) and ``max_radius`` (pole radius limit, default 0.995;
+        None: none); see :class:`identification.InverseModel`.
     """
 
     name = "error-signal"
@@ -274,6 +333,16 @@ class SplitSpectra:
     holds, so the two share the splitting function rather than the model. ``low_responses`` / ``high_responses`` (response channel names) let each band's
     inverse use its own transducers: the multiple-transducer split spectra of §3.2.2 (the
     motorcycle's coil-spring strain gauge below the split, its spindle accelerometer above).
+
+    Parameters
+    ----------
+    split_hz : float
+        Split frequency in Hz.
+    low, high : method or None, optional
+        The band methods (objects with ``identify`` and ``drive``); default
+        ``InverseArx(4)`` for each.
+    low_responses, high_responses : sequence of str, optional
+        Response channel names each band's inverse uses (default all).
     """
 
     name = "split"
@@ -294,12 +363,28 @@ class SplitSpectra:
         return th if names is None else th[names]
 
     def identify(self, iddrv: TimeHistory, idres: TimeHistory) -> None:
+        """Split both records at ``split_hz`` and identify each band's method on its band.
+
+        Parameters
+        ----------
+        iddrv : TimeHistory
+            Identification drive record.
+        idres : TimeHistory
+            The response measured for it (same length and sample rate).
+        """
         d_lo, d_hi = band_split(iddrv, self.split_hz)
         r_lo, r_hi = band_split(idres, self.split_hz)
         self.low.identify(d_lo, self._select(r_lo, self.low_responses))
         self.high.identify(d_hi, self._select(r_hi, self.high_responses))
 
     def drive(self, response: TimeHistory) -> np.ndarray:
+        """The sum of the band methods' drives for the two bands of ``response``.
+
+        Parameters
+        ----------
+        response : TimeHistory
+            The response (desired, or an iteration's correction target) to compute a drive for.
+        """
         r_lo, r_hi = band_split(response, self.split_hz)
         return self.low.drive(self._select(r_lo, self.low_responses)) + self.high.drive(
             self._select(r_hi, self.high_responses)
@@ -315,7 +400,14 @@ class SplitSpectra:
     def set_lead(self, lead) -> None:
         """Fix the bands' leads for the next :meth:`identify`: one value for both bands or
         ``{"low": ..., "high": ...}`` (as :meth:`fitted_lead` returns); a band without a lead
-        (e.g. :class:`InverseFrf`) is left alone."""
+        (e.g. :class:`InverseFrf`) is left alone.
+
+        Parameters
+        ----------
+        lead : int, str or mapping
+            One lead for both bands (samples >= 0 or ``"auto"``) or
+            ``{"low": ..., "high": ...}``.
+        """
         parts = lead if isinstance(lead, Mapping) else {"low": lead, "high": lead}
         unknown = set(parts) - {"low", "high"}
         if unknown:
@@ -347,6 +439,7 @@ class SplitSpectra:
         }
 
     def describe(self) -> str:
+        """One line: the split frequency and each band's method description."""
         lo = "" if self.low_responses is None else f" from {self.low_responses}"
         hi = "" if self.high_responses is None else f" from {self.high_responses}"
         return (
@@ -378,6 +471,15 @@ class InverseFrf:
     inverse per frequency line is the truncated-SVD pseudo-inverse (singular values below
     ``rcond`` of the largest dropped) with Tikhonov damping ``tikhonov * s_max``. The drive for a
     response is ``irfft(H^-1(f) R(f))`` on the record's own frequency grid (H^-1 interpolated).
+
+    Parameters
+    ----------
+    nperseg : int, optional
+        Welch segment length in samples (frequency resolution ``fs / nperseg`` Hz).
+    rcond : float, optional
+        Relative singular value below which a direction of H is dropped.
+    tikhonov : float, optional
+        Tikhonov damping as a fraction of the largest singular value.
     """
 
     name = "frf"
@@ -394,6 +496,15 @@ class InverseFrf:
         self.nperseg, self.rcond, self.tikhonov = nperseg, rcond, tikhonov
 
     def identify(self, iddrv: TimeHistory, idres: TimeHistory) -> None:
+        """Estimate the H1 FRF matrix from the identification records and invert it per line.
+
+        Parameters
+        ----------
+        iddrv : TimeHistory
+            Identification drive record.
+        idres : TimeHistory
+            The response measured for it (same length and sample rate).
+        """
         u, y, fs = iddrv.data, idres.data, iddrv.fs
         nper = min(self.nperseg, u.shape[0] // 4)
         f, suu = cross_spectra(u, u, fs, nper)
@@ -414,7 +525,13 @@ class InverseFrf:
 
     def drive(self, response: TimeHistory) -> np.ndarray:
         """Drive for a response: the record is zero-padded to twice its length (no circular
-        wrap-around of the inverse's impulse response) and the DC line is left out."""
+        wrap-around of the inverse's impulse response) and the DC line is left out.
+
+        Parameters
+        ----------
+        response : TimeHistory
+            The response (desired, or an iteration's correction target) to compute a drive for.
+        """
         r = response.data
         n = r.shape[0]
         n_fft = 2 * n
@@ -430,7 +547,7 @@ class InverseFrf:
         return np.fft.irfft(np.einsum("fij,fj->fi", Hi, R), n=n_fft, axis=0)[:n]
 
     def describe(self) -> str:
-        """One line: the number of frequency lines of the fitted inverse FRF."""
+        """One line: the number of frequency lines and the inverse used."""
         return f"frf: H1 with {self.f.size} lines, truncated-SVD/Tikhonov inverse"
 
     def options(self) -> dict:
@@ -490,7 +607,15 @@ METHODS = {
 def make_method(method, **options):
     """A method object from a name (``"arx"``, ``"narx"``, ``"error-signal"``, ``"split"``,
     ``"frf"``) and options,
-    or the given object if it already has ``identify`` and ``drive``."""
+    or the given object if it already has ``identify`` and ``drive``.
+
+    Parameters
+    ----------
+    method : str or method object
+        A name of :data:`METHODS` or an object with ``identify`` and ``drive``.
+    **options
+        Keyword arguments of the named method's class (none for an object).
+    """
     if hasattr(method, "identify") and hasattr(method, "drive"):
         if options:
             raise ValueError("options are only for methods given by name")

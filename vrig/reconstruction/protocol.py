@@ -52,11 +52,25 @@ class Method(Protocol):
     """A reconstruction method (see the module docstring)."""
 
     def identify(self, iddrv: TimeHistory, idres: TimeHistory) -> None:
-        """Fit the method from identification drive ``iddrv`` and response ``idres``."""
+        """Fit the method from identification drive ``iddrv`` and response ``idres``.
+
+        Parameters
+        ----------
+        iddrv : TimeHistory
+            Identification drive record.
+        idres : TimeHistory
+            The response measured for it (same length and sample rate).
+        """
         ...
 
     def drive(self, response: TimeHistory) -> np.ndarray:
-        """The drive (n_samples, n_drives) the fitted method predicts for ``response``."""
+        """The drive (n_samples, n_drives) the fitted method predicts for ``response``.
+
+        Parameters
+        ----------
+        response : TimeHistory
+            The response to compute a drive for (desired, or an iteration's target).
+        """
         ...
 
     def describe(self) -> str:
@@ -85,7 +99,13 @@ class InverseModelMethod(Method, SizedMethod, Protocol):
     def set_lead(self, lead: Lead) -> None:
         """Fix the lead for the next ``identify``: a number of samples >= 0 (0: causal), or
         ``"auto"`` (search it); a method of parts takes one value for all of them or a mapping
-        as :meth:`fitted_lead` returns it (a part whose lead is None is left as it is)."""
+        as :meth:`fitted_lead` returns it (a part whose lead is None is left as it is).
+
+        Parameters
+        ----------
+        lead : int, "auto" or mapping of str to int or None
+            The lead (samples) or leads of the parts.
+        """
         ...
 
 

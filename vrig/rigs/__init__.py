@@ -56,7 +56,13 @@ def severity_rigs() -> list[str]:
 
 
 def rig_path(name: str) -> Path:
-    """The side-car description file of a shipped rig."""
+    """The side-car description file of a shipped rig.
+
+    Parameters
+    ----------
+    name : str
+        A shipped rig's name (see :func:`list_rigs`).
+    """
     path = _models_dir() / name / f"{name}.rig.json"
     if not path.exists():
         raise ValueError(f"unknown rig {name!r}; available rigs: {list_rigs()}")

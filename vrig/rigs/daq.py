@@ -32,7 +32,25 @@ __all__ = ["Acquisition", "AntiAliasFilter", "Transducer", "acquire"]
 
 @dataclass(frozen=True)
 class Transducer:
-    """One response transducer (the channel's conditioning chain)."""
+    """One response transducer (the channel's conditioning chain).
+
+    Attributes
+    ----------
+    kind : {"accelerometer", "load_cell", "strain_gauge", "lvdt", "generic"}
+        The kind of sensor.
+    gain : float
+        Channel unit per sensor unit.
+    noise_rms : float
+        Measurement noise, RMS after the anti-alias filter, in channel units.
+    highpass_hz : float
+        AC-coupling corner frequency in Hz (accelerometers); 0: DC coupled.
+    mains_amplitude : float
+        Mains pickup amplitude, in channel units.
+    mains_hz : float
+        Mains frequency in Hz.
+    bits : int
+        ADC resolution over ± full scale (0..32); 0: no quantisation.
+    """
 
     kind: str = "generic"  # accelerometer | load_cell | strain_gauge | lvdt | generic
     gain: float = 1.0  # channel unit per sensor unit
@@ -59,7 +77,15 @@ class Transducer:
 
 @dataclass(frozen=True)
 class AntiAliasFilter:
-    """Causal Butterworth low-pass ahead of the ADC."""
+    """Causal Butterworth low-pass ahead of the ADC.
+
+    Attributes
+    ----------
+    order : int
+        Butterworth order.
+    cutoff : float
+        Corner frequency as a fraction of the DAQ sample rate fs (0.4 fs: 80 % of Nyquist).
+    """
 
     order: int = 6
     cutoff: float = 0.4  # fraction of the DAQ sample rate fs (0.4 fs: 80 % of Nyquist)
@@ -73,6 +99,20 @@ class AntiAliasFilter:
         check_number("anti_alias.cutoff", self.cutoff, minimum=0.05, exclusive_maximum=0.5)
 
     def sos(self, fs: float, physics_rate: float) -> np.ndarray:
+        """Second-order sections of the filter, designed at the physics rate.
+
+        Parameters
+        ----------
+        fs : float
+            DAQ sample rate in Hz (sets the corner, ``cutoff * fs``).
+        physics_rate : float
+            Physics rate in Hz, at which the filter runs.
+
+        Raises
+        ------
+        ValueError
+            If the corner is not below the physics rate's Nyquist frequency.
+        """
         wn = self.cutoff * fs / (physics_rate / 2.0)
         if not 0 < wn < 1:
             raise ValueError(
@@ -81,7 +121,17 @@ class AntiAliasFilter:
         return signal.butter(self.order, wn, output="sos")
 
     def response(self, f, fs: float, physics_rate: float) -> np.ndarray:
-        """Complex frequency response at frequencies ``f`` [Hz] (for analytic models)."""
+        """Complex frequency response at frequencies ``f`` [Hz] (for analytic models).
+
+        Parameters
+        ----------
+        f : array_like
+            Frequencies in Hz.
+        fs : float
+            DAQ sample rate in Hz.
+        physics_rate : float
+            Physics rate in Hz, at which the filter runs.
+        """
         _, h = signal.sosfreqz(
             self.sos(fs, physics_rate), worN=np.asarray(f, float), fs=physics_rate
         )
@@ -103,7 +153,17 @@ def _highpass_sos(corner_hz: float, physics_rate: float) -> np.ndarray:
 
 
 def transducer_response(t: Transducer, f, physics_rate: float) -> np.ndarray:
-    """Complex response of the transducer's dynamics and gain at ``f`` [Hz]."""
+    """Complex response of the transducer's dynamics and gain at ``f`` [Hz].
+
+    Parameters
+    ----------
+    t : Transducer
+        The transducer.
+    f : array_like
+        Frequencies in Hz.
+    physics_rate : float
+        Physics rate in Hz, at which its high-pass runs.
+    """
     h = np.full(np.shape(f), t.gain, dtype=complex)
     if _highpass_active(t, physics_rate):
         _, hp = signal.sosfreqz(
@@ -134,6 +194,7 @@ class Acquisition:
     decimation : int
         Physics steps per sample.
     aa : AntiAliasFilter
+        The anti-alias filter.
     rng : numpy.random.Generator
         The run's DAQ noise generator.
     """
@@ -162,7 +223,13 @@ class Acquisition:
 
     def process(self, raw: np.ndarray) -> np.ndarray:
         """Condition the next ``raw`` (n_steps, n_channels) physics-rate values; returns the
-        samples that fall in them (every ``decimation``-th step of the whole record)."""
+        samples that fall in them (every ``decimation``-th step of the whole record).
+
+        Parameters
+        ----------
+        raw : ndarray (n_steps, n_channels)
+            The next physics-rate sensor values, in sensor units.
+        """
         n_steps, n = raw.shape
         x = np.empty_like(raw, dtype=float)
         for j, t in enumerate(self.transducers):
@@ -209,6 +276,23 @@ def acquire(
 
     Returns ``(sampled, peak)``: the sampled channels (ceil(n_steps / decimation), n_channels)
     and each channel's peak magnitude among them (for the transducer-range interlock).
+
+    Parameters
+    ----------
+    raw : ndarray (n_steps, n_channels)
+        Physics-rate sensor values, in sensor units.
+    transducers : list of Transducer
+        One per channel.
+    full_scale : ndarray (n_channels,)
+        ± range of each channel, in channel units (the quantisation range).
+    fs : float
+        DAQ sample rate in Hz.
+    decimation : int
+        Physics steps per sample.
+    aa : AntiAliasFilter
+        The anti-alias filter.
+    rng : numpy.random.Generator
+        The run's DAQ noise generator.
     """
     chain = Acquisition(transducers, full_scale, fs=fs, decimation=decimation, aa=aa, rng=rng)
     sampled = chain.process(raw)

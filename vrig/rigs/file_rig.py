@@ -14,7 +14,8 @@ from pathlib import Path
 import numpy as np
 
 from ..timehistory import TimeHistory
-from .spec import ChannelSpec, check_drive_limits
+from .limits import check_drive_limits
+from .spec import ChannelSpec
 
 __all__ = ["FileRig"]
 
@@ -36,6 +37,7 @@ class FileRig:
     bandwidth : (low, high) Hz
         The test band (default 0 .. fs/4).
     name : str
+        The rig's name (as a shipped rig's, e.g. in a test folder's summary).
     """
 
     def __init__(
@@ -65,7 +67,15 @@ class FileRig:
         self._count = 0
 
     def run(self, drive, *, seed=None) -> TimeHistory:
-        """Write the drive file, obtain and read the response (``seed`` is ignored)."""
+        """Write the drive file, obtain and read the response (``seed`` is ignored).
+
+        Parameters
+        ----------
+        drive : ndarray or TimeHistory
+            The drive, (n_samples, n_inputs) in the drive channels' units, at ``fs``.
+        seed : int, optional
+            Ignored (the response is whatever ``respond`` returns).
+        """
         from .. import io
 
         data = np.asarray(getattr(drive, "data", drive), dtype=float)

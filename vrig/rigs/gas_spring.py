@@ -86,6 +86,7 @@ class AirSpring:
     Attributes
     ----------
     name : str
+        The air spring's name (in messages and the side-car).
     tendon : str
         The MJCF tendon whose length is the air-spring height ``h`` [m].
     sensor : str or None
@@ -139,31 +140,67 @@ class AirSpring:
     """The numeric fields a side-car parameter may set (``{"air_spring": NAME, "field": F}``)."""
 
     def replace(self, **changes) -> AirSpring:
-        """A copy with ``changes`` (unknown names refused, the values checked)."""
+        """A copy with ``changes`` (unknown names refused, the values checked).
+
+        Parameters
+        ----------
+        **changes
+            New values of fields, by name (in the fields' SI units).
+        """
         return replace_fields(self, changes, "air-spring field")
 
     # the law in NumPy (the compiled callback evaluates the same expressions)
     def effective_area_at(self, h):
-        """``A_e(h)`` [m²]."""
+        """``A_e(h)`` [m²].
+
+        Parameters
+        ----------
+        h : float or ndarray
+            Air-spring height in m.
+        """
         return np.maximum(self.effective_area + self.area_slope * (np.asarray(h) - self.design_height), 0.0)
 
     def volume_at(self, h):
-        """``V(h)`` [m³] (at least 1 % of ``V_d``)."""
+        """``V(h)`` [m³] (at least 1 % of ``V_d``).
+
+        Parameters
+        ----------
+        h : float or ndarray
+            Air-spring height in m.
+        """
         d = np.asarray(h, dtype=float) - self.design_height
         v = self.volume + self.effective_area * d + 0.5 * self.area_slope * d * d
         return np.maximum(v, _MIN_VOLUME * self.volume)
 
     def pressure_at(self, h):
-        """Gauge pressure ``p(h) - p_a`` [Pa]."""
+        """Gauge pressure ``p(h) - p_a`` [Pa].
+
+        Parameters
+        ----------
+        h : float or ndarray
+            Air-spring height in m.
+        """
         p0 = self.design_pressure + self.ambient_pressure
         return p0 * (self.volume / self.volume_at(h)) ** self.polytropic_index - self.ambient_pressure
 
     def force_at(self, h):
-        """Force pushing the plates apart [N]."""
+        """Force pushing the plates apart [N].
+
+        Parameters
+        ----------
+        h : float or ndarray
+            Air-spring height in m.
+        """
         return self.pressure_at(h) * self.effective_area_at(h)
 
     def rate_at(self, h):
-        """Small-signal rate ``-dF/dh`` [N/m]."""
+        """Small-signal rate ``-dF/dh`` [N/m].
+
+        Parameters
+        ----------
+        h : float or ndarray
+            Air-spring height in m.
+        """
         p = self.pressure_at(h) + self.ambient_pressure
         a = self.effective_area_at(h)
         return self.polytropic_index * p * a * a / self.volume_at(h) - (
@@ -171,7 +208,15 @@ class AirSpring:
         ) * self.area_slope
 
     def record(self, tendon_id: int, sensor_adr: int) -> np.ndarray:
-        """This air spring as one :data:`PARAM_DTYPE` record."""
+        """This air spring as one :data:`PARAM_DTYPE` record.
+
+        Parameters
+        ----------
+        tendon_id : int
+            Id of the MJCF tendon that gives the height.
+        sensor_adr : int
+            Address of the pressure sensor in ``sensordata`` (-1: none).
+        """
         r = np.zeros((), dtype=PARAM_DTYPE)
         r["tendon"], r["sensor"] = tendon_id, sensor_adr
         r["design_height"] = self.design_height
@@ -265,6 +310,15 @@ def install(model: mujoco.MjModel, data: mujoco.MjData, springs) -> np.ndarray |
     ``springs``: sequence of (AirSpring, tendon id, sensor address or -1). Nothing to do for
     none (``data`` gets no context: the callbacks leave it alone). Returns the context record
     (kept alive until :func:`uninstall`). Other MjData are unaffected.
+
+    Parameters
+    ----------
+    model : mujoco.MjModel
+        The rig's model.
+    data : mujoco.MjData
+        The rig's data.
+    springs : sequence of tuple
+        ``(AirSpring, tendon id, sensor address or -1)`` per air spring.
     """
     n = len(springs)
     if n == 0:
@@ -288,6 +342,12 @@ def install(model: mujoco.MjModel, data: mujoco.MjData, springs) -> np.ndarray |
 
 def uninstall(data: mujoco.MjData | None = None) -> None:
     """Remove ``data``'s context (every one for None) from both callbacks; the previous
-    callbacks are back once no context is left."""
+    callbacks are back once no context is left.
+
+    Parameters
+    ----------
+    data : mujoco.MjData, optional
+        The data whose context is removed; None removes every one.
+    """
     PASSIVE.remove(data)
     SENSOR.remove(data)

@@ -115,6 +115,41 @@ class HydraulicActuator:
 
     Defaults describe a 25 kN, ±75 mm laboratory actuator at 21 MPa with a 38 L/min servo valve
     (datasheet-typical values for MTS 244 / Moog G761 class hardware).
+
+    Attributes
+    ----------
+    area : float
+        Piston annulus area A [m²] (default: 25 kN at 21 MPa).
+    supply_pressure : float
+        Supply pressure P_s [Pa].
+    max_flow : float
+        Rated valve flow Q_max [m³/s] (38 L/min: a 0.53 m/s velocity limit).
+    valve_frequency : float
+        Servo-valve natural frequency [Hz] (the -90 deg point).
+    valve_damping : float
+        Servo-valve damping ratio [-].
+    bulk_modulus : float
+        Effective oil bulk modulus, hoses included [Pa].
+    oil_volume : float
+        Total trapped oil volume V_t [m³].
+    leakage : float
+        Cross-port leakage coefficient [m³/(s Pa)].
+    kp : float
+        Proportional gain [valve fraction per m of following error] (about 40 Hz crossover).
+    ki : float
+        Integral gain [1/(m s)].
+    kd : float
+        Derivative gain [s/m].
+    pressure_feedback : float
+        Delta-P stabilisation [valve fraction per P_s of load pressure] (see the module).
+    stroke : float
+        Stroke limit (half stroke) [m].
+    force_limit : float
+        Force interlock [N].
+    error_limit : float
+        Following-error interlock [m].
+    controller_rate : float
+        Controller update rate [Hz] (at most the physics rate).
     """
 
     area: float = 1.2e-3  # piston annulus area A [m^2]: 25 kN at 21 MPa
@@ -154,12 +189,27 @@ class HydraulicActuator:
         return 4.0 * self.bulk_modulus * self.area**2 / self.oil_volume
 
     def replace(self, **changes) -> HydraulicActuator:
-        """A copy with ``changes`` (unknown names refused, the values checked)."""
+        """A copy with ``changes`` (unknown names refused, the values checked).
+
+        Parameters
+        ----------
+        **changes
+            New values of fields, by name (in the fields' units).
+        """
         return replace_fields(self, changes, "hydraulic parameter")
 
     def record(self, dt: float, index=(0, 0, 0, 0, 0)) -> np.ndarray:
         """This channel as one :data:`PARAM_DTYPE` record for a physics timestep ``dt`` [s];
-        ``index``: (cmd, noise, force ctrl index, qpos address, dof address)."""
+        ``index``: (cmd, noise, force ctrl index, qpos address, dof address).
+
+        Parameters
+        ----------
+        dt : float
+            Physics timestep in s.
+        index : tuple of int, optional
+            ``(cmd ctrl index, noise ctrl index, force ctrl index, qpos address, dof address)`` of
+            the channel in the MuJoCo model.
+        """
         r = np.zeros((), dtype=PARAM_DTYPE)
         steps = max(1, round(1.0 / (self.controller_rate * dt)))
         r["area"] = self.area
@@ -322,6 +372,20 @@ def install(
     :func:`uninstall`). Resets the callback's states in ``data.userdata`` to zero, or to
     ``states`` (from :func:`channel_states`, e.g. of a settled rig). Other MjData (other rigs,
     a user's own model) are unaffected.
+
+    Parameters
+    ----------
+    model : mujoco.MjModel
+        The rig's model.
+    data : mujoco.MjData
+        The rig's data (its ``userdata`` holds the callback's states).
+    channels : sequence of tuple
+        ``(HydraulicActuator, cmd ctrl index, noise ctrl index, force ctrl index, qpos address,
+        dof address)`` per channel.
+    dt : float
+        Physics timestep in s.
+    states : ndarray, optional
+        Callback states to start from (from :func:`channel_states`); default zero.
     """
     n = len(channels)
     if n > MAX_CHANNELS:
@@ -345,12 +409,24 @@ def install(
 
 def uninstall(data: mujoco.MjData | None = None) -> None:
     """Remove ``data``'s context (every one for None); the callback ignores that mjData from
-    then on, and the previous callback is back once no context is left."""
+    then on, and the previous callback is back once no context is left.
+
+    Parameters
+    ----------
+    data : mujoco.MjData, optional
+        The data whose context is removed; None removes every one.
+    """
     CONTROL.remove(data)
 
 
 def trip_record(data: mujoco.MjData):
-    """(kind, channel index, step, value, limit) of the first interlock trip, or None."""
+    """(kind, channel index, step, value, limit) of the first interlock trip, or None.
+
+    Parameters
+    ----------
+    data : mujoco.MjData
+        A rig's data after a run.
+    """
     ud = data.userdata
     if ud.size < _UD_HEADER or ud[_UD_TRIP_CODE] == 0:
         return None
@@ -365,5 +441,13 @@ def trip_record(data: mujoco.MjData):
 
 def channel_states(data: mujoco.MjData, n: int) -> np.ndarray:
     """A copy of the callback's states (spool, spool velocity, load pressure, integrator, previous
-    error, held valve command) of ``n`` channels, to restore with ``install(states=...)``."""
+    error, held valve command) of ``n`` channels, to restore with ``install(states=...)``.
+
+    Parameters
+    ----------
+    data : mujoco.MjData
+        A rig's data.
+    n : int
+        Number of hydraulic channels.
+    """
     return data.userdata[_UD_HEADER : _UD_HEADER + _UD_PER_CHANNEL * n].copy()

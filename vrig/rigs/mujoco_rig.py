@@ -28,13 +28,13 @@ from ..timehistory import TimeHistory
 from . import gas_spring, hydraulics, stability
 from ._callbacks import foreign_callbacks_suspended
 from .daq import Acquisition
+from .limits import check_drive_limits
 from .spec import (
     ChannelSpec,
     InputDef,
     OutputDef,
     RigDefaults,
     RigDescription,
-    check_drive_limits,
     check_outputs_for_rate,
     check_severity,
     read_description,
@@ -450,6 +450,7 @@ class MujocoRig:
     # ------------------------------------------------------------------ public
     @property
     def name(self) -> str:
+        """The rig's name (from its side-car description)."""
         return self._desc.name
 
     @property
@@ -459,10 +460,12 @@ class MujocoRig:
 
     @property
     def inputs(self) -> tuple[ChannelSpec, ...]:
+        """The drive channels (name, unit, full scale), in drive column order."""
         return tuple(c.spec for c in self._inputs)
 
     @property
     def outputs(self) -> tuple[ChannelSpec, ...]:
+        """The response channels (name, unit, full scale), in response column order."""
         return tuple(c.spec for c in self._outputs)
 
     @property
@@ -472,14 +475,17 @@ class MujocoRig:
 
     @property
     def input_defs(self) -> tuple[InputDef, ...]:
+        """The side-car definitions of the drive channels (actuator, limits...)."""
         return tuple(self._inputs)
 
     @property
     def output_defs(self) -> tuple[OutputDef, ...]:
+        """The side-car definitions of the response channels (sensor, transducer...)."""
         return tuple(self._outputs)
 
     @property
     def description(self) -> RigDescription:
+        """The rig's parsed side-car description."""
         return self._desc
 
     @property

@@ -59,7 +59,16 @@ class Rig(Protocol):
         ...
 
     def run(self, drive: np.ndarray | TimeHistory, *, seed: int | None = None) -> TimeHistory:
-        """Play ``drive`` (n_samples x n_inputs at ``fs``) and return the responses."""
+        """Play ``drive`` (n_samples x n_inputs at ``fs``) and return the responses.
+
+        Parameters
+        ----------
+        drive : ndarray or TimeHistory
+            The drive, (n_samples, n_inputs) in the drive channels' units, sampled at ``fs``.
+        seed : int, optional
+            Noise seed for this run; None: the rig's own choice (a shipped rig: the next stream
+            of its generator).
+        """
         ...
 
 

@@ -16,13 +16,13 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import jsonschema
-import numpy as np
 
-from ..errors import RigLimitError, RigModelError, RigParameterError
+from ..errors import RigModelError, RigParameterError
 from ._checks import check_number, describe_range
 from .daq import AntiAliasFilter, Transducer
 from .gas_spring import AirSpring
 from .hydraulics import HydraulicActuator
+from .limits import check_drive_limits  # re-exported: its public path before rigs.limits
 
 __all__ = [
     "MILD",
@@ -51,7 +51,10 @@ class ChannelSpec:
 
     Attributes
     ----------
-    name, unit : str
+    name : str
+        Channel name (unique within the rig), e.g. ``"damper_load"``.
+    unit : str
+        Engineering unit of the channel (``"m"``, ``"N"``, ``"m/s^2"``, ``"V"``, ...).
     full_scale : float
         ± range of the channel in its unit (drives: the command range; responses: the
         transducer range — exceeding it trips the transducer-range interlock).
@@ -61,6 +64,7 @@ class ChannelSpec:
         Responses: the transducer kind (``accelerometer``, ``load_cell``, ``strain_gauge``,
         ``lvdt``, ...).
     description : str
+        What the channel is, in words (side-car ``"description"``; may be empty).
     limits : dict
         The interlock limits of the channel (stroke, force, velocity, following error ...).
     """
@@ -90,6 +94,27 @@ class Parameter:
     A numeric parameter's allowed range is given by ``minimum``, ``exclusive_minimum``,
     ``maximum``, ``exclusive_maximum`` (the side-car's ``minimum``, ``exclusiveMinimum``, ...;
     none: any finite number); a string parameter's values by ``enum``.
+
+    Attributes
+    ----------
+    name : str
+        The parameter's key in the side-car's ``"parameters"`` (the ``load_rig`` keyword).
+    value : float or str
+        The documented default value (the ``"mild"`` variant's), in ``unit``.
+    unit : str
+        Unit of the value (``"-"``: dimensionless or a string).
+    description : str
+        What the parameter is, in words.
+    source : str
+        Where the value comes from (datasheet, reference-text section, calibration).
+    apply : tuple of dict
+        The side-car's ``apply`` rules: which MjSpec attribute, channel or air-spring field
+        the value sets (``models/README.md``, *Parameters*).
+    minimum, exclusive_minimum, maximum, exclusive_maximum : float or None
+        The allowed range of a numeric value, in ``unit`` (the side-car's ``minimum``,
+        ``exclusiveMinimum``, ``maximum``, ``exclusiveMaximum``); ``None``: unbounded.
+    enum : tuple of str or None
+        The allowed values of a string parameter; ``None``: any string.
     """
 
     name: str
@@ -120,7 +145,14 @@ class Parameter:
 
     def check(self, value):
         """``value`` if it is allowed for this parameter, else :class:`RigParameterError`
-        naming the parameter and its allowed range (the type follows the default's)."""
+        naming the parameter and its allowed range (the type follows the default's).
+
+        Parameters
+        ----------
+        value : float or str
+            A candidate value, in :attr:`unit`: a finite number within the range for a numeric
+            parameter, a string (in :attr:`enum` when given) for a string one.
+        """
         if isinstance(self.value, str):
             ok = isinstance(value, str) and (self.enum is None or value in self.enum)
         else:
@@ -148,6 +180,26 @@ class Parameter:
 
 @dataclass(frozen=True)
 class InputDef:
+    """A drive channel of the side-car (``"inputs"``), read: what MujocoRig needs to drive it.
+
+    Attributes
+    ----------
+    spec : ChannelSpec
+        The channel (name, unit, full scale, ``kind`` ``"hydraulic"`` or ``"direct"``, and the
+        interlock limits of a hydraulic drive).
+    actuator : str
+        MJCF actuator name: of a direct drive, the actuator whose ``ctrl`` is the drive; of a
+        hydraulic one, the prefix of its ``<actuator>_cmd``, ``_noise`` and ``_force`` actuators.
+    joint : str or None
+        The piston's slide joint of a hydraulic drive; ``None`` for a direct one.
+    hydraulic : HydraulicActuator or None
+        The servo-hydraulic actuator (the defaults with the side-car's ``"hydraulic"`` fields
+        applied); ``None`` for a direct drive.
+    noise_rms : float
+        Command noise RMS, >= 0: of the servo-valve (fraction of full opening) on a hydraulic
+        drive, of the amplifier (in the drive's unit) on a direct one.
+    """
+
     spec: ChannelSpec
     actuator: str
     joint: str | None
@@ -160,6 +212,20 @@ class InputDef:
 
 @dataclass(frozen=True)
 class OutputDef:
+    """A response channel of the side-car (``"outputs"``), read: where MujocoRig measures it.
+
+    Attributes
+    ----------
+    spec : ChannelSpec
+        The channel (name, unit, full scale = the transducer range, transducer kind).
+    sensor : str
+        The MJCF sensor name.
+    component : int
+        Index of the measured component within a multi-axis sensor (0 for a scalar sensor).
+    transducer : Transducer
+        The transducer chain (gain, noise, high-pass, mains pickup, ADC bits).
+    """
+
     spec: ChannelSpec
     sensor: str
     component: int
@@ -198,7 +264,52 @@ class RigDefaults:
 
 @dataclass(frozen=True)
 class RigDescription:
-    """Everything in a side-car file, validated."""
+    """Everything in a side-car file, validated (:func:`read_description`).
+
+    Attributes
+    ----------
+    name : str
+        The rig's name (the side-car's ``"name"``; a shipped rig's folder name).
+    title : str
+        One-line title (may be empty).
+    description : str
+        What the rig is, in words (may be empty).
+    path : Path
+        The side-car file read.
+    mjcf : Path
+        The MJCF model file (the side-car's ``"mjcf"``, relative to its folder).
+    fs : float
+        DAQ sample rate [Hz]; the physics rate is an integer multiple of it.
+    bandwidth : (float, float)
+        The test band (low, high) [Hz], ``0 <= low < high <= fs/2`` (side-car
+        ``"bandwidth_hz"``; default (0, fs/4)).
+    settle_time : float
+        Zero drive played before every run and discarded [s] (gravity sag, preload; default 0).
+    anti_alias : AntiAliasFilter
+        The DAQ's causal anti-alias filter.
+    inputs : tuple of InputDef
+        The drive channels, in drive-column order.
+    outputs : tuple of OutputDef
+        The response channels, in response-column order.
+    parameters : dict
+        Parameter name -> :class:`Parameter`: the documented, overridable parameters.
+    notes : tuple of str
+        Free-text notes of the side-car.
+    fast_physics_rate : float or None
+        Physics rate of ``fidelity="fast"`` [Hz]; ``None``: derived by MujocoRig from the
+        model's stability limit.
+    variants : dict
+        Variant name -> :class:`Variant`; always holds :data:`MILD` (the documented values).
+    default_variant : str
+        The variant ``load_rig(name)`` gives (``variant=None``); :data:`MILD` unless the
+        side-car names another.
+    severity : Severity or None
+        The non-linearity severity axis; ``None``: a rig linear in its operating range.
+    air_springs : tuple of AirSpring
+        The gas-spring elements (side-car ``"air_springs"``; :mod:`vrig.rigs.gas_spring`).
+    defaults : RigDefaults
+        The rig's own defaults (side-car ``"reconstruction"``: band, gain, gym id, tolerance).
+    """
 
     name: str
     title: str
@@ -231,6 +342,16 @@ class Variant:
     """A named set of parameter values of a rig (side-car ``"variants"``), e.g. a calibration.
 
     ``values`` are checked against each parameter's declared range when the side-car is read.
+
+    Attributes
+    ----------
+    name : str
+        The variant's key in the side-car's ``"variants"`` (``load_rig(name, variant=...)``).
+    description : str
+        What was set or calibrated, on what, to which value.
+    values : dict
+        Parameter name -> value (in the parameter's unit); parameters not named keep their
+        documented value.
     """
 
     name: str
@@ -265,13 +386,35 @@ class Severity:
     Values at ``s > 1`` may leave a parameter's documented *plausible* range (the axis is a
     benchmark axis, not a physical rig); they never leave its physically valid range (a
     parameter's minimum).
+
+    Attributes
+    ----------
+    description : str
+        What severity 0, 1 and 2 mean on this rig.
+    scales : dict
+        Parameter name -> law: ``"proportional"``, ``"reciprocal"`` or ``{"linearised": L}``
+        (:data:`SEVERITY_LAWS`).
     """
 
     description: str
     scales: dict  # parameter name -> law: "proportional", "reciprocal" or {"linearised": L}
 
     def linearised_value(self, law: dict, values: dict) -> float:
-        """The value ``L`` of a ``{"linearised": L}`` law, resolved on ``values``."""
+        """The value ``L`` of a ``{"linearised": L}`` law, resolved on ``values``.
+
+        Parameters
+        ----------
+        law : dict
+            ``{"linearised": L}``: ``L`` a number, another parameter's name, or ``{"mean":
+            [names]}`` (the mean of those parameters' values).
+        values : dict
+            Parameter name -> value (unscaled) the names resolve on.
+
+        Returns
+        -------
+        float
+            ``L``, in the unit of the parameters it names.
+        """
         target = law["linearised"]
         if isinstance(target, str):
             return float(values[target])
@@ -283,7 +426,19 @@ class Severity:
         """``values`` (parameter name -> value, the variant and overrides applied) with the
         scaled parameters at severity ``s``; every linearised reference is resolved on the
         unscaled ``values``. ``parameters`` (name -> :class:`Parameter`) supply the minima a
-        linearised law keeps to."""
+        linearised law keeps to.
+
+        Parameters
+        ----------
+        values : dict
+            Parameter name -> value, with the variant and the overrides applied; every
+            parameter in :attr:`scales` must be present.
+        s : float
+            The severity (dimensionless, :data:`SEVERITY_RANGE`; not checked here).
+        parameters : dict, optional
+            Parameter name -> :class:`Parameter`; a linearised value is kept at or above its
+            parameter's ``minimum``. ``None``: no minima.
+        """
         out = dict(values)
         for name, law in self.scales.items():
             v = float(values[name])
@@ -302,7 +457,15 @@ class Severity:
 
 
 def check_severity(value, rig: str) -> float:
-    """``value`` as a float if it lies in :data:`SEVERITY_RANGE`, else RigParameterError."""
+    """``value`` as a float if it lies in :data:`SEVERITY_RANGE`, else RigParameterError.
+
+    Parameters
+    ----------
+    value : float
+        The severity asked for (dimensionless).
+    rig : str
+        The rig's name, for the error message.
+    """
     lo, hi = SEVERITY_RANGE
     check_number(f"rig {rig!r}: severity", value, minimum=lo, maximum=hi)
     return float(value)
@@ -367,7 +530,17 @@ def validate_description(raw, where: str = "side-car", *, schema: dict | None = 
     """Check a parsed side-car against :func:`rig_schema` (and for NaN/infinite numbers, which
     JSON Schema cannot see); raises :class:`RigParameterError` naming the key and what is
     allowed (unknown keys such as a misspelt ``noise_rmss`` included). ``schema``: check
-    against this (part of the) schema instead."""
+    against this (part of the) schema instead.
+
+    Parameters
+    ----------
+    raw : object
+        The parsed JSON document (``json.loads`` of the side-car).
+    where : str
+        Where it came from (the file's path), put in front of the error message.
+    schema : dict, optional
+        A JSON Schema (draft 2020-12) to check against instead of :func:`rig_schema`.
+    """
     for path, value in _non_finite(raw):
         key = _json_path(path)
         raise RigParameterError(
@@ -519,7 +692,22 @@ def _read_severity(raw: dict | None, params: dict, where: str) -> Severity | Non
 
 
 def check_outputs_for_rate(outputs, fs: float, where: str) -> None:
-    """A transducer's high-pass corner must lie below the DAQ Nyquist frequency fs/2."""
+    """A transducer's high-pass corner must lie below the DAQ Nyquist frequency fs/2.
+
+    Parameters
+    ----------
+    outputs : iterable of OutputDef
+        The response channels to check (``transducer.highpass_hz`` [Hz] >= 0 and < fs/2).
+    fs : float
+        The DAQ sample rate [Hz].
+    where : str
+        Where the channels come from (a side-car path, a parameter rule), for the error.
+
+    Raises
+    ------
+    RigParameterError
+        A high-pass corner outside [0, fs/2).
+    """
     for o in outputs:
         check_number(
             f"{o.spec.name}: transducer.highpass_hz",
@@ -568,6 +756,11 @@ def read_defaults(path) -> RigDefaults:
     :func:`read_description` checks them, without reading the rest (the gymnasium registration
     reads every shipped side-car on ``import vrig``).
 
+    Parameters
+    ----------
+    path : str or Path
+        The ``*.rig.json`` side-car file.
+
     Raises
     ------
     RigModelError
@@ -592,6 +785,11 @@ def read_defaults(path) -> RigDefaults:
 
 def read_description(path) -> RigDescription:
     """Read and validate a ``*.rig.json`` side-car file.
+
+    Parameters
+    ----------
+    path : str or Path
+        The ``*.rig.json`` side-car file; its ``"mjcf"`` is relative to the file's folder.
 
     Raises
     ------
@@ -668,27 +866,3 @@ def read_description(path) -> RigDescription:
         defaults=_read_defaults(raw, fs, where),
     )
 
-
-def check_drive_limits(
-    channels, drive, *, fs: float | None = None, what: str = "the drive"
-) -> None:
-    """Raise :class:`~vrig.errors.RigLimitError` if any drive channel exceeds its full scale.
-
-    A drive beyond a channel's ± full scale (or not finite) is never sent: the error names the
-    channel, the first offending sample (and its time when ``fs`` is given) and says the drive was not sent.
-    """
-    for j, c in enumerate(channels):
-        over = ~(np.abs(drive[:, j]) <= c.full_scale)  # NaN counts as over: never sent either
-        if over.any():
-            i = int(np.argmax(over))
-            when = f"sample {i}" + (f", t = {i / fs:.4f} s" if fs else "")
-            fix = "scale it down" if np.isfinite(drive[i, j]) else "it is not finite"
-            raise RigLimitError(
-                "drive",
-                c.name,
-                float("nan"),
-                drive[i, j],
-                c.full_scale,
-                c.unit,
-                hint=f"({when}): {what} was not sent; {fix}.",
-            )

@@ -78,7 +78,14 @@ class StiffElement:
         return math.sqrt(self.stiffness / self.mass) / (2 * math.pi)
 
     def limit(self, integrator: int) -> float:
-        """Largest stable timestep [s] of this element alone (closed form, see the module)."""
+        """Largest stable timestep [s] of this element alone (closed form, see the module).
+
+        Parameters
+        ----------
+        integrator : int
+            The model's integrator (``mujoco.mjtIntegrator`` value: Euler, RK4, implicit or
+            implicitfast).
+        """
         w2, cm = self.stiffness / self.mass, self.damping / self.mass
         if integrator == _RK4:
             return 2.0 * math.sqrt(2.0) / math.sqrt(w2)
@@ -220,6 +227,17 @@ def spectral_radius(model: mujoco.MjModel, data: mujoco.MjData, elements, dt: fl
     """Growth factor per step (largest eigenvalue magnitude) of the linearised model at ``dt``.
 
     Stable when <= 1. ``data`` holds the pose ``elements`` were computed at.
+
+    Parameters
+    ----------
+    model : mujoco.MjModel
+        The compiled model.
+    data : mujoco.MjData
+        Its data, at the pose the elements were computed at.
+    elements : sequence of StiffElement
+        The springs of the model (see :func:`stiff_elements`).
+    dt : float
+        Timestep in s.
     """
     mass = _mass_matrix(model, data)
     damping = _damping(model, data)
@@ -231,6 +249,15 @@ def max_stable_timestep(model: mujoco.MjModel, data: mujoco.MjData, elements) ->
 
     Bisection on :func:`spectral_radius`, to 0.01 % of the limit; ``inf`` without a spring (or
     above 10 s), 0.0 if it grows at any timestep (a negative stiffness).
+
+    Parameters
+    ----------
+    model : mujoco.MjModel
+        The compiled model.
+    data : mujoco.MjData
+        Its data, at the pose the elements were computed at.
+    elements : sequence of StiffElement
+        The springs of the model (see :func:`stiff_elements`).
     """
     if not elements:
         return math.inf

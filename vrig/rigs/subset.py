@@ -19,6 +19,13 @@ class OutputSubset:
 
     Everything else (drives, limits, sample rate, band) is the wrapped rig's; ``run`` plays the
     drive on the whole rig and returns the selected channels.
+
+    Parameters
+    ----------
+    rig : Rig
+        The wrapped rig.
+    names : sequence of str
+        Response channel names of ``rig`` to keep, in the order wanted.
     """
 
     def __init__(self, rig, names):
@@ -46,10 +53,21 @@ class OutputSubset:
 
     @property
     def name(self) -> str:
+        """The wrapped rig's name with the selected channels, e.g. ``"rig[F,x]"``."""
         return f"{self.rig.name}[{','.join(self.names)}]"
 
     def run(self, drive, *, seed: int | None = None, **options) -> TimeHistory:
-        """The wrapped rig's run (``options``: e.g. ``chunk_seconds``), selected channels."""
+        """The wrapped rig's run (``options``: e.g. ``chunk_seconds``), selected channels.
+
+        Parameters
+        ----------
+        drive : ndarray or TimeHistory
+            The drive, as for the wrapped rig's ``run``.
+        seed : int, optional
+            Seed of the run's noise, as for the wrapped rig.
+        **options
+            Further keyword arguments of the wrapped rig's ``run`` (e.g. ``chunk_seconds``).
+        """
         return self.rig.run(drive, seed=seed, **options)[self.names]
 
     def __repr__(self) -> str:

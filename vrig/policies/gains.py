@@ -1,0 +1,278 @@
+"""Drive-iteration policies for the ``vrig/`` gymnasium environments: the gains of each iteration.
+
+A policy is built for one environment (it reads the env's :class:`~vrig.envs.ActionLayout`),
+``reset()`` at the start of each episode and called with each observation; it returns a valid
+flat action (gains in the env's range). All of them work on any action mode (``bands``,
+``channels``, ``scalar``): band-wise decisions are averaged where the mode has no bands.
+
+* :class:`FixedGain` - the classic: the same gain every iteration.
+* :class:`DecreasingGain` - ``max(floor, start * decay**n)``.
+* :class:`AdaptiveBandGain` - per band: cut the gain when the band's error grew, raise it
+  slowly while it falls.
+* :class:`BandRatioPolicy` - the learned one: per band ``g_b = exp(theta_b + alpha * change_b +
+  beta * (error_b + 1) + gamma * n)`` from the observed log10 band-error ratio (``error_b``), its
+  change over the last iteration (``change_b``) and the iteration index ``n``; parameters found
+  by :func:`~vrig.policies.search.cross_entropy_search` (``benchmarks/learned_iteration.py``
+  trains it). No GPU, no deep-learning library.
+
+An episode of a policy is played by :func:`~vrig.policies.episodes.run_episode`.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+__all__ = [
+    "AdaptiveBandGain",
+    "BandRatioPolicy",
+    "DecreasingGain",
+    "FixedGain",
+    "Policy",
+]
+
+
+class Policy:
+    """Base class: ``reset()`` per episode, ``policy(obs) -> action``.
+
+    Parameters
+    ----------
+    env : gymnasium.Env
+        A :class:`vrig.envs.DriveIterationEnv` (or a wrapper of one); its action layout sets the
+        shape of the actions.
+    """
+
+    name = "policy"
+
+    def __init__(self, env):
+        self.layout = env.unwrapped.layout
+
+    def reset(self) -> None:
+        """Forget the episode's state (called by :func:`~vrig.policies.episodes.run_episode`
+        after ``env.reset``)."""
+
+    def gains(self, obs) -> np.ndarray:  # pragma: no cover - abstract
+        """Gains per drive channel and band (n_inputs, n_bands), or anything broadcasting.
+
+        Parameters
+        ----------
+        obs : dict of str to ndarray
+            The environment's observation (``iteration``, ``band_error``,
+            ``band_error_change``, ...; see :class:`vrig.envs.DriveIterationEnv`).
+        """
+        raise NotImplementedError
+
+    def reidentify(self, obs) -> bool:
+        """Whether to re-identify the inverse model before the next iteration (default: never).
+
+        Parameters
+        ----------
+        obs : dict of str to ndarray
+            The environment's observation (``iteration``, ``band_error``,
+            ``band_error_change``, ...; see :class:`vrig.envs.DriveIterationEnv`).
+        """
+        return False
+
+    def __call__(self, obs) -> np.ndarray:
+        lay = self.layout
+        g = np.broadcast_to(np.asarray(self.gains(obs), float), (lay.n_inputs, lay.n_bands))
+        if lay.mode == "channels":
+            g = g.mean(axis=1)
+        elif lay.mode == "scalar":
+            g = np.array([g.mean()])
+        return lay.action(np.clip(g, lay.low, lay.high), self.reidentify(obs))
+
+    def __repr__(self) -> str:
+        return self.name
+
+
+class FixedGain(Policy):
+    """The same gain every iteration (what :func:`vrig.reconstruct` does).
+
+    Parameters
+    ----------
+    env : gymnasium.Env
+        A :class:`vrig.envs.DriveIterationEnv` (or a wrapper of one); its action layout sets the
+        shape of the actions.
+    gain : float, optional
+        The gain applied to every band and drive channel.
+    """
+
+    def __init__(self, env, gain: float = 0.8):
+        super().__init__(env)
+        self.gain = float(gain)
+        self.name = f"fixed {self.gain:g}"
+
+    def gains(self, obs):
+        """The fixed gain, every iteration.
+
+        Parameters
+        ----------
+        obs : dict of str to ndarray
+            The environment's observation (``iteration``, ``band_error``,
+            ``band_error_change``, ...; see :class:`vrig.envs.DriveIterationEnv`).
+        """
+        return self.gain
+
+
+class DecreasingGain(Policy):
+    """``gain_n = max(floor, start * decay**(n))`` for the update after iteration n.
+
+    Parameters
+    ----------
+    env : gymnasium.Env
+        A :class:`vrig.envs.DriveIterationEnv` (or a wrapper of one); its action layout sets the
+        shape of the actions.
+    start : float, optional
+        Gain of the update after IT00.
+    decay : float, optional
+        Factor applied per iteration.
+    floor : float, optional
+        Smallest gain.
+    """
+
+    def __init__(self, env, start: float = 1.2, decay: float = 0.85, floor: float = 0.5):
+        super().__init__(env)
+        self.start, self.decay, self.floor = float(start), float(decay), float(floor)
+        self.name = f"decreasing {self.start:g}x{self.decay:g}^n"
+
+    def gains(self, obs):
+        """``max(floor, start * decay**n)`` with n the observed iteration.
+
+        Parameters
+        ----------
+        obs : dict of str to ndarray
+            The environment's observation (``iteration``, ``band_error``,
+            ``band_error_change``, ...; see :class:`vrig.envs.DriveIterationEnv`).
+        """
+        n = float(obs["iteration"][0])
+        return max(self.floor, self.start * self.decay**n)
+
+
+class AdaptiveBandGain(Policy):
+    """Per band: multiply the gain by ``shrink`` when the band's error grew in the last
+    iteration (any output channel), else by ``grow``; gains kept in [``low``, ``high``].
+
+    Parameters
+    ----------
+    env : gymnasium.Env
+        A :class:`vrig.envs.DriveIterationEnv` (or a wrapper of one); its action layout sets the
+        shape of the actions.
+    start : float, optional
+        Gain of every band at the first update.
+    shrink : float, optional
+        Factor applied to a band's gain when its error grew.
+    grow : float, optional
+        Factor applied to a band's gain otherwise.
+    low, high : float, optional
+        Range the gains are kept in.
+    """
+
+    def __init__(
+        self,
+        env,
+        start: float = 0.8,
+        shrink: float = 0.5,
+        grow: float = 1.1,
+        low: float = 0.1,
+        high: float = 1.2,
+    ):
+        super().__init__(env)
+        self.start, self.shrink, self.grow = float(start), float(shrink), float(grow)
+        self.low, self.high = float(low), float(high)
+        self.name = "adaptive per band"
+        self.reset()
+
+    def reset(self):
+        """Forget the gains of the last episode (the next call starts from ``start``)."""
+        self._g = None
+
+    def gains(self, obs):
+        """The per-band gains after this observation's error changes.
+
+        Parameters
+        ----------
+        obs : dict of str to ndarray
+            The environment's observation (``iteration``, ``band_error``,
+            ``band_error_change``, ...; see :class:`vrig.envs.DriveIterationEnv`).
+        """
+        lay = self.layout
+        if self._g is None or float(obs["iteration"][0]) == 0:
+            self._g = np.full((lay.n_inputs, lay.n_bands), self.start)
+            return self._g.copy()
+        grew = np.asarray(obs["band_error_change"]).max(axis=0) > 0  # (n_bands,)
+        self._g = np.clip(
+            self._g * np.where(grew, self.shrink, self.grow)[None, :], self.low, self.high
+        )
+        return self._g.copy()
+
+
+class BandRatioPolicy(Policy):
+    """Learned per-band gains as a function of the observed band-error ratios.
+
+    ``g_b = clip(exp(theta_b + alpha * change_b + beta * (error_b + 1) + gamma * n))``, with
+    ``error_b`` the log10 band-error ratio and ``change_b`` its change over the last iteration
+    (both taken as the maximum over output channels) and ``n`` the iteration index.
+    ``params = [theta_1 .. theta_B, alpha, beta, gamma]``.
+
+    Parameters
+    ----------
+    env : gymnasium.Env
+        A :class:`vrig.envs.DriveIterationEnv` (or a wrapper of one); its action layout sets the
+        shape of the actions.
+    params : array_like, shape (n_bands + 3,)
+        ``[theta_1 .. theta_B, alpha, beta, gamma]`` (see above).
+    """
+
+    def __init__(self, env, params):
+        super().__init__(env)
+        p = np.asarray(params, dtype=float)
+        if p.shape != (self.n_params(env),):
+            raise ValueError(f"params must have shape ({self.n_params(env)},), got {p.shape}")
+        self.params = p
+        self.name = "learned (CEM)"
+
+    @staticmethod
+    def n_params(env) -> int:
+        """Length of the parameter vector for ``env``: its number of bands plus 3.
+
+        Parameters
+        ----------
+        env : gymnasium.Env
+            A :class:`vrig.envs.DriveIterationEnv` (or a wrapper of one); its action layout sets the
+            shape of the actions.
+        """
+        return env.unwrapped.layout.n_bands + 3
+
+    @staticmethod
+    def initial(env, gain: float = 0.8) -> np.ndarray:
+        """Parameters of the fixed gain ``gain`` (a starting point for the search).
+
+        Parameters
+        ----------
+        env : gymnasium.Env
+            A :class:`vrig.envs.DriveIterationEnv` (or a wrapper of one); its action layout sets the
+            shape of the actions.
+        gain : float, optional
+            The fixed gain the parameters reproduce.
+        """
+        p = np.zeros(BandRatioPolicy.n_params(env))
+        p[:-3] = np.log(gain)
+        return p
+
+    def gains(self, obs):
+        """The learned per-band gains for this observation (same for every drive channel).
+
+        Parameters
+        ----------
+        obs : dict of str to ndarray
+            The environment's observation (``iteration``, ``band_error``,
+            ``band_error_change``, ...; see :class:`vrig.envs.DriveIterationEnv`).
+        """
+        nb = self.layout.n_bands
+        theta, (alpha, beta, gamma) = self.params[:nb], self.params[nb:]
+        err = np.asarray(obs["band_error"], float).max(axis=0)
+        change = np.asarray(obs["band_error_change"], float).max(axis=0)
+        n = float(obs["iteration"][0])
+        x = theta + alpha * change + beta * (err + 1.0) + gamma * n
+        return np.exp(np.clip(x, -20, 5))[None, :]
+
