@@ -118,7 +118,7 @@ plt.show()
 #
 # Two ways to score a model on the test record:
 #
-# * **one step ahead** (`model.predict(u, y)`): each sample is predicted from the *measured*
+# * **one step ahead** (`model.predict(u, y, steps_ahead=1)`): each sample is predicted from the *measured*
 #   past outputs — the model only ever looks one sample ahead;
 # * **free run** (`model.simulate(u, y0=...)`): the model is started from measured outputs and
 #   then runs on the input alone, feeding back its *own* outputs — what a model is used for in
@@ -144,7 +144,7 @@ def score(model):
 
 def one_step(model):
     p = model.max_lag_
-    pred = model.predict(u[te0 - p : te1], y[te0 - p : te1])[:, 0]
+    pred = model.predict(u[te0 - p : te1], y[te0 - p : te1], steps_ahead=1)[:, 0]
     return rmse_mv(y[te0 + INIT : te1], pred[p + INIT :])
 
 
@@ -154,8 +154,9 @@ print(f"linear ARX, {arx.n_terms_[0]} terms: one step {one_step(arx):.2f} mV, "
 
 # %% [markdown]
 # The linear model predicts one step ahead to a fraction of a millivolt, yet its free run is off
-# by about ten: a one-step score says little about simulation. (SysIdentPy's `predict` is a free
-# run by default; vrig's `predict` is one step ahead — compare like with like.)
+# by about ten: a one-step score says little about simulation. (`predict` takes SysIdentPy's
+# `steps_ahead`: `None` is a free run, the same as `simulate`, `k` a k-step-ahead prediction;
+# SysIdentPy's default is the free run, vrig's is one step ahead — compare like with like.)
 #
 # ## Term selection: forward regression (FROLS)
 #
