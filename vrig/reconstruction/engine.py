@@ -89,11 +89,11 @@ class DriveIteration:
     """One reconstruction, step by step: the engine of :func:`reconstruct` and of the gymnasium
     environments (so a policy's fixed gain reproduces ``reconstruct`` exactly).
 
-    >>> it = DriveIteration(rig, desired, method="arx", seed=0)     # doctest: +SKIP
-    >>> it.identify()                                               # IDDRV -> IDRES -> model
-    >>> drive = it.first_drive()                                    # IT00DRV = inverse(DESRES)
-    >>> drv, raw, res, (eta0, rms, damage) = it.play(drive, 0)      # RIT00RES, IT00RES, scores
-    >>> drive = it.next_drive(drive, res, gain=0.8)                 # IT01DRV
+    >>> it = DriveIteration(rig, desired, method="arx", seed=0)   # doctest: +SKIP
+    >>> it.identify()                             # IDDRV -> IDRES -> model   # doctest: +SKIP
+    >>> drive = it.first_drive()                  # IT00DRV = inverse(DESRES) # doctest: +SKIP
+    >>> drv, raw, res, (eta0, rms, damage) = it.play(drive, 0)  # RIT00RES, IT00RES # doctest: +SKIP
+    >>> drive = it.next_drive(drive, res, gain=0.8)  # IT01DRV                # doctest: +SKIP
 
     ``play`` raises :class:`~vrig.RigLimitError` for a drive beyond the rig's limits *before*
     sending it, or when the rig trips. A drive that was refused or tripped the rig (in ``play``

@@ -46,6 +46,7 @@ def reconstruct(
 ) -> ReconstructionResult:
     """Reproduce ``desired`` on ``rig`` by drive iteration.
 
+    >>> import vrig
     >>> result = vrig.reconstruct(rig, desired, method="narx", gain=0.5, order=4)  # doctest: +SKIP
     >>> settings = vrig.IterationSettings(method="arx", iterations=5, id_seed=1, run_seed=2)
     >>> result = vrig.reconstruct(rig, desired, settings)                          # doctest: +SKIP
