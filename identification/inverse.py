@@ -13,6 +13,7 @@ import copy
 import warnings
 
 import numpy as np
+from scipy.signal import windows
 
 from . import metrics
 from ._validation import as_signal, check_same_length
@@ -394,6 +395,6 @@ class InverseModel:
         k = min(int(run_in), shifted.shape[0] - 1)
         if k <= 0:
             return self.model.simulate(shifted, bound=bound)
-        fade = 0.5 - 0.5 * np.cos(np.pi * np.arange(k) / k)
+        fade = windows.hann(2 * k + 1)[:k]  # the rising half of a raised cosine
         past = shifted[k:0:-1] * fade[:, None]  # times -k .. -1: the record mirrored about 0
         return self.model.simulate(np.concatenate([past, shifted]), bound=bound)[k:]

@@ -78,6 +78,7 @@ from pathlib import Path
 
 import numpy as np
 from scipy import signal
+from scipy.signal import windows
 
 from .timehistory import TimeHistory
 
@@ -172,7 +173,7 @@ def linearity_drives(
     u = random_drive(flat_psd(band), n, fs, channels=n_in, seed=seed).data
     u = (u - u.mean(axis=0)) * rms / np.sqrt(np.mean((u - u.mean(axis=0)) ** 2, axis=0))
     w = np.ones((r + m + n, 1))
-    w[:r, 0] = 0.5 * (1.0 - np.cos(np.pi * np.arange(r) / max(r, 1)))
+    w[:r, 0] = windows.hann(2 * r + 1)[:r]  # the rising half of a raised cosine
     u = u[np.arange(-(r + m), n) % n] * w  # the cyclic continuation, faded in
     b = w * offset
     names = list(names) if names is not None else [f"drive{k + 1}" for k in range(n_in)]

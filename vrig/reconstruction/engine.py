@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 from scipy import signal
+from scipy.signal import windows
 
 from identification.errors import SimulationDivergedError
 
@@ -285,7 +286,7 @@ class DriveIteration:
         y = np.array(gprepro(th, self.id_band, detrend=False).data)
         m = min(round(self.taper * self.rig.fs), self.n // 4)
         if m > 0:
-            ramp = 0.5 - 0.5 * np.cos(np.pi * np.arange(m) / m)
+            ramp = windows.hann(2 * m + 1)[:m]  # the rising half of a raised cosine
             y[:m] *= ramp[:, None]
             y[self.n - m :] *= ramp[::-1, None]
         return y
