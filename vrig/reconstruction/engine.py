@@ -14,6 +14,7 @@ from scipy import signal
 from identification.errors import SimulationDivergedError
 
 from ..errors import RigLimitError, SimulationInstabilityError
+from ..field import default_band
 from ..processing import band_gains, decimate, gprepro, identification_band
 from ..rigs.spec import check_drive_limits
 from ..signals import random_drive, triangular_psd
@@ -121,7 +122,8 @@ class DriveIteration:
             )
         s = self.settings = IterationSettings.build(settings, **options)
         self.rig = rig
-        self.band = _check_band(s.bandwidth if s.bandwidth is not None else rig.bandwidth, rig.fs)
+        band = s.bandwidth if s.bandwidth is not None else default_band(rig)  # side-car's
+        self.band = _check_band(band, rig.fs)
         self.id_band = identification_band(self.band, fs=rig.fs)
         self.method = make_method(s.method, **s.method_options)
         self.decimation = (
