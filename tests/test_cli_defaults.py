@@ -271,3 +271,36 @@ def test_a_plain_numeric_csv_is_refused_with_the_expected_format(tmp_path, capsy
     err = capsys.readouterr().err
     assert code == cli.EXIT_USAGE
     assert "no header row" in err and "time,<name> [<unit>]" in err
+
+
+# --------------------------------------------------------------------------- README alternatives
+@pytest.mark.parametrize(
+    "options",
+    [
+        # README "other methods", each in place of method="arx", order=4
+        {"method": "narx", "order": 4, "degree": 2},
+        {"method": vrig.reconstruction.InverseNarx(4, 2)},
+        {
+            "method": vrig.reconstruction.SplitSpectra(
+                3.0, vrig.reconstruction.InverseNarx(4, 2), vrig.reconstruction.InverseArx(4)
+            )
+        },
+        {"method": "frf"},
+        {"method": "error-signal"},
+    ],
+)
+def test_the_readme_alternative_methods_are_valid_settings(options):
+    s = IterationSettings.build(iterations=5, gain=0.8, bandwidth=(0.0, 10.0), seed=0, **options)
+    vrig.reconstruction.make_method(s.method, **s.method_options)
+
+
+@pytest.mark.parametrize(
+    ("method", "options", "match"),
+    [
+        ("frf", {"order": 4}, r"'frf' takes no option 'order'; its options: nperseg"),
+        ("arx", {"degre": 2}, r"'arx'.*degre"),
+    ],
+)
+def test_an_option_a_method_does_not_take_is_a_value_error(method, options, match):
+    with pytest.raises(ValueError, match=match):
+        vrig.reconstruction.make_method(method, **options)
