@@ -443,7 +443,7 @@ def _method(args, band):
         raise _UsageError("--order applies to arx, narx and split, not frf")
     if args.degree is not None and m not in ("narx", "split", "error-signal"):
         raise _UsageError(
-            "--degree applies to narx, split (a NARX low band) and error-signal, not " + m
+            "--degree applies to narx and split (a NARX low band), and to error-signal; not " + m
         )
     if args.split_hz is not None and m != "split":
         raise _UsageError("--split-hz applies to --method split only")
