@@ -423,15 +423,26 @@ def _defaults(args, rig) -> dict:
         )
     if args.tolerance is not None and not (np.isfinite(args.tolerance) and args.tolerance > 0):
         raise _UsageError(f"--tolerance must be an η0 > 0 [%], got {args.tolerance:g}")
+    taken = []  # what the side-car set, for the note below
     if args.gain is None:
         args.gain = next(g for g in (m.gain, d.gain, DEFAULT_GAIN) if g is not None)
+        taken += [f"gain {args.gain:g}"] if m.gain is not None or d.gain is not None else []
     for name in ("order", "degree", "split_hz", "focus"):  # (no flag for focus)
-        if getattr(args, name, None) is None:
+        if getattr(args, name, None) is None and getattr(m, name) is not None:
             setattr(args, name, getattr(m, name))
+            taken.append(f"{name} {getattr(m, name)}")
+        elif not hasattr(args, name):
+            setattr(args, name, None)
     extra = {"strategy": args.strategy, "tolerance": args.tolerance}
     level = m.id_rms if m.id_rms is not None else d.id_rms
     if level is not None:  # a fraction of each drive's full scale
         extra["id_rms"] = tuple(level * c.full_scale for c in rig.inputs)
+        taken.append(f"identification at {100 * level:g} % of full scale")
+    if taken:
+        print(
+            f"note: the rig's own defaults for {args.method}: {', '.join(taken)} (why: its "
+            "side-car's reconstruction block, models/README.md)"
+        )
     return extra
 
 
