@@ -1,7 +1,7 @@
-"""Issue 15 acceptance: every shipped rig x {arx, narx, split, frf} through ``vrig reconstruct``
-at fast fidelity runs without an interlock trip and without a traceback, exits with a documented
-code, and keeps an iteration where no channel is worse than at IT00 (slow: the whole matrix is
-several minutes; ``python -m benchmarks.cli_matrix`` prints the same table).
+"""Issue 15 acceptance: every shipped rig x {arx, narx, split, frf, error-signal} through
+``vrig reconstruct`` at fast fidelity runs without an interlock trip and without a traceback,
+exits with a documented code, and keeps an iteration where no channel is worse than at IT00 (slow:
+the whole matrix takes minutes; ``python -m benchmarks.cli_matrix`` prints the same table).
 
 A method the rig's side-car marks ``unsupported`` (the reference text reports it failing there)
 must be refused before anything is played, with the failure exit code; every other run must
@@ -29,7 +29,7 @@ def _documented_codes() -> set[int]:
 
 
 def test_every_rig_and_method_runs_from_the_cli_without_a_trip():
-    rows = run_matrix(vrig.list_rigs(), METHODS, "fast", 20.0, jobs=2, quiet=True)
+    rows = run_matrix(vrig.list_rigs(), (*METHODS, "error-signal"), "fast", 20.0, jobs=2, quiet=True)
     print(table(rows))
     codes = _documented_codes()
     problems = []
