@@ -17,7 +17,7 @@ import vrig
 from vrig.envs import ENV_IDS, FALLBACK_TOLERANCE, DriveIterationEnv
 from vrig.field import default_band
 from vrig.rigs import ChannelSpec, FileRig, OutputSubset, RigDefaults
-from vrig.rigs.spec import read_defaults
+from vrig.rigs.spec import MethodDefaults, read_defaults
 
 MODELS = Path(__file__).resolve().parents[1] / "models"
 GENERIC_ID = "vrig/DriveIteration-v0"
@@ -50,11 +50,17 @@ def _user_side_car(tmp_path, rig: str, edit) -> Path:
 def test_rig_defaults_are_the_side_cars_values(name):
     block = _side_cars()[name].get("reconstruction", {})
     gym_block = block.get("gym", {})
+    methods = {
+        method: MethodDefaults(**{k: v for k, v in m.items()})
+        for method, m in block.get("methods", {}).items()
+    }
     want = RigDefaults(
         band=None if "band" not in block else tuple(block["band"]),
         gain=block.get("gain"),
         gym_id=gym_block.get("id"),
         tolerance=gym_block.get("tolerance"),
+        id_rms=block.get("id_rms"),
+        methods=methods,
     )
     rig = vrig.load_rig(name)
     assert rig.defaults == want
@@ -218,7 +224,8 @@ def test_the_env_tolerance_is_the_side_cars(tmp_path):
     assert env.unwrapped.task.tolerance == 7.5
     env.close()
     # a rig whose side-car names none: the global fallback
-    assert "reconstruction" not in json.loads(vrig.rig_path("motorcycle-rear").read_text())
+    side_car = json.loads(vrig.rig_path("motorcycle-rear").read_text())
+    assert "gym" not in side_car.get("reconstruction", {})
     env = gym.make(GENERIC_ID, rig="motorcycle-rear", fast=True)
     assert env.unwrapped.task.tolerance == FALLBACK_TOLERANCE
     env.close()

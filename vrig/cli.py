@@ -32,7 +32,8 @@ kinds ``summary.json``'s ``stop_kind``):
        simulation or model); ``vrig reconstruct``: an error of another kind after IT00 (stop
        kind failed); results that could not be written
 2      bad input: arguments, ``--desired`` files, rig descriptions, results folders that cannot
-       be written, plugins that do not load, ``vrig bench`` without a source checkout
+       be written, plugins that do not load, ``vrig bench`` without a source checkout, a
+       ``--method`` the rig's side-car marks unsupported (the reference text reports it failing)
 3      an unexpected error (a bug: ``VRIG_DEBUG=1`` shows the traceback)
 4      ``vrig reconstruct`` stopped after IT00 on an interlock trip or a refused drive (stop
        kind interlock, refused); the best iteration is kept
@@ -68,7 +69,7 @@ from .field import default_band, pseudo_field
 __all__ = ["EXIT_CODE_MEANINGS", "STOP_EXIT", "ExitCode", "main"]
 
 
-_METHODS = ("arx", "narx", "split", "frf")
+_METHODS = ("arx", "narx", "split", "frf", "error-signal")
 _DEMO_SAMPLES = (2000, 100_000)  # = vrig.demo's MIN/MAX_SAMPLES (454 terms per output)
 DEFAULT_GAIN = 0.8  # reconstruct's iteration gain unless the rig's side-car names its own
 _MAX_SECONDS = 3600.0  # longest record a command plays or reconstructs (--seconds, --desired)
@@ -222,37 +223,22 @@ def _add_reconstruct_parser(sub) -> None:
         epilog=_EXIT_CODES,
     )
     rec.add_argument("--rig", required=True, help="rig name (see `vrig rigs`) or rig file")
-    rec.add_argument(
-        "--method",
-        choices=_METHODS,
-        default="arx",
-        help="inverse model: arx (QanTiM), narx, split (split spectra), frf (H1, RPC-style); "
-        "default arx",
-    )
-    rec.add_argument("--order", type=int, help="model order (arx/narx/split; default 4)")
-    rec.add_argument(
-        "--degree",
-        type=int,
-        help="NARX polynomial degree (narx: default 2; split: makes the low band NARX)",
-    )
-    rec.add_argument(
-        "--split-hz",
-        type=float,
-        help="split frequency [Hz] (split; default: geometric mean of the band, or a quarter of "
-        "its upper edge for a band from 0 Hz)",
-    )
+    _add_model_arguments(rec)
     rec.add_argument(
         "--desired",
         metavar="FILE",
         help="desired response (.rsp/.drv/.tim RPC III, .csv, .mat, .npz) with the rig's "
-        "response channels at the rig's sample rate",
+        "response channels (`vrig describe RIG`) at the rig's sample rate. CSV: UTF-8, a header "
+        "row 'time,<name> [<unit>],...' (first column time [s], uniformly spaced: it gives the "
+        "sample rate; one column per response, matched by name, else by position), then one "
+        "row of numbers per sample, comma-separated; a file without the header row is refused",
     )
     rec.add_argument("--iterations", type=int, default=5, help="iterations after IT00 (default 5)")
     rec.add_argument(
         "--gain",
         type=float,
-        help=f"iteration gain in (0, 2] (default: the rig side-car's reconstruction.gain, else "
-        f"{DEFAULT_GAIN:g})",
+        help=f"iteration gain in (0, 2] (default: the rig side-car's "
+        f"reconstruction.methods.METHOD.gain, else reconstruction.gain, else {DEFAULT_GAIN:g})",
     )
     rec.add_argument(
         "--band",
@@ -279,6 +265,52 @@ def _add_reconstruct_parser(sub) -> None:
     rec.add_argument("--out", help="results folder (default ./results/<rig>-<method>)")
     rec.add_argument(
         "--overwrite", action="store_true", help="replace the records of an existing results folder"
+    )
+
+
+def _add_model_arguments(rec) -> None:
+    """Add ``reconstruct``'s inverse-model and iteration-strategy options (defaults: the rig
+    side-car's ``reconstruction`` block, :func:`_defaults`)."""
+    rec.add_argument(
+        "--method",
+        choices=_METHODS,
+        default="arx",
+        help="inverse model: arx (QanTiM), narx, split (split spectra), frf (H1, RPC-style), "
+        "error-signal (ARX + NARX of its drive error, §5.5.4); default arx. A method the "
+        "reference text reports as failing on the rig is refused (the rig's side-car: "
+        "reconstruction.methods.METHOD.unsupported, models/README.md)",
+    )
+    rec.add_argument(
+        "--order",
+        type=int,
+        help="model order (arx/narx/split/error-signal; default: the rig side-car's "
+        "reconstruction.methods.METHOD.order, else 4; error-signal: 3)",
+    )
+    rec.add_argument(
+        "--degree",
+        type=int,
+        help="NARX polynomial degree (narx: default 2; split: makes the low band NARX; "
+        "error-signal: of the error NARX, default 2)",
+    )
+    rec.add_argument(
+        "--split-hz",
+        type=float,
+        help="split frequency [Hz] (split; default: the rig side-car's, else the geometric mean "
+        "of the band, or a quarter of its upper edge for a band from 0 Hz)",
+    )
+    rec.add_argument(
+        "--strategy",
+        choices=("fixed", "adaptive"),
+        default="fixed",
+        help="fixed: one inverse model for the whole iteration (QanTiM; default); adaptive: "
+        "re-identified from the latest drive and response before every update",
+    )
+    rec.add_argument(
+        "--tolerance",
+        type=float,
+        metavar="PCT",
+        help="stop as soon as every channel's η0 [%%] is at or below PCT (default: play all "
+        "--iterations)",
     )
 
 
@@ -448,26 +480,70 @@ def _check_content(desired, rig) -> None:
             )
 
 
+def _defaults(args, rig) -> dict:
+    """Fill the ``reconstruct`` options the user did not give from the rig's side-car
+    (``rig.defaults``: ``reconstruction.methods.METHOD`` first, then ``reconstruction``), else
+    the global defaults; returns the further :class:`~vrig.IterationSettings` options
+    (``strategy``, ``tolerance``, ``id_rms`` in drive units).
+
+    A method the side-car marks ``unsupported`` (the reference text reports it failing on the
+    rig) is refused here, before anything runs: one line, the failure exit code."""
+    d = rig.defaults
+    m = d.method(args.method)
+    if m.unsupported:
+        raise _UsageError(
+            f"--method {args.method} is not offered on rig {rig.name!r}: {m.unsupported} "
+            "(models/<rig>/<rig>.rig.json reconstruction.methods)"
+        )
+    if args.tolerance is not None and not (np.isfinite(args.tolerance) and args.tolerance > 0):
+        raise _UsageError(f"--tolerance must be an η0 > 0 [%], got {args.tolerance:g}")
+    taken = []  # what the side-car set, for the note below
+    if args.gain is None:
+        args.gain = next(g for g in (m.gain, d.gain, DEFAULT_GAIN) if g is not None)
+        taken += [f"gain {args.gain:g}"] if m.gain is not None or d.gain is not None else []
+    for name in ("order", "degree", "split_hz", "focus"):  # (no flag for focus)
+        if getattr(args, name, None) is None and getattr(m, name) is not None:
+            setattr(args, name, getattr(m, name))
+            taken.append(f"{name} {getattr(m, name)}")
+        elif not hasattr(args, name):
+            setattr(args, name, None)
+    extra = {"strategy": args.strategy, "tolerance": args.tolerance}
+    level = m.id_rms if m.id_rms is not None else d.id_rms
+    if level is not None:  # a fraction of each drive's full scale
+        extra["id_rms"] = tuple(level * c.full_scale for c in rig.inputs)
+        taken.append(f"identification at {100 * level:g} % of full scale")
+    if taken:
+        print(
+            f"note: the rig's own defaults for {args.method}: {', '.join(taken)} (why: its "
+            "side-car's reconstruction block, models/README.md)"
+        )
+    return extra
+
+
 def _method(args, band):
-    from .reconstruction import InverseArx, InverseNarx, SplitSpectra
+    from .reconstruction import InverseArx, InverseErrorSignal, InverseNarx, SplitSpectra
 
     m = args.method
     if args.order is not None and m == "frf":
         raise _UsageError("--order applies to arx, narx and split, not frf")
-    if args.degree is not None and m not in ("narx", "split"):
-        raise _UsageError("--degree applies to narx and split (a NARX low band), not " + m)
+    if args.degree is not None and m not in ("narx", "split", "error-signal"):
+        raise _UsageError(
+            "--degree applies to narx and split (a NARX low band), and to error-signal; not " + m
+        )
     if args.split_hz is not None and m != "split":
         raise _UsageError("--split-hz applies to --method split only")
-    order = 4 if args.order is None else args.order
+    order = (3 if m == "error-signal" else 4) if args.order is None else args.order
     if not 1 <= order <= 20:
         raise _UsageError(f"--order must be 1..20, got {order}")
     if args.degree is not None and not 1 <= args.degree <= 5:
         raise _UsageError(f"--degree must be 1..5, got {args.degree}")
     if m == "arx":
         return InverseArx(order), f"arx order {order}"
+    focus = getattr(args, "focus", None) or "prediction"  # the side-car's (_defaults)
+    fit = "" if focus == "prediction" else f", {focus} focus"
     if m == "narx":
         degree = 2 if args.degree is None else args.degree
-        return InverseNarx(order, degree), f"narx order {order} degree {degree}"
+        return InverseNarx(order, degree, focus=focus), f"narx order {order} degree {degree}{fit}"
     if m == "split":
         lo, hi = band
         split = args.split_hz
@@ -482,6 +558,12 @@ def _method(args, band):
         return (
             SplitSpectra(split, low=low, high=InverseArx(order)),
             f"split spectra at {split:g} Hz (low {kind} order {order}, high arx order {order})",
+        )
+    if m == "error-signal":
+        degree = 2 if args.degree is None else args.degree
+        return InverseErrorSignal(order, 2, degree, focus=focus), (
+            f"error-signal (arx order {order} + narx order 2 degree {degree} of its drive "
+            f"error{fit})"
         )
     return "frf", "frf (H1, truncated-SVD/Tikhonov inverse)"
 
@@ -589,8 +671,7 @@ def _cmd_reconstruct(args) -> int:
     _check_reconstruct_args(args)
     status(f"loading rig {args.rig} (building its simulation) ...")
     rig = _load_rig(args.rig, seed=args.seed)
-    if args.gain is None:  # the rig's own default (side-car "reconstruction"), else the global one
-        args.gain = DEFAULT_GAIN if rig.defaults.gain is None else rig.defaults.gain
+    extra = _defaults(args, rig)  # the rig side-car's defaults for what the user did not give
     band = _band(rig, args.band)
     method, method_text = _method(args, band)
     out = _out_dir(args.out, f"{Path(rig.name).stem}-{args.method}", args.overwrite)
@@ -612,9 +693,10 @@ def _cmd_reconstruct(args) -> int:
         "iterations": args.iterations,
         "seed": args.seed,
         "desired": source,
+        **{k: v for k, v in extra.items() if k != "id_rms"},
     }
     save = {"field": field, "records": records, "settings": settings}
-    result = _reconstruct(rig, field, method, band, args, out, save)
+    result = _reconstruct(rig, field, method, band, args, out, save, extra)
     _print_result(result, args)
     _save(result, out, rig, args, save)
     print(f"time       {time.perf_counter() - t_start:.1f} s")
@@ -629,9 +711,10 @@ def _cmd_reconstruct(args) -> int:
     return code
 
 
-def _reconstruct(rig, field, method, band, args, out: Path, save: dict):
+def _reconstruct(rig, field, method, band, args, out: Path, save: dict, extra: dict):
     """Run the reconstruction; a failure before IT00 saves what was made and raises
-    :class:`_Failure` (exit code 7)."""
+    :class:`_Failure` (exit code 7). ``extra``: further settings (strategy, tolerance, the rig's
+    identification level) from :func:`_defaults`."""
     from .errors import ReconstructionError
     from .progress import is_enabled
     from .reconstruction import IterationSettings, reconstruct
@@ -644,6 +727,7 @@ def _reconstruct(rig, field, method, band, args, out: Path, save: dict):
             bandwidth=band,
             id_seed=args.seed,
             run_seed=args.seed,
+            **extra,
         )
         return reconstruct(rig, field, iteration, progress=is_enabled())
     except ValueError as exc:  # e.g. a desired record too short for the model: bad input

@@ -98,6 +98,15 @@ def _csv_text(path: Path) -> str:
         ) from None
 
 
+def _numbers(columns: list[str]) -> bool:
+    """True when every field of a row is a number (a data row where the header should be)."""
+    try:
+        [float(c) for c in columns]
+    except ValueError:
+        return False
+    return True
+
+
 def _csv_header(lines: list[str], src: str) -> tuple[list[str], list[str], list[str]]:
     """The header row's columns and the channel names and units (``"-"`` without ``[unit]``)."""
     if not lines or not lines[0].strip():
@@ -110,6 +119,14 @@ def _csv_header(lines: list[str], src: str) -> tuple[list[str], list[str], list[
         raise FileFormatError(src, _CSV, f"unreadable header row: {exc}") from None
     first = _COLUMN.match(columns[0])
     first_name = (first.group(1) if first else columns[0]).strip().lower()
+    if _numbers(columns):
+        raise FileFormatError(
+            src,
+            _CSV,
+            f"no header row (the first row is numbers: {lines[0][:80]!r}); a CSV time history "
+            "starts with the header row time,<name> [<unit>],... (time in s, one column per "
+            "channel) and then one row per sample, uniformly spaced",
+        )
     if first_name != "time" or len(columns) < 2:
         raise FileFormatError(
             src, _CSV, f"the header row must be time,<name> [<unit>],..., got {lines[0][:80]!r}"

@@ -15,6 +15,7 @@ from scipy.signal import windows
 from identification.errors import SimulationDivergedError
 
 from ..errors import RigLimitError, SimulationInstabilityError
+from ..field import default_band
 from ..processing import band_gains, decimate, gprepro, identification_band
 from ..progress import status
 from ..rigs.limits import check_drive_limits
@@ -132,7 +133,8 @@ class DriveIteration:
             )
         s = self.settings = IterationSettings.build(settings, **options)
         self.rig = rig
-        self.band = _check_band(s.bandwidth if s.bandwidth is not None else rig.bandwidth, rig.fs)
+        band = s.bandwidth if s.bandwidth is not None else default_band(rig)  # side-car's
+        self.band = _check_band(band, rig.fs)
         self.id_band = identification_band(self.band, fs=rig.fs)
         self.method = make_method(s.method, **s.method_options)
         self.decimation = (

@@ -30,7 +30,7 @@ from ..errors import ReconstructionError, RigLimitError, SimulationInstabilityEr
 from ..progress import enabled_if
 from ..timehistory import TimeHistory
 from .engine import DriveIteration
-from .result import ReconstructionResult
+from .result import ReconstructionResult, best_iteration
 from .settings import MAX_ITERATIONS, IterationSettings
 
 __all__ = ["MAX_ITERATIONS", "reconstruct"]
@@ -69,7 +69,8 @@ def reconstruct(
         Settings by name on top of ``settings``: ``method`` (``"arx"``, ``"narx"``, ``"split"``,
         ``"frf"``, ``"error-signal"`` or a method object), ``iterations``, ``gain``,
         ``strategy``, ``bandwidth``, ``id_duration``, ``id_rms``, ``id_psd``, ``decimation``,
-        ``taper``, ``id_seed``, ``run_seed``, ``divergence``, ``min_increase``; ``seed`` sets
+        ``taper``, ``id_seed``, ``run_seed``, ``divergence``, ``min_increase``,
+        ``tolerance``; ``seed`` sets
         both seeds; any other name is a method option (``order``, ``degree``, ``split_hz``, ...).
         See :class:`~vrig.reconstruction.IterationSettings` for their meaning and defaults.
 
@@ -188,8 +189,9 @@ def _first_drive(engine: DriveIteration, result: ReconstructionResult) -> np.nda
 
 def _iterate(engine: DriveIteration, result, drive, gain, bar) -> None:
     """The loop of :func:`reconstruct` from IT00 on: fills ``result`` until the last iteration,
-    divergence (``engine.settings``' ``divergence`` and ``min_increase``) or the first error
-    after IT00."""
+    divergence (``engine.settings``' ``divergence`` and ``min_increase``, against the lowest mean
+    η0 so far), the tolerance (``tolerance``: every channel's η0 at or below it) or the first
+    error after IT00. The kept iteration follows :func:`~.result.best_iteration`."""
     s = engine.settings
     iterations, divergence, min_increase = s.iterations, s.divergence, s.min_increase
     errs, rmss, dmgs = [], [], []
@@ -215,14 +217,20 @@ def _iterate(engine: DriveIteration, result, drive, gain, bar) -> None:
             np.array(dmgs),
         )
         means = result.errors.mean(axis=1)
-        result.best_iteration = int(np.argmin(np.where(np.isnan(means), np.inf, means)))
+        result.best_iteration = best_iteration(result.errors)
         bar.update(1)
-        best = means[result.best_iteration]
+        best = np.min(np.where(np.isnan(means), np.inf, means))  # divergence: the lowest mean
         if means[-1] > divergence * best and means[-1] - best > min_increase:
             result.stopped = (
                 f"IT{it:02d}: diverging (mean η0 {means[-1]:.1f} % > {divergence} x best)"
             )
             result.stop_kind = "diverged"
+            break
+        if s.tolerance is not None and np.all(e <= s.tolerance):  # NaN never meets it
+            result.stopped = (
+                f"IT{it:02d}: converged (every channel's η0 <= the tolerance {s.tolerance:g} %)"
+            )
+            result.stop_kind = "converged"
             break
         if it == iterations:
             break

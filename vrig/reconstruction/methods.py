@@ -22,6 +22,7 @@ Tikhonov per frequency line: the MTS RPC / Simcenter TWR baseline).
 
 from __future__ import annotations
 
+import inspect
 from collections.abc import Mapping
 
 import numpy as np
@@ -624,4 +625,18 @@ def make_method(method, **options):
         cls = METHODS[method]
     except (KeyError, TypeError):
         raise ValueError(f"unknown method {method!r}; choose one of {sorted(METHODS)}") from None
-    return cls(**options)
+    params = inspect.signature(cls).parameters
+    if not any(p.kind is p.VAR_KEYWORD for p in params.values()):
+        unknown = sorted(set(options) - set(params))
+        if unknown:
+            takes = [n for n, p in params.items() if p.kind not in (p.VAR_POSITIONAL,)]
+            raise ValueError(
+                f"method {method!r} takes no option {', '.join(map(repr, unknown))}; its options: "
+                f"{', '.join(takes) or 'none'}"
+            )
+    try:
+        return cls(**options)
+    except TypeError as exc:  # an option the class's base does not take either
+        if "keyword argument" not in str(exc):
+            raise
+        raise ValueError(f"method {method!r}: {exc}") from None

@@ -9,7 +9,7 @@ import numpy as np
 from ..timehistory import TimeHistory
 from .settings import IterationSettings
 
-__all__ = ["STOP_KINDS", "ReconstructionResult"]
+__all__ = ["STOP_KINDS", "ReconstructionResult", "best_iteration"]
 
 STOP_KINDS = (
     "completed",
@@ -58,8 +58,13 @@ class ReconstructionResult:
     drives, responses, raw_responses : list of TimeHistory
         ITxxDRV, ITxxRES (processed) and RITxxRES (raw) per iteration.
     best_iteration : int
-        Iteration with the smallest mean η0; ``final_drive``/``final_response`` are its records.
-        ``-1`` when no iteration was played (the result of a :class:`~vrig.ReconstructionError`).
+        The iteration kept (:func:`best_iteration`): the smallest mean η0 among the iterations
+        where no channel's η0 exceeds its IT00 value (IT00 itself always qualifies), so a better
+        mean bought by making one channel worse than the model's first drive is never the one
+        kept (a test engineer signs off per channel: a channel worse than IT00 means the
+        iteration damaged what the inverse model got right). ``final_drive``/``final_response``
+        are its records. ``-1`` when no iteration was played (the result of a
+        :class:`~vrig.ReconstructionError`).
     id_drive, id_response : TimeHistory or None
         IDDRV and IDRES (raw); ``None`` when the identification drive could not be played.
     stopped : str
@@ -133,3 +138,33 @@ class ReconstructionResult:
                 + f" {e.mean():>7.2f}%{mark}"
             )
         return "\n".join(rows)
+
+
+def best_iteration(errors) -> int:
+    """The iteration a reconstruction keeps: the smallest mean η0 among the iterations where no
+    channel's η0 exceeds its IT00 value; IT00 itself always qualifies.
+
+    A NaN η0 disqualifies its iteration (IT00 is then kept unless a later iteration has finite
+    values that are all <= IT00's; a NaN at IT00 compares as +inf). Ties go to the earliest
+    iteration.
+
+    Parameters
+    ----------
+    errors : array_like (n_iterations_run + 1, n_outputs)
+        η0 [%] per iteration (IT00 first) and channel.
+
+    Returns
+    -------
+    int
+        The index of the iteration (0 = IT00); -1 for an empty ``errors``.
+    """
+    e = np.asarray(errors, dtype=float)
+    if e.ndim != 2:
+        raise ValueError(f"errors must be (iterations, channels), got shape {e.shape}")
+    if e.shape[0] == 0:
+        return -1
+    first = np.where(np.isnan(e[0]), np.inf, e[0])
+    ok = np.all(e <= first, axis=1)  # NaN compares False: disqualified
+    ok[0] = True
+    means = np.where(ok, np.nan_to_num(e.mean(axis=1), nan=np.inf), np.inf)
+    return int(np.argmin(means))

@@ -69,7 +69,9 @@ class IterationSettings:
     strategy : {"fixed", "adaptive"}
         See :data:`STRATEGIES`.
     bandwidth : (low, high) Hz, optional
-        Simulation band applied to every record (default: the rig's test band).
+        Simulation band applied to every record (default: :func:`vrig.field.default_band`, the
+        rig side-car's ``reconstruction.band`` where it names one, else the rig's test band
+        ``rig.bandwidth`` -- the band the CLI, the pseudo-field responses and the envs use).
     id_duration : float, optional
         Identification drive length [s] (default: the desired record's).
     id_rms : float or sequence of float, optional
@@ -92,6 +94,10 @@ class IterationSettings:
         never) ...
     min_increase : float
         ... and by more than ``min_increase`` percentage points.
+    tolerance : float, optional
+        Stop as soon as every channel's η0 is at or below ``tolerance`` [%] (``result.stopped``
+        says "converged"); ``None`` (default): play all ``iterations``. The iteration kept is
+        still chosen by :func:`~vrig.reconstruction.result.best_iteration`.
     """
 
     method: Any = "arx"
@@ -109,6 +115,7 @@ class IterationSettings:
     run_seed: int | None = None
     divergence: float = 1.5
     min_increase: float = 1.0
+    tolerance: float | None = None
 
     def __post_init__(self):
         put = object.__setattr__
@@ -134,6 +141,14 @@ class IterationSettings:
         if not (isinstance(self.min_increase, (int, float, np.number)) and self.min_increase >= 0):
             raise ValueError(
                 f"min_increase must be >= 0 percentage points, got {self.min_increase!r}"
+            )
+        tol = self.tolerance
+        if tol is not None and not (
+            isinstance(tol, (int, float, np.number)) and not isinstance(tol, bool)
+            and np.isfinite(tol) and tol > 0
+        ):
+            raise ValueError(
+                f"tolerance must be a finite η0 > 0 [%] (or None: no tolerance stop), got {tol!r}"
             )
         try:
             gain = np.asarray(self.gain, dtype=float)

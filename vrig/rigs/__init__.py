@@ -16,7 +16,7 @@ from .file_rig import FileRig
 from .hydraulics import HydraulicActuator
 from .mujoco_rig import FAST_MARGIN, MujocoRig, _models_dir
 from .protocol import DescribedRig, Rig
-from .spec import ChannelSpec, RigDefaults, read_description
+from .spec import ChannelSpec, MethodDefaults, RigDefaults, read_description
 from .subset import OutputSubset
 
 __all__ = [
@@ -27,6 +27,7 @@ __all__ = [
     "DescribedRig",
     "FileRig",
     "HydraulicActuator",
+    "MethodDefaults",
     "MujocoRig",
     "OutputSubset",
     "Rig",

@@ -12,8 +12,10 @@ import contextlib
 import functools
 import json
 import math
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
+from types import MappingProxyType
 
 import jsonschema
 
@@ -29,6 +31,7 @@ __all__ = [
     "SEVERITY_LAWS",
     "SEVERITY_RANGE",
     "ChannelSpec",
+    "MethodDefaults",
     "Parameter",
     "RigDefaults",
     "RigDescription",
@@ -233,6 +236,44 @@ class OutputDef:
 
 
 @dataclass(frozen=True)
+class MethodDefaults:
+    """A rig's defaults for one reconstruction method (side-car
+    ``"reconstruction": {"methods": {NAME: {...}}}``); ``None``: not set (the rig's or the
+    global default applies).
+
+    Attributes
+    ----------
+    description : str
+        Why these values (what the global ones do on this rig), or what the reference text
+        reports when the method is ``unsupported``.
+    order, degree : int or None
+        Model order and NARX degree (``vrig reconstruct``'s ``--order`` / ``--degree``).
+    focus : str or None
+        ``"prediction"`` or ``"simulation"``: the fit of a NARX inverse (``narx``,
+        ``error-signal``; :class:`~vrig.reconstruction.InverseNarx`).
+    split_hz : float or None
+        Split frequency [Hz] of ``split`` (``--split-hz``).
+    gain : float or None
+        Iteration gain in (0, 2] for this method (wins over the rig's ``gain``).
+    id_rms : float or None
+        Identification drive RMS as a fraction of each drive's full scale, in (0, 0.5] (wins
+        over the rig's ``id_rms``).
+    unsupported : str or None
+        The method does not work on this rig by the reference text (the sentence that says so):
+        ``vrig reconstruct`` refuses it in one line instead of running it into a trip.
+    """
+
+    description: str = ""
+    order: int | None = None
+    degree: int | None = None
+    focus: str | None = None
+    split_hz: float | None = None
+    gain: float | None = None
+    id_rms: float | None = None
+    unsupported: str | None = None
+
+
+@dataclass(frozen=True)
 class RigDefaults:
     """A rig's own defaults where they differ from the global ones (side-car
     ``"reconstruction"``; ``rig.defaults`` of a rig built from a side-car).
@@ -254,12 +295,33 @@ class RigDefaults:
     tolerance : float or None
         Default η0 tolerance [%] of the drive-iteration env on this rig, measured by the rule
         stated in :mod:`vrig.envs` (global default 2 %).
+    id_rms : float or None
+        Identification drive RMS of ``vrig reconstruct`` as a fraction of each drive's full
+        scale, in (0, 0.5] (global default 0.05).
+    methods : mapping of str to MethodDefaults
+        Per-method defaults of ``vrig reconstruct`` (:meth:`method`); empty when none is set.
     """
 
     band: tuple[float, float] | None = None
     gain: float | None = None
     gym_id: str | None = None
     tolerance: float | None = None
+    id_rms: float | None = None
+    methods: Mapping[str, MethodDefaults] = field(default_factory=lambda: MappingProxyType({}))
+
+    def method(self, name: str) -> MethodDefaults:
+        """The defaults of method ``name`` (empty :class:`MethodDefaults` when none are set).
+
+        Parameters
+        ----------
+        name : str
+            A method name (``"arx"``, ``"narx"``, ``"split"``, ``"frf"``, ``"error-signal"``).
+
+        Returns
+        -------
+        MethodDefaults
+        """
+        return self.methods.get(name, MethodDefaults())
 
 
 @dataclass(frozen=True)
@@ -736,11 +798,32 @@ def _read_defaults(raw: dict, fs: float, where: str) -> RigDefaults:
     block = raw.get("reconstruction", {})
     gym = block.get("gym", {})
     band = block.get("band")
+    methods = {}
+    for name, m in block.get("methods", {}).items():
+        methods[name] = MethodDefaults(
+            description=m["description"],
+            order=m.get("order"),
+            degree=m.get("degree"),
+            focus=m.get("focus"),
+            split_hz=None if "split_hz" not in m else float(m["split_hz"]),
+            gain=None if "gain" not in m else float(m["gain"]),
+            id_rms=None if "id_rms" not in m else float(m["id_rms"]),
+            unsupported=m.get("unsupported"),
+        )
+        split = methods[name].split_hz
+        if split is not None and not 0 < split < fs / 2:
+            allowed = f"0 < split_hz < fs/2 = {fs / 2:g} Hz"
+            key = f"reconstruction.methods.{name}.split_hz"
+            raise RigParameterError(
+                f"{where}: {key} must be {allowed}, got {split:g}", key, split, allowed
+            )
     return RigDefaults(
         band=None if band is None else _band(band, fs, where, "reconstruction.band"),
         gain=None if "gain" not in block else float(block["gain"]),
         gym_id=gym.get("id"),
         tolerance=None if "tolerance" not in gym else float(gym["tolerance"]),
+        id_rms=None if "id_rms" not in block else float(block["id_rms"]),
+        methods=MappingProxyType(methods),
     )
 
 
