@@ -158,7 +158,8 @@ def test_ci_runs_the_wheel_check():
     script = ROOT / ".ci" / "wheel_check.sh"
     assert script.is_file()
     run = (ROOT / ".ci" / "run").read_text()
-    assert re.search(r"^bash \.ci/wheel_check\.sh\b", run, re.M), "the wheel check is not in CI"
+    assert re.search(r"^\s*bash \.ci/wheel_check\.sh\b", run, re.M), "the wheel check is not in CI"
+    assert "mkdocs build --strict" in run, "the docs build is not in CI"
     body = script.read_text()
     for command in (
         '"$VRIG" --version',
