@@ -563,8 +563,8 @@ def test_ctrl_c_during_vrig_bench_exits_130_with_one_line(tmp_path):
     (runner / "cli.py").write_text(
         "import sys, time\n"
         "def main(argv, prog=None):\n"
-        "    print('benchmark: running', flush=True)\n"
         "    try:\n"
+        "        print('benchmark: running', flush=True)\n"
         "        time.sleep(60)\n"
         "    except KeyboardInterrupt:\n"
         "        print(f'{prog} run: interrupted', file=sys.stderr)\n"
