@@ -96,10 +96,8 @@ class Settings:
     def __post_init__(self):
         if not (math.isfinite(self.seconds) and 4 <= self.seconds <= 3600):
             raise ValueError(f"seconds must be 4..3600, got {self.seconds}")
-        if not 0 <= self.iterations <= 99:
-            raise ValueError(f"iterations must be 0..99, got {self.iterations}")
-        if not 0 < self.gain <= 2:
-            raise ValueError(f"gain must lie in (0, 2], got {self.gain}")
+        # the iteration's own checks (one place): iterations 0..MAX_ITERATIONS, gain in (0, 2]
+        IterationSettings(iterations=self.iterations, gain=self.gain)
         if self.fidelity not in ("full", "fast"):
             raise ValueError(f"fidelity must be 'full' or 'fast', got {self.fidelity!r}")
         if not 0.1 <= self.holdout <= 0.5:
