@@ -743,14 +743,26 @@ class MujocoRig:
                         results[i] = exc
                     shown.update(1)
                 return
-            free = queue.SimpleQueue()
-            for d in self._batch_data(workers):
-                free.put(d)
-            cancel = threading.Event()
+            self._play_threaded(jobs, chunk, workers, results, shown)
+        finally:
+            shown.close()
 
-            def play(x, valve_rng, daq_rng):
+    def _play_threaded(self, jobs, chunk: int, workers: int, results: list, shown) -> None:
+        """:meth:`_play_jobs` on ``workers`` threads. Whatever happens in the calling thread
+        (Ctrl-C lands there), it returns only once no run is active any more: the executor's
+        own shutdown cannot be trusted for that (an interrupt inside ``submit`` can start a
+        worker thread that it never records, and never joins)."""
+        free = queue.SimpleQueue()
+        for d in self._batch_data(workers):
+            free.put(d)
+        cancel, state, active = threading.Event(), threading.Condition(), [0]
+
+        def play(x, valve_rng, daq_rng):
+            with state:
                 if cancel.is_set():
                     raise _Cancelled
+                active[0] += 1
+            try:
                 d = free.get()  # as many data as threads: one is always free
                 try:
                     return self._responses(
@@ -758,21 +770,23 @@ class MujocoRig:
                     )
                 finally:
                     free.put(d)
-
-            pool = ThreadPoolExecutor(workers, thread_name_prefix=f"vrig-{self.name}")
-            try:
-                futures = {pool.submit(play, *job[1:]): job[0] for job in jobs}
-                for f in as_completed(futures):
-                    exc = f.exception()
-                    results[futures[f]] = f.result() if exc is None else exc
-                    shown.update(1)
-            except BaseException:
-                cancel.set()
-                raise
             finally:
-                pool.shutdown(wait=True, cancel_futures=True)
+                with state:
+                    active[0] -= 1
+                    state.notify_all()
+
+        pool = ThreadPoolExecutor(workers, thread_name_prefix=f"vrig-{self.name}")
+        try:
+            futures = {pool.submit(play, *job[1:]): job[0] for job in jobs}
+            for f in as_completed(futures):
+                exc = f.exception()
+                results[futures[f]] = f.result() if exc is None else exc
+                shown.update(1)
         finally:
-            shown.close()
+            with state:  # no run starts from here on; the active ones stop after their chunk
+                cancel.set()
+                state.wait_for(lambda: active[0] == 0)
+            pool.shutdown(wait=True, cancel_futures=True)
 
     def _batch_data(self, n: int) -> list:
         """``n`` MjData for a batch: the rig's own and ``n - 1`` clones (made on first use and
