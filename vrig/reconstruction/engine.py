@@ -25,7 +25,11 @@ from .methods import make_method
 from .scores import scores
 from .settings import IterationSettings
 
-__all__ = ["DriveIteration"]
+__all__ = ["DriveIteration", "play_batch"]
+
+_PLAY_ERRORS = (RigLimitError, SimulationInstabilityError, SimulationDivergedError)
+"""What :func:`play_batch` returns in a drive's slot (what :meth:`DriveIteration.play` raises
+for a drive the rig refuses, trips on or cannot simulate)."""
 
 
 def _check_drive(rig, drive: np.ndarray, what: str) -> None:
@@ -327,9 +331,16 @@ class DriveIteration:
         scores : (eta0, rms_error, damage_ratio)
             Per response channel (:func:`~vrig.reconstruction.scores.scores`).
         """
-        what = f"IT{iteration:02d}DRV"
-        run_seed = self.settings.rig_run_seed + 1 + iteration
-        drv, raw = self._send(drive, f"{iteration:02d}", what, run_seed)
+        tag, what, run_seed = self._play_names(iteration)
+        drv, raw = self._send(drive, tag, what, run_seed)
+        return self._processed(drv, raw)
+
+    def _play_names(self, iteration: int) -> tuple[str, str, int]:
+        """(tag ``xx``, record name ``ITxxDRV``, rig run seed ``run_seed + 1 + xx``)."""
+        return f"{iteration:02d}", f"IT{iteration:02d}DRV", self.settings.rig_run_seed + 1 + iteration
+
+    def _processed(self, drv: TimeHistory, raw: TimeHistory):
+        """(ITxxDRV, RITxxRES, ITxxRES, scores) of a played drive (see :meth:`play`)."""
         res = gprepro(raw, self.band)
         return drv, raw, res, scores(self.desres, res)
 
@@ -337,6 +348,17 @@ class DriveIteration:
         """Check ``drive`` (TimeHistory or array) against the limits and play it; returns
         (drive as TimeHistory, raw response). A refused drive or one that trips the rig (an
         interlock, an unstable simulation) is kept in ``rejected`` before the error goes on."""
+        drv = self._checked(drive, tag, what)
+        try:
+            raw = self.rig.run(drv, seed=seed)
+        except (RigLimitError, SimulationInstabilityError):
+            self.rejected = (f"TRIPPED{tag}", drv)
+            raise
+        return drv, raw
+
+    def _checked(self, drive, tag: str, what: str) -> TimeHistory:
+        """``drive`` as a TimeHistory once checked against the limits (the first half of
+        :meth:`_send`: ``rejected`` cleared, a refused finite drive kept as ``REFUSEDxx``)."""
         self.rejected = None
         data = drive.data if isinstance(drive, TimeHistory) else np.asarray(drive, dtype=float)
         drv = None
@@ -347,12 +369,7 @@ class DriveIteration:
         except RigLimitError:
             self.rejected = None if drv is None else (f"REFUSED{tag}", drv)
             raise
-        try:
-            raw = self.rig.run(drv, seed=seed)
-        except (RigLimitError, SimulationInstabilityError):
-            self.rejected = (f"TRIPPED{tag}", drv)
-            raise
-        return drv, raw
+        return drv
 
     def _th(self, data: np.ndarray) -> TimeHistory:
         return TimeHistory(data, self.rig.fs, self.names, self.units)
@@ -398,3 +415,80 @@ class DriveIteration:
                 raise ValueError("per-band gains need the band edges")
             return drive + band_gains(corr, self.rig.fs, g, edges)
         return drive + np.broadcast_to(g, (self.n_inputs,)) * corr
+
+
+def play_batch(engines, drives, iterations, *, threads: int | None = None) -> list:
+    """:meth:`DriveIteration.play` of many engines on one rig, their rig runs in one batch
+    (:func:`vrig.rigs.run_batch`: across threads on a MuJoCo rig).
+
+    Each engine (its own desired response and run seed) plays one drive; slot ``i`` is what
+    ``engines[i].play(drives[i], iterations[i])`` returns, bit for bit, or the exception it
+    raises (:class:`~vrig.RigLimitError`, :class:`~vrig.errors.SimulationInstabilityError`,
+    :class:`~identification.SimulationDivergedError`), with the same ``rejected`` bookkeeping
+    (``REFUSEDxx`` / ``TRIPPEDxx``) on each engine. Any other error (e.g. a drive of the wrong
+    shape) is raised, the first one's (lowest index), once every drive has been played.
+
+    Parameters
+    ----------
+    engines : sequence of DriveIteration
+        The engines, all on the same rig object.
+    drives : sequence of ndarray (n, n_inputs) or TimeHistory
+        One drive per engine, at the rig rate.
+    iterations : int or sequence of int
+        Each drive's iteration number xx (one for all, or one per engine).
+    threads : int, optional
+        Worker threads of the rig's batch (see :meth:`vrig.rigs.MujocoRig.run_batch`).
+
+    Returns
+    -------
+    list of tuple or Exception
+        Per engine, ``(drive, raw, processed, (eta0, rms_error, damage_ratio))`` as
+        :meth:`DriveIteration.play` returns, or the exception in its slot.
+    """
+    from ..rigs import run_batch
+
+    engines, drives = list(engines), list(drives)
+    its = [iterations] * len(engines) if np.ndim(iterations) == 0 else list(iterations)
+    if not len(drives) == len(its) == len(engines):
+        raise ValueError(
+            f"play_batch needs one drive and one iteration per engine ({len(engines)}), got "
+            f"{len(drives)} drives and {len(its)} iterations"
+        )
+    if engines and any(e.rig is not engines[0].rig for e in engines):
+        raise ValueError("play_batch: every engine must play on the same rig object")
+    out: list = [None] * len(engines)
+    sent, names = [], []
+    for i, (engine, drive, it) in enumerate(zip(engines, drives, its, strict=True)):
+        tag, what, seed = engine._play_names(it)
+        try:
+            sent.append((i, engine._checked(drive, tag, what), seed))
+            names.append(tag)
+        except _PLAY_ERRORS as exc:
+            out[i] = exc
+        except Exception as exc:  # raised below, in drive order
+            out[i] = _Raise(exc)
+    if sent:
+        raws = run_batch(engines[0].rig, [d for _, d, _ in sent],
+                         seeds=[s for *_, s in sent], threads=threads, return_exceptions=True)  # fmt: skip
+        for (i, drv, _), tag, raw in zip(sent, names, raws, strict=True):
+            if isinstance(raw, (RigLimitError, SimulationInstabilityError)):
+                engines[i].rejected = (f"TRIPPED{tag}", drv)
+                out[i] = raw
+            elif isinstance(raw, BaseException):
+                out[i] = _Raise(raw)
+            else:
+                try:
+                    out[i] = engines[i]._processed(drv, raw)
+                except _PLAY_ERRORS as exc:
+                    out[i] = exc
+    first = next((r for r in out if isinstance(r, _Raise)), None)
+    if first is not None:
+        raise first.error
+    return out
+
+
+class _Raise:
+    """An error of :func:`play_batch` that is raised, not returned in its slot."""
+
+    def __init__(self, error: BaseException):
+        self.error = error

@@ -14,7 +14,7 @@ from ..errors import RigModelError
 from .daq import AntiAliasFilter, Transducer
 from .file_rig import FileRig
 from .hydraulics import HydraulicActuator
-from .mujoco_rig import FAST_MARGIN, MujocoRig, _models_dir
+from .mujoco_rig import FAST_MARGIN, MujocoRig, _batch_seeds, _models_dir
 from .protocol import DescribedRig, Rig
 from .spec import ChannelSpec, MethodDefaults, RigDefaults, read_description
 from .subset import OutputSubset
@@ -36,6 +36,7 @@ __all__ = [
     "list_rigs",
     "load_rig",
     "rig_path",
+    "run_batch",
     "severity_rigs",
 ]
 
@@ -126,3 +127,49 @@ def load_rig(
         severity=severity,
         **overrides,
     )
+
+
+def run_batch(rig, drives, *, seeds=None, threads=None, return_exceptions=False) -> list:
+    """Play ``drives`` on any rig: ``rig.run_batch`` when it has one (a :class:`MujocoRig`:
+    across threads), an :class:`OutputSubset`'s wrapped rig's batch (its channels selected),
+    else one ``rig.run`` after another. Result ``i`` is ``rig.run(drives[i], seed=seeds[i])``.
+
+    Parameters
+    ----------
+    rig : Rig
+        Any rig (:class:`~vrig.rigs.Rig` protocol).
+    drives : sequence of ndarray or TimeHistory
+        The drives, as for ``rig.run``.
+    seeds : sequence of int or None, optional
+        One noise seed per drive (None: the rig's own choice, in drive order).
+    threads : int, optional
+        Worker threads of a batched rig (see :meth:`MujocoRig.run_batch`); ignored by a rig
+        that plays one drive at a time.
+    return_exceptions : bool
+        False: raise the first failing drive's exception (lowest index) once every drive has
+        been played; True: return each failure in its slot.
+
+    Returns
+    -------
+    list of TimeHistory (or Exception, with ``return_exceptions=True``)
+    """
+    drives = list(drives)
+    if isinstance(rig, OutputSubset):
+        out = run_batch(rig.rig, drives, seeds=seeds, threads=threads, return_exceptions=True)
+        results = [r if isinstance(r, BaseException) else r[rig.names] for r in out]
+    elif callable(getattr(rig, "run_batch", None)):
+        return rig.run_batch(
+            drives, seeds=seeds, threads=threads, return_exceptions=return_exceptions
+        )
+    else:
+        results = []
+        for drive, seed in zip(drives, _batch_seeds(seeds, len(drives)), strict=True):
+            try:
+                results.append(rig.run(drive, seed=seed))
+            except Exception as exc:  # in its slot, like a batched rig's
+                results.append(exc)
+    if not return_exceptions:
+        failed = next((r for r in results if isinstance(r, BaseException)), None)
+        if failed is not None:
+            raise failed
+    return results

@@ -15,8 +15,13 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import os
+import queue
 import sys
+import threading
 import warnings
+from concurrent.futures import ThreadPoolExecutor, as_completed
+from functools import partial
 from pathlib import Path
 
 import mujoco
@@ -27,7 +32,7 @@ from ..errors import RigLimitError, RigModelError, RigParameterError, Simulation
 from ..progress import RUN_BAR_DELAY_S, bar
 from ..timehistory import TimeHistory
 from . import gas_spring, hydraulics, stability
-from ._callbacks import foreign_callbacks_suspended
+from ._callbacks import MAX_LIVE, foreign_callbacks_suspended
 from .daq import Acquisition
 from .limits import check_drive_limits
 from .spec import (
@@ -41,11 +46,15 @@ from .spec import (
     read_description,
 )
 
-__all__ = ["FAST_MARGIN", "MujocoRig"]
+__all__ = ["FAST_MARGIN", "MAX_BATCH_THREADS", "MujocoRig"]
 
 _STATE = mujoco.mjtState.mjSTATE_FULLPHYSICS
 _MAX_DECIMATION = 10_000  # physics steps per DAQ sample
 _ELEMENTS = ("joint", "body", "geom", "site", "actuator", "tendon", "equality", "sensor")
+
+MAX_BATCH_THREADS = 8
+"""Most worker threads of :meth:`MujocoRig.run_batch` (each holds one live callback context and
+one ``MjData`` clone of the rig)."""
 
 FAST_MARGIN = 0.8
 """``fidelity="fast"`` runs at most at this fraction of the model's explicit-integration
@@ -171,6 +180,7 @@ class MujocoRig:
         self._presettle()
         self._rng = np.random.default_rng(seed)
         self.seed = seed
+        self._clones: list = []  # MjData clones for run_batch's threads (made on first use)
 
     # ------------------------------------------------------------------ set-up
     def _compile(self, spec) -> tuple[float, float]:
@@ -624,19 +634,169 @@ class MujocoRig:
         """
         x = self._check_drive(drive)
         chunk = self._chunk_samples(chunk_seconds)
+        return self._responses(self._play(x, chunk, *self._streams(seed)))
+
+    def _streams(self, seed):
+        """The run's (valve noise, DAQ) generators: from ``seed``, else from the next stream of
+        the rig's generator (independent streams: chunking cannot interleave them)."""
         rng = (
             np.random.default_rng(seed)
             if seed is not None
             else np.random.default_rng(self._rng.integers(2**63))
         )
-        valve_rng, daq_rng = rng.spawn(2)  # independent streams: chunking cannot interleave them
-        data = self._play(x, chunk, valve_rng, daq_rng)
+        return rng.spawn(2)
+
+    def _responses(self, data: np.ndarray) -> TimeHistory:
         return TimeHistory(
             data,
             self.fs,
             [o.spec.name for o in self._outputs],
             [o.spec.unit for o in self._outputs],
         )
+
+    def run_batch(
+        self,
+        drives,
+        *,
+        seeds=None,
+        threads: int | None = None,
+        chunk_seconds: float | None = None,
+        return_exceptions: bool = False,
+    ) -> list:
+        """Play many drives at once across threads; result ``i`` is bit for bit
+        ``run(drives[i], seed=seeds[i], chunk_seconds=chunk_seconds)``, errors included.
+
+        Every drive is checked (shape, NaN, limits) before anything is simulated. Each thread
+        plays its drives one after another on its own ``MjData`` (the rig's own and clones of
+        it, made on first use and kept, each with its own callback context installed per run
+        and removed after it, and its own transducer chain), through the same code as
+        :meth:`run`; ``mujoco.rollout`` releases the GIL while it steps. It is not one
+        ``mujoco.rollout`` call over all drives because the servo-hydraulic states, the step
+        counter and the trip record live in each ``mjData.userdata``, which rollout's initial
+        state (``mjSTATE_FULLPHYSICS``) does not include, while rollout hands its items to
+        threads dynamically so one ``MjData`` would carry its userdata from one drive into the
+        next. Nor does rollout return each item's final solver warm start, which the next chunk
+        of a long run needs to stay bit for bit the same as one piece.
+
+        Parameters
+        ----------
+        drives : sequence of TimeHistory or array (N, n_inputs)
+            The drives, as for :meth:`run` (their lengths may differ).
+        seeds : sequence of int or None, optional
+            One noise seed per drive (None in a slot, or ``seeds=None``: that drive takes the
+            next stream of the rig's generator, in drive order, exactly as successive
+            :meth:`run` calls would; a refused drive takes none, as in :meth:`run`).
+        threads : int, optional
+            Worker threads, 1 to :data:`MAX_BATCH_THREADS`; default ``min(len(drives),
+            os.cpu_count(), MAX_BATCH_THREADS)``; 1 plays in the calling thread.
+        chunk_seconds : float, optional
+            Simulated seconds per chunk, as for :meth:`run`.
+        return_exceptions : bool
+            False (default): after every drive has finished, raise the exception of the first
+            failing drive (lowest index). True: return each failure in its slot instead (like
+            ``asyncio.gather``).
+
+        Returns
+        -------
+        list of TimeHistory (or Exception, with ``return_exceptions=True``)
+            One per drive, in drive order.
+
+        Raises
+        ------
+        ValueError
+            bad ``seeds``, ``threads`` or ``chunk_seconds``; a drive's own errors as in
+            :meth:`run` (``ValueError``, ``RigLimitError``, ``SimulationInstabilityError``).
+        """
+        drives = list(drives)
+        seeds = _batch_seeds(seeds, len(drives))
+        workers = _batch_threads(threads, len(drives))
+        chunk = self._chunk_samples(chunk_seconds)
+        results: list = [None] * len(drives)
+        jobs = []
+        for i, (drive, seed) in enumerate(zip(drives, seeds, strict=True)):
+            try:
+                x = self._check_drive(drive)
+            except Exception as exc:  # the drive's own error, in its slot (run raises it)
+                results[i] = exc
+                continue
+            jobs.append((i, x, *self._streams(seed)))
+        self._play_jobs(jobs, chunk, min(workers, max(len(jobs), 1)), results)
+        if not return_exceptions:
+            failed = next((r for r in results if isinstance(r, BaseException)), None)
+            if failed is not None:
+                raise failed
+        return results
+
+    def _play_jobs(self, jobs, chunk: int, workers: int, results: list) -> None:
+        """Play ``jobs`` ((index, drive, valve rng, DAQ rng)) on ``workers`` threads, each on a
+        free ``MjData`` of the pool; store each response (or exception) at its index. An
+        interrupt (Ctrl-C) or error in the calling thread stops the workers after their current
+        chunk and waits for them (their contexts removed) before it goes on."""
+        shown = bar(len(jobs), desc=f"{self.name}: batch of {len(jobs)} runs", unit="run",
+                    delay=RUN_BAR_DELAY_S)  # fmt: skip
+        try:
+            if workers <= 1:  # in the calling thread, on the rig's own data
+                for i, x, valve_rng, daq_rng in jobs:
+                    try:
+                        results[i] = self._responses(self._play(x, chunk, valve_rng, daq_rng))
+                    except Exception as exc:
+                        results[i] = exc
+                    shown.update(1)
+                return
+            self._play_threaded(jobs, chunk, workers, results, shown)
+        finally:
+            shown.close()
+
+    def _play_threaded(self, jobs, chunk: int, workers: int, results: list, shown) -> None:
+        """:meth:`_play_jobs` on ``workers`` threads. Whatever happens in the calling thread
+        (Ctrl-C lands there), it returns only once no run is active any more: the executor's
+        own shutdown cannot be trusted for that (an interrupt inside ``submit`` can start a
+        worker thread that it never records, and never joins)."""
+        free = queue.SimpleQueue()
+        for d in self._batch_data(workers):
+            free.put(d)
+        cancel, state, active = threading.Event(), threading.Condition(), [0]
+
+        def play(x, valve_rng, daq_rng):
+            with state:
+                if cancel.is_set():
+                    raise _Cancelled
+                active[0] += 1
+            try:
+                d = free.get()  # as many data as threads: one is always free
+                try:
+                    return self._responses(
+                        self._play(x, chunk, valve_rng, daq_rng, d, cancel=cancel)
+                    )
+                finally:
+                    free.put(d)
+            finally:
+                with state:
+                    active[0] -= 1
+                    state.notify_all()
+
+        pool = ThreadPoolExecutor(workers, thread_name_prefix=f"vrig-{self.name}")
+        try:
+            futures = {pool.submit(play, *job[1:]): job[0] for job in jobs}
+            for f in as_completed(futures):
+                exc = f.exception()
+                results[futures[f]] = f.result() if exc is None else exc
+                shown.update(1)
+        finally:
+            with state:  # no run starts from here on; the active ones stop after their chunk
+                cancel.set()
+                state.wait_for(lambda: active[0] == 0)
+            pool.shutdown(wait=True, cancel_futures=True)
+
+    def _batch_data(self, n: int) -> list:
+        """``n`` MjData for a batch: the rig's own and ``n - 1`` clones (made on first use and
+        kept, each in the presettled state)."""
+        clones = self._clones
+        while len(clones) < n - 1:
+            d = mujoco.MjData(self.model)
+            mujoco.mj_setState(self.model, d, self._state0, _STATE)
+            clones.append(d)
+        return [self.data, *clones[: n - 1]]
 
     def _chunk_samples(self, chunk_seconds) -> int:
         value = self.chunk_seconds if chunk_seconds is None else chunk_seconds
@@ -650,10 +810,19 @@ class MujocoRig:
             )
         return sys.maxsize if math.isinf(value) else max(1, round(value * self.fs))
 
-    def _play(self, x, chunk: int, valve_rng, daq_rng) -> np.ndarray:
-        """Simulate the settling period and the drive ``x`` in chunks of ``chunk`` DAQ samples;
-        returns the sampled responses of the drive period (errors: see :meth:`run`)."""
-        m, d, dec = self.model, self.data, self.decimation
+    def _play(
+        self, x, chunk: int, valve_rng, daq_rng, data=None, *, cancel=None
+    ) -> np.ndarray:
+        """Simulate the settling period and the drive ``x`` in chunks of ``chunk`` DAQ samples
+        on ``data`` (default :attr:`data`; :meth:`run_batch` passes each thread's clone): from
+        the presettled state ``_state0`` and callback states ``_hyd_states``, its callback
+        context installed for the run and removed after, whatever happens. Returns the sampled
+        responses of the drive period (errors: see :meth:`run`); ``cancel``: an event checked
+        after each chunk (set: :class:`_Cancelled` is raised)."""
+        m, dec = self.model, self.decimation
+        d = self.data if data is None else data
+        # the one-argument form for the rig's own data (a test hooks ``_check_stability``)
+        check = self._check_stability if d is self.data else partial(self._check_stability, d=d)
         n = x.shape[0]
         settle = round(self._desc.settle_time * self.fs)  # whole DAQ samples, zero drive
         total = settle + n
@@ -690,7 +859,7 @@ class MujocoRig:
                     sensordata=sens_buf[:, :k],
                 )
                 raw = sens[0][:, self._sensor_cols]
-                self._check_stability(k0 * dec, raw)
+                check(k0 * dec, raw)
                 sampled = chain.process(raw)
                 if not np.all(np.isfinite(sampled)):  # e.g. a huge transducer gain overflowed
                     raise SimulationInstabilityError(
@@ -705,6 +874,8 @@ class MujocoRig:
                 mujoco.mj_getState(m, d, state, _STATE)
                 warm = d.qacc_warmstart[None, :].copy()
                 shown.update(k1 - k0)
+                if cancel is not None and cancel.is_set():
+                    raise _Cancelled
             trip = hydraulics.trip_record(d)
         finally:
             shown.close()
@@ -739,11 +910,12 @@ class MujocoRig:
                 ctrl[0, :, i_noise] += c.noise_rms * noise[:, noisy.index(j)]
         return ctrl
 
-    def _check_stability(self, g0: int, raw) -> None:
-        """Raise SimulationInstabilityError if the chunk that starts at physics step ``g0`` blew
-        up: a MuJoCo warning (``mujoco.rollout`` stops stepping at the first one; the rig's
-        auto-reset is off, so the time says where) or a non-finite sensor value."""
-        d = self.data
+    def _check_stability(self, g0: int, raw, d=None) -> None:
+        """Raise SimulationInstabilityError if the chunk that starts at physics step ``g0`` of
+        the run on ``d`` (default :attr:`data`) blew up: a MuJoCo warning (``mujoco.rollout``
+        stops stepping at the first one; the rig's auto-reset is off, so the time says where)
+        or a non-finite sensor value."""
+        d = self.data if d is None else d
         counts = d.warning.number
         finite = np.isfinite(raw.sum())  # one pass: NaN and inf propagate into the sum
         if finite and not counts.any():
@@ -788,6 +960,37 @@ class MujocoRig:
         }[kind]
         unit = "N" if kind == "force" else spec.unit
         return RigLimitError(kind, spec.name, t, value, limit, unit, hint=hint)
+
+
+class _Cancelled(Exception):
+    """A batch run stopped between chunks because the batch was interrupted."""
+
+
+def _batch_seeds(seeds, n: int) -> list:
+    """One seed (a non-negative int, or None: the rig's next stream) per drive."""
+    if seeds is None:
+        return [None] * n
+    seeds = list(seeds)
+    if len(seeds) != n:
+        raise ValueError(f"seeds must have one entry per drive ({n}), got {len(seeds)}")
+    for s in seeds:
+        ok = s is None or (isinstance(s, (int, np.integer)) and not isinstance(s, bool) and s >= 0)
+        if not ok:
+            raise ValueError(f"each seed must be a non-negative integer or None, got {s!r}")
+    return seeds
+
+
+def _batch_threads(threads, n: int) -> int:
+    """The checked number of worker threads of a batch of ``n`` drives."""
+    if threads is None:
+        return max(1, min(n, os.cpu_count() or 1, MAX_BATCH_THREADS))
+    ok = isinstance(threads, (int, np.integer)) and not isinstance(threads, bool)
+    if not ok or not 1 <= threads <= MAX_BATCH_THREADS:
+        raise ValueError(
+            f"threads must be an integer from 1 to {MAX_BATCH_THREADS} (each thread holds a live "
+            f"callback context while it runs; at most {MAX_LIVE} per process), got {threads!r}"
+        )
+    return int(threads)
 
 
 def _models_dir() -> Path:

@@ -1,0 +1,115 @@
+"""Throughput of batched rig runs (issue 16, deliverable 2): rig runs and drive-iterations per
+minute, one after another against ``rig.run_batch`` / ``play_batch`` across threads.
+
+A rig run is ``rig.run(drive)`` of a 4 s band-limited random drive (fast fidelity); a
+drive-iteration is one :meth:`DriveIteration.play <vrig.reconstruction.engine.DriveIteration.
+play>` (check, rig run, processing, scores), each engine with its own desired response. Rigs:
+the shock absorber (SISO) and fuel-tank-7ch (7 drives). For each rig and batch size (8, 16) the
+batch is played one after another (``single``) and batched with 2 and 4 threads; every batched
+result is checked bit for bit against the single one (``identical``). Figures are per wall
+minute on this machine (``os.cpu_count()`` and the load average are printed: threads beyond the
+free cores only share them).
+
+    python -m benchmarks.rig_batch [--quick] [--rigs shock-absorber fuel-tank-7ch]
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import time
+
+import numpy as np
+
+import vrig
+from identification import band_limited_noise
+from vrig.reconstruction.engine import DriveIteration, play_batch
+
+SECONDS = 4.0
+
+
+def _fraction(rig) -> float:
+    """The largest of 3 / 1 / 0.5 % of full scale (rms) at which four trial drives run without
+    an interlock trip (fuel-tank-7ch trips its force interlock at 3 %)."""
+    for fraction in (0.03, 0.01, 0.005):
+        out = rig.run_batch([_drive(rig, s, fraction) for s in range(4)], return_exceptions=True)
+        if not any(isinstance(r, Exception) for r in out):
+            return fraction
+    raise RuntimeError(f"{rig.name}: even a 0.5 % drive trips an interlock")
+
+
+def _drive(rig, seed: int, fraction: float = 0.03) -> np.ndarray:
+    """A band-limited random drive in the rig's band at ``fraction`` of full scale (rms)."""
+    cutoff = min(max(rig.bandwidth[1], 5.0), 0.4 * rig.fs) / (rig.fs / 2)
+    d = band_limited_noise(int(SECONDS * rig.fs), len(rig.inputs), cutoff=cutoff, seed=seed)
+    return d * fraction * np.array([c.full_scale for c in rig.inputs])
+
+
+def _per_minute(count: int, seconds: float) -> float:
+    return 60.0 * count / seconds
+
+
+def _timed(fn):
+    t0 = time.perf_counter()
+    out = fn()
+    return out, time.perf_counter() - t0
+
+
+def _runs(rig, xs, threads_list) -> list[tuple[str, float, bool]]:
+    """(mode, rig runs per minute, identical to single) for one batch of drives."""
+    seeds = list(range(1, len(xs) + 1))
+    ref, wall = _timed(lambda: [rig.run(x, seed=s).data for x, s in zip(xs, seeds, strict=True)])
+    rows = [("single", _per_minute(len(xs), wall), True)]
+    for threads in threads_list:
+        got, wall = _timed(lambda t=threads: rig.run_batch(xs, seeds=seeds, threads=t))
+        same = all(np.array_equal(g.data, r) for g, r in zip(got, ref, strict=True))
+        rows.append((f"batch {threads} threads", _per_minute(len(xs), wall), same))
+    return rows
+
+
+def _plays(rig, xs, threads_list, fraction) -> list[tuple[str, float, bool]]:
+    """(mode, drive-iterations per minute, identical to single) for one batch of engines."""
+    name = rig.name
+    engines = []
+    for k in range(len(xs)):  # each its own desired response: a response of a twin rig
+        desired = vrig.load_rig(name, seed=50 + k, fidelity="fast").run(_drive(rig, 60 + k, fraction))
+        engines.append(DriveIteration(rig, desired, run_seed=100 + k))
+    ref, wall = _timed(lambda: [e.play(x, 1) for e, x in zip(engines, xs, strict=True)])
+    rows = [("single", _per_minute(len(xs), wall), True)]
+    for threads in threads_list:
+        got, wall = _timed(lambda t=threads: play_batch(engines, xs, 1, threads=t))
+        same = all(
+            np.array_equal(g[2].data, r[2].data) and np.array_equal(g[3][0], r[3][0])
+            for g, r in zip(got, ref, strict=True)
+        )
+        rows.append((f"batch {threads} threads", _per_minute(len(xs), wall), same))
+    return rows
+
+
+def main(argv=None) -> int:
+    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    p.add_argument("--quick", action="store_true", help="batch size 8, 2 threads only")
+    p.add_argument("--rigs", nargs="+", default=["shock-absorber", "fuel-tank-7ch"])
+    args = p.parse_args(argv)
+    sizes, threads = ([8], [2]) if args.quick else ([8, 16], [2, 4])
+    print(f"rig batch throughput: {SECONDS:g} s drives, fast fidelity, "
+          f"os.cpu_count() = {os.cpu_count()}, load average {os.getloadavg()[0]:.1f} "
+          "(a shared, loaded box gives the threads no free core)")  # fmt: skip
+    header = f"{'rig':<16} {'batch':>5}  {'mode':<18} {'runs/min':>9} {'iter/min':>9}  identical"
+    print(header)
+    print("-" * len(header))
+    for name in args.rigs:
+        rig = vrig.load_rig(name, seed=0, fidelity="fast")
+        fraction = _fraction(rig)  # also compiles the callbacks and makes the clones
+        for size in sizes:
+            xs = [_drive(rig, s, fraction) for s in range(size)]
+            runs = _runs(rig, xs, threads)
+            plays = _plays(rig, xs, threads, fraction)
+            for (mode, rpm, same_r), (_, ipm, same_p) in zip(runs, plays, strict=True):
+                same = "yes" if same_r and same_p else "NO"
+                print(f"{name:<16} {size:>5}  {mode:<18} {rpm:>9.0f} {ipm:>9.0f}  {same}")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
