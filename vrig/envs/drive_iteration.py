@@ -233,22 +233,16 @@ class DriveIterationEnv(gym.Env):
     **Spaces by rig size** (default ``n_bands=4``; ``n_inputs x n_outputs``; the flat
     observation is ``gymnasium.wrappers.FlattenObservation``'s length,
     ``2 * n_outputs * n_bands + 2 * n_outputs + 2 * n_inputs + 1``; the action lengths are
-    without the re-identify flag, +1 with it):
+    without the re-identify flag, +1 with it; ``"scalar"`` is always 1):
 
-    ====================  ===================  =====  ========  ======  =======  ========
-    rig (inputs x outputs) band_error            flat   "bands"  "chan.  "scalar" "complex"
-    ====================  ===================  =====  ========  ======  =======  ========
-    1 x 1 (shock absorber, damper, shaker)
-                          (1, 4)               13     4         1       1        8
-    1 x 2 (radiator, motorcycle rear)
-                          (2, 4)               23     4         1       1        8
-    1 x 3 (pneumatic trailer)
-                          (3, 4)               33     4         1       1        8
-    2 x 2 (fuel tank 2ch) (2, 4)               25     8         2       1        16
-    6 x 10 (light truck front)
-                          (10, 4)              113    24        6       1        48
-    7 x 7 (fuel tank 7ch) (7, 4)               85     28        7       1        56
-    ====================  ===================  =====  ========  ======  =======  ========
+    | inputs x outputs: rigs                  | band_error | flat obs | bands | channels | complex |
+    |-----------------------------------------|------------|----------|-------|----------|---------|
+    | 1 x 1: shock absorber, damper, shaker   | (1, 4)     | 13       | 4     | 1        | 8       |
+    | 1 x 2: radiator, motorcycle rear        | (2, 4)     | 23       | 4     | 1        | 8       |
+    | 1 x 3: pneumatic trailer                | (3, 4)     | 33       | 4     | 1        | 8       |
+    | 2 x 2: fuel tank 2ch                    | (2, 4)     | 25       | 8     | 2        | 16      |
+    | 6 x 10: light-truck front               | (10, 4)    | 113      | 24    | 6        | 48      |
+    | 7 x 7: fuel tank 7ch                    | (7, 4)     | 85       | 28    | 7        | 56      |
 
     In general ``band_error`` / ``band_error_change`` are ``(n_outputs, n_bands)``, ``eta0`` /
     ``rms_error`` ``(n_outputs,)``, ``drive_rms`` / ``drive_peak`` ``(n_inputs,)``; the action
