@@ -55,7 +55,7 @@ _WORKER: dict = {}
 
 
 def _make(env_id):
-    return gym.make(env_id, fast=True, max_iterations=BUDGET, max_episode_steps=BUDGET)
+    return gym.make(env_id, fast=True, max_episode_steps=BUDGET)
 
 
 def _init(env_id):

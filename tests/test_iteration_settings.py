@@ -149,7 +149,7 @@ def test_env_takes_taper_and_id_psd_from_settings_and_keeps_its_run_seed():
     rig = _SeedRecordingRig()
     psd = flat_psd((0.0, 24.0))
     s = IterationSettings(method="arx", method_options={"order": 2}, taper=0.75, id_psd=psd)
-    env = DriveIterationEnv(rig, settings=s, seconds=6.0, model_seed=3, max_iterations=2)
+    env = DriveIterationEnv(rig, settings=s, seconds=6.0, model_seed=3)
     _obs, info = env.reset(seed=0, options={"desired": _desired(rig, 6.0), "run_seed": 20})
     engine = env.engine
     assert engine.settings.taper == 0.75 and engine.settings.id_psd is psd

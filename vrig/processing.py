@@ -171,12 +171,19 @@ def f2d(
 
 
 def band_gains(x: np.ndarray, fs: float, gains: np.ndarray, edges) -> np.ndarray:
-    """Scale each frequency band of each channel of ``x`` by its own gain.
+    """Scale (and, with complex gains, phase-shift) each frequency band of each channel of ``x``.
 
     ``gains`` is (n_channels, n_bands); band ``b`` holds the frequencies in
     ``[edges[b], edges[b + 1])`` (the first band starts at 0 Hz, the last runs to Nyquist,
     whatever ``edges[0]`` / ``edges[-1]`` say). The scaling is a piecewise-constant weighting of the
-    record's (zero-padded) spectrum, so gains equal across bands give exactly ``gain * x``.
+    record's (zero-padded, one-sided: ``rfft``) spectrum, so gains equal across bands give exactly
+    ``gain * x``.
+
+    A complex gain ``g * exp(1j * phi)`` multiplies the band's positive-frequency bins: a sinusoid
+    ``cos(2 pi f t)`` in the band becomes ``g * cos(2 pi f t + phi)`` (``phi > 0``: phase lead,
+    ``phi < 0``: a delay of ``-phi / (2 pi f)`` s). The DC and Nyquist bins get the magnitude
+    ``|g|`` only, so the result stays real. Complex gains whose imaginary parts are all zero are
+    the real gains, bit for bit.
 
     Parameters
     ----------
@@ -184,8 +191,8 @@ def band_gains(x: np.ndarray, fs: float, gains: np.ndarray, edges) -> np.ndarray
         The record (e.g. a drive correction).
     fs : float
         Sample rate [Hz].
-    gains : ndarray (n_channels, n_bands)
-        Gain per channel and band.
+    gains : ndarray (n_channels, n_bands), real or complex
+        Gain per channel and band (dimensionless; complex: magnitude and phase [rad]).
     edges : sequence of float
         ``n_bands + 1`` band edges [Hz].
 
@@ -194,16 +201,23 @@ def band_gains(x: np.ndarray, fs: float, gains: np.ndarray, edges) -> np.ndarray
     ndarray (n_samples, n_channels)
     """
     x = np.asarray(x, dtype=float)
-    gains = np.asarray(gains, dtype=float)
+    gains = np.asarray(gains)
+    if np.iscomplexobj(gains) and not np.any(gains.imag):
+        gains = gains.real
+    complex_gains = np.iscomplexobj(gains)
+    gains = gains.astype(complex if complex_gains else float)
     edges = np.asarray(edges, dtype=float)
     if gains.ndim != 2 or gains.shape[0] != x.shape[1] or gains.shape[1] != edges.size - 1:
         raise ValueError(
             f"gains must be (n_channels={x.shape[1]}, n_bands={edges.size - 1}), got {gains.shape}"
         )
-    if np.all(gains == gains[:, :1]):
+    if not complex_gains and np.all(gains == gains[:, :1]):
         return x * gains[:, 0]
     n = x.shape[0]
     X = np.fft.rfft(x, n=2 * n, axis=0)
     f = np.fft.rfftfreq(2 * n, 1.0 / fs)
     band = np.clip(np.searchsorted(edges, f, side="right") - 1, 0, edges.size - 2)
-    return np.fft.irfft(X * gains[:, band].T, n=2 * n, axis=0)[:n]
+    weight = gains[:, band].T
+    if complex_gains:  # DC and Nyquist (2n is even): the magnitude only, the record stays real
+        weight[[0, -1]] = np.abs(weight[[0, -1]])
+    return np.fft.irfft(X * weight, n=2 * n, axis=0)[:n]

@@ -57,7 +57,9 @@ print(f"IT00 eta0 {info['eta0']} %, tolerance {env.unwrapped.task.tolerance} %")
 # plays one more iteration. The observation holds, per output and band, the log10 ratio of the
 # band's RMS error to the desired response's (`band_error`), its change since the last iteration,
 # η0 and drive levels. The episode **terminates** when every channel's η0 is within the rig's
-# tolerance and is **truncated** after 10 iterations; the reward is the log reduction of the
+# tolerance and is **truncated** after 10 iterations (by gymnasium's `TimeLimit` wrapper:
+# `max_episode_steps` of `gym.make`; the environment itself never truncates and
+# `run_episode` reports the reason `"budget"`); the reward is the log reduction of the
 # mean η0 (minus a small drive-energy penalty; −5 for a refused or tripping drive).
 #
 # ## Baselines
@@ -134,5 +136,7 @@ print(f"{'learned (2 generations)':26s} iterations to tolerance {its}  (mean {np
 # Any gymnasium agent can be trained the same way — e.g. Stable-Baselines3 with
 # `gymnasium.wrappers.FlattenObservation` around the environment (the `rl` extra installs it;
 # not needed for anything here). `action_mode="channels"` or `"scalar"` makes the action one
-# gain per drive channel or one gain in all; `reidentify_action=True` lets the agent also decide
+# gain per drive channel or one gain in all; `action_mode="complex"` adds a phase per channel and
+# band (in ±`phase_max` rad: the band's correction is advanced or delayed in phase, for an
+# inverse model whose phase is off); `reidentify_action=True` lets the agent also decide
 # when to re-fit the inverse model from the latest run.

@@ -5,8 +5,9 @@
 gymnasium id (``"reconstruction": {"gym": {"id": ..., "tolerance": ...}}``, ``models/README.md``;
 ``rig.defaults.gym_id``) has that id too, with the rig fixed: :data:`ENV_IDS` lists them all
 (``vrig/ShockAbsorber-v0``, ``vrig/ElastomericDamper-v0``, ``vrig/Shaker-v0``,
-``vrig/Radiator-v0``, ``vrig/LightTruckFront-v0``). Every id has ``max_episode_steps=10`` (the
-env's default ``max_iterations``; pass both to change the budget).
+``vrig/Radiator-v0``, ``vrig/LightTruckFront-v0``). Every id has ``max_episode_steps=10``: the
+``TimeLimit`` wrapper owns the iteration budget (the env itself never truncates; pass
+``max_episode_steps`` to change it).
 
 **Tolerance.** The env's default η0 tolerance [%, every channel] on a rig is its side-car's
 ``gym.tolerance`` (``rig.defaults.tolerance``; the side-car's ``gym.description`` keeps the

@@ -39,30 +39,38 @@ FAST_ID_SECONDS = 12.0
 """Identification drive length of the ``fast`` option [s]: a 4 s record is too short for a
 stable inverse on the elastomeric damper (the default is the desired segment length, 20 s)."""
 
-_ACTION_MODES = ("bands", "channels", "scalar")
+_ACTION_MODES = ("bands", "channels", "scalar", "complex")
 
 
 @dataclass(frozen=True)
 class ActionLayout:
-    """How the flat action vector maps to gains.
+    """How the flat action vector maps to gains (and phases).
 
     ``mode`` ``"bands"``: ``n_inputs * n_bands`` gains, channel-major (``action[:n_gains]
     .reshape(n_inputs, n_bands)``); ``"channels"``: one gain per drive channel; ``"scalar"``: one
-    gain. With ``reidentify`` the last element (in [0, 1]) is the re-identify flag (>= 0.5: re-fit
-    the inverse model from the latest drive and raw response before computing the update).
+    gain; ``"complex"``: ``n_inputs * n_bands`` gain magnitudes then as many phases [rad], both
+    channel-major (``action[:n_gains]`` and ``action[n_gains:2 * n_gains]``, each reshaped to
+    ``(n_inputs, n_bands)``). With ``reidentify`` the last element (in [0, 1]) is the re-identify
+    flag (>= 0.5: re-fit the inverse model from the latest drive and raw response before
+    computing the update).
 
     Parameters
     ----------
-    mode : {"bands", "channels", "scalar"}
-        Gain resolution: per drive channel and band, per drive channel, or one gain.
+    mode : {"bands", "channels", "scalar", "complex"}
+        Gain resolution: per drive channel and band, per drive channel, one gain, or per drive
+        channel and band a magnitude and a phase.
     n_inputs : int
         Number of drive channels of the rig.
     n_bands : int
-        Number of gain bands (used by ``mode="bands"`` only).
+        Number of gain bands (used by ``mode="bands"`` and ``"complex"``).
     reidentify : bool
         Whether the action ends with the re-identify flag.
     low, high : float
-        Bounds of every gain (dimensionless; the flag's bounds are [0, 1] whatever these are).
+        Bounds of every gain magnitude (dimensionless; the flag's bounds are [0, 1] whatever these
+        are).
+    phase_max : float
+        Bound of every phase, ``[-phase_max, phase_max]`` rad (``mode="complex"`` only; default
+        pi/2).
     """
 
     mode: str
@@ -71,29 +79,67 @@ class ActionLayout:
     reidentify: bool
     low: float
     high: float
+    phase_max: float = np.pi / 2
 
     @property
     def n_gains(self) -> int:
-        """Number of gains in the action (``n_inputs * n_bands``, ``n_inputs`` or 1)."""
-        return {"bands": self.n_inputs * self.n_bands, "channels": self.n_inputs, "scalar": 1}[
-            self.mode
-        ]
+        """Number of gains (magnitudes) in the action (``n_inputs * n_bands``, ``n_inputs`` or
+        1)."""
+        per_band = self.n_inputs * self.n_bands
+        return {"bands": per_band, "complex": per_band, "channels": self.n_inputs}.get(
+            self.mode, 1
+        )
+
+    @property
+    def n_phases(self) -> int:
+        """Number of phases in the action (:attr:`n_gains` in ``"complex"`` mode, else 0)."""
+        return self.n_gains if self.mode == "complex" else 0
 
     @property
     def size(self) -> int:
-        """Length of the flat action: :attr:`n_gains`, plus 1 for the re-identify flag."""
-        return self.n_gains + int(self.reidentify)
+        """Length of the flat action: :attr:`n_gains` + :attr:`n_phases`, plus 1 for the
+        re-identify flag."""
+        return self.n_gains + self.n_phases + int(self.reidentify)
 
-    def action(self, gains, reidentify: bool = False) -> np.ndarray:
+    def bounds(self) -> tuple[np.ndarray, np.ndarray]:
+        """The action's bounds ``(low, high)``: gains ``[low, high]``, phases ``[-phase_max,
+        phase_max]`` rad, the flag [0, 1]."""
+        ng, nph = self.n_gains, self.n_phases
+        low = np.r_[np.full(ng, self.low), np.full(nph, -self.phase_max)]
+        high = np.r_[np.full(ng, self.high), np.full(nph, self.phase_max)]
+        if self.reidentify:
+            low, high = np.r_[low, 0.0], np.r_[high, 1.0]
+        return low, high
+
+    def _shaped(self, values, what: str) -> np.ndarray:
+        """``values`` broadcast to the mode's shape and flattened channel-major."""
+        v = np.asarray(values, dtype=float)
+        per_band = self.mode in ("bands", "complex")
+        shape = (self.n_inputs, self.n_bands) if per_band else (self.n_inputs,)
+        if self.mode == "scalar":
+            shape = (1,)
+        if per_band and v.ndim == 1 and v.size == self.n_inputs != self.n_bands:
+            v = v[:, None]
+        try:
+            return np.broadcast_to(v, shape).ravel()
+        except ValueError:
+            raise ValueError(f"{what} of shape {v.shape} do not fit the {shape} of "
+                             f"action_mode={self.mode!r}") from None
+
+    def action(self, gains, phases=None, reidentify: bool = False) -> np.ndarray:
         """A flat action from gains (scalar, per channel or (channels, bands), broadcast to the
-        mode's shape) and the re-identify flag.
+        mode's shape), phases (``"complex"`` mode) and the re-identify flag.
 
         Parameters
         ----------
         gains : float or array_like
-            Gains (dimensionless): a scalar, one per drive channel (``(n_inputs,)``, repeated
-            over the bands in ``"bands"`` mode) or ``(n_inputs, n_bands)``; broadcast to the
-            mode's shape. Not clipped to ``[low, high]`` here (the env clips).
+            Gains (dimensionless; magnitudes in ``"complex"`` mode): a scalar, one per drive
+            channel (``(n_inputs,)``, repeated over the bands in ``"bands"``/``"complex"``
+            mode) or ``(n_inputs, n_bands)``; broadcast to the mode's shape. Not clipped to
+            ``[low, high]`` here (the env clips).
+        phases : float or array_like, optional
+            ``"complex"`` mode only: phases [rad] (> 0: phase lead), shaped like ``gains``
+            (default 0: the ``"bands"`` update). Not clipped here.
         reidentify : bool
             The re-identify flag (1.0 when true, else 0.0); ignored unless the layout has one.
 
@@ -102,30 +148,51 @@ class ActionLayout:
         ndarray
             The flat float64 action of length :attr:`size`.
         """
-        g = np.asarray(gains, dtype=float)
-        shape = {"bands": (self.n_inputs, self.n_bands), "channels": (self.n_inputs,)}.get(
-            self.mode, (1,)
-        )
-        if self.mode == "bands" and g.ndim == 1 and g.size == self.n_inputs != self.n_bands:
-            g = g[:, None]
-        flat = np.broadcast_to(g, shape).ravel()
+        if isinstance(phases, (bool, np.bool_)):
+            raise TypeError(
+                "phases must be numbers: pass the re-identify flag by keyword, "
+                "action(gains, reidentify=...)"
+            )
+        if phases is not None and self.mode != "complex":
+            raise ValueError(f"phases need action_mode='complex' (this layout: {self.mode!r})")
+        flat = self._shaped(gains, "gains")
+        if self.mode == "complex":
+            flat = np.r_[flat, self._shaped(0.0 if phases is None else phases, "phases")]
         if self.reidentify:
             flat = np.concatenate([flat, [1.0 if reidentify else 0.0]])
         return flat.astype(np.float64)
 
 
-def _check_env_options(render_mode, action_mode, max_iterations, gain_range) -> tuple[float, float]:
+def _check_env_options(render_mode, action_mode, max_iterations, gain_range, phase_max):
     """The options checked before the rig is built; returns the gain range ``(low, high)``."""
     if render_mode is not None:
         raise ValueError("DriveIterationEnv does not render (render_mode must be None)")
+    if max_iterations is not None:
+        raise TypeError(
+            "max_iterations was removed in v1: the iteration budget is TimeLimit's, "
+            "gymnasium.make(..., max_episode_steps=n) (default 10), or wrap the env in "
+            "gymnasium.wrappers.TimeLimit(env, n)"
+        )
     if action_mode not in _ACTION_MODES:
         raise ValueError(f"action_mode must be one of {_ACTION_MODES}, got {action_mode!r}")
-    if not isinstance(max_iterations, (int, np.integer)) or max_iterations < 1:
-        raise ValueError(f"max_iterations must be a positive integer, got {max_iterations!r}")
     lo, hi = (float(g) for g in gain_range)
     if not (np.isfinite(lo) and np.isfinite(hi) and 0 <= lo < hi):
         raise ValueError(f"gain_range must satisfy 0 <= low < high, got {gain_range}")
+    if isinstance(phase_max, bool) or not (
+        isinstance(phase_max, (int, float, np.number)) and 0 < phase_max <= np.pi
+    ):
+        raise ValueError(f"phase_max must be a number in (0, pi] rad, got {phase_max!r}")
     return lo, hi
+
+
+def _tolerance(rig, tolerance) -> float:
+    """The η0 tolerance [%]: ``tolerance``, else the rig's side-car one, else the fallback."""
+    if tolerance is None:
+        tolerance = getattr(getattr(rig, "defaults", None), "tolerance", None)
+        tolerance = FALLBACK_TOLERANCE if tolerance is None else tolerance
+    if not (np.isfinite(tolerance) and tolerance > 0):
+        raise ValueError(f"tolerance must be a positive number [%], got {tolerance!r}")
+    return float(tolerance)
 
 
 class DriveIterationEnv(gym.Env):
@@ -136,9 +203,10 @@ class DriveIterationEnv(gym.Env):
     ``options["desired"]`` - builds the engine with the inverse model (identified once with
     ``model_seed`` and cached), computes IT00DRV = inverse(DESRES) and plays it. Each ``step``
     is one iteration: ``ITn+1DRV = ITnDRV + gains x (inverse(DESRES) - inverse(ITnRES))`` with
-    the action's gains (per drive channel and frequency band), then plays it. (An IT00 drive
-    beyond the limits makes ``reset`` raise :class:`~vrig.RigLimitError`: there is no drive to
-    fall back on; pseudo-field targets of the registered rigs never do.)
+    the action's gains (per drive channel and frequency band; complex per band in ``"complex"``
+    mode), then plays it. (An IT00 drive beyond the limits makes ``reset`` raise
+    :class:`~vrig.RigLimitError`: there is no drive to fall back on; pseudo-field targets of the
+    registered rigs never do.)
 
     **Observation** (``Dict`` of float32 boxes, clipped to their bounds):
 
@@ -148,13 +216,38 @@ class DriveIterationEnv(gym.Env):
       iteration (0 at IT00), in [-3, 3] (> 0: the band's error grew);
     * ``eta0``, ``rms_error`` (outputs,): η0 (eq. 5-28) and RMS error [%], in [0, 1000];
     * ``drive_rms``, ``drive_peak`` (inputs,): of ITnDRV, as fractions of the full scale;
-    * ``iteration`` (1,): n.
+    * ``iteration`` (1,): n, in [0, 99] (:data:`~vrig.envs.task.ITERATION_MAX`: the records are
+      named IT00..IT99; a longer episode observes 99 from then on).
 
     **Action** (``Box`` float64, flat; see :class:`ActionLayout`): gains in ``[gain_low,
     gain_high]`` (default [0, 2]) per drive channel x band (``action_mode="bands"``), per
-    channel (``"channels"``) or one (``"scalar"``), plus an optional re-identify flag
-    (``reidentify_action=True``). Gains out of bounds are clipped (``info["action_clipped"]``); a
-    wrong shape or a non-finite value raises ``ValueError``.
+    channel (``"channels"``) or one (``"scalar"``); or (``"complex"``) per drive channel x band
+    a gain magnitude in ``gain_range`` and a phase in ``[-phase_max, phase_max]`` rad (default
+    pi/2): the flat action is the magnitudes, then the phases (both channel-major), and the
+    band's correction is multiplied by ``g * exp(1j * phi)`` in the frequency domain
+    (:func:`vrig.processing.band_gains`: ``phi > 0`` a phase lead, ``phi < 0`` a delay; phases 0
+    are the ``"bands"`` update bit for bit). Any mode may end with the re-identify flag
+    (``reidentify_action=True``). Values out of bounds are clipped (``info["action_clipped"]``);
+    a wrong shape or a non-finite value raises ``ValueError``.
+
+    **Spaces by rig size** (default ``n_bands=4``; ``n_inputs x n_outputs``; the flat
+    observation is ``gymnasium.wrappers.FlattenObservation``'s length,
+    ``2 * n_outputs * n_bands + 2 * n_outputs + 2 * n_inputs + 1``; the action lengths are
+    without the re-identify flag, +1 with it; ``"scalar"`` is always 1):
+
+    | inputs x outputs: rigs                  | band_error | flat obs | bands | channels | complex |
+    |-----------------------------------------|------------|----------|-------|----------|---------|
+    | 1 x 1: shock absorber, damper, shaker   | (1, 4)     | 13       | 4     | 1        | 8       |
+    | 1 x 2: radiator, motorcycle rear        | (2, 4)     | 23       | 4     | 1        | 8       |
+    | 1 x 3: pneumatic trailer                | (3, 4)     | 33       | 4     | 1        | 8       |
+    | 2 x 2: fuel tank 2ch                    | (2, 4)     | 25       | 8     | 2        | 16      |
+    | 6 x 10: light-truck front               | (10, 4)    | 113      | 24    | 6        | 48      |
+    | 7 x 7: fuel tank 7ch                    | (7, 4)     | 85       | 28    | 7        | 56      |
+
+    In general ``band_error`` / ``band_error_change`` are ``(n_outputs, n_bands)``, ``eta0`` /
+    ``rms_error`` ``(n_outputs,)``, ``drive_rms`` / ``drive_peak`` ``(n_inputs,)``; the action
+    is ``n_inputs * n_bands`` (``"bands"``), ``n_inputs`` (``"channels"``), 1 (``"scalar"``) or
+    ``2 * n_inputs * n_bands`` (``"complex"``) long.
 
     **Reward**: ``ln(mean η0 before) - ln(mean η0 after) - energy_penalty * max(0, ln(drive
     energy growth)) - step_penalty``; a drive beyond the limits (never sent), a rig trip or a
@@ -162,18 +255,58 @@ class DriveIterationEnv(gym.Env):
     diverging inverse-model free run or an unstable simulation: ``"unstable"``).
 
     **Termination** when every channel's η0 <= ``tolerance`` (``info["reason"] ==
-    "tolerance"``); **truncation** after ``max_iterations`` steps (``"budget"``). ``info``
-    carries the raw errors (``eta0``, ``rms_error``, ``damage_ratio``, ``mean_eta0``), the
-    ``iteration``, ``success``, ``reason``, ``field_seed``, ``run_seed`` and any ``trip`` message.
+    "tolerance"``). **Truncation** is not the env's: it never truncates (``truncated`` is always
+    False); the iteration budget is the ``TimeLimit`` wrapper's (``gymnasium.make(...,
+    max_episode_steps=n)``, default 10 for the registered ids, or a ``TimeLimit`` you add), as
+    Gymnasium's convention is. :func:`vrig.policies.run_episode` reports a truncated episode
+    with reason ``"budget"``. ``info`` carries the raw errors (``eta0``, ``rms_error``,
+    ``damage_ratio``, ``mean_eta0``), the ``iteration``, ``success``, ``reason``, ``field_seed``,
+    ``run_seed`` and any ``trip`` message.
 
     **Randomness**: only ``reset(seed=...)`` / ``self.np_random``: each reset draws the
     pseudo-field seed (or the index into ``desired``) and the run seed (rig noise of the
     iteration runs: ``run_seed + 1 + n``); a drawn pseudo-field target whose IT00 drive trips
     the rig or exceeds its full scale (the linear inverse overshoots a hardening rig: on the
     calibrated elastomeric damper about 1 target in 24) is redrawn from ``self.np_random`` up to
-    :data:`FIELD_REDRAWS` times (``info["field_seed"]`` is the one played). ``options`` may fix ``"desired"`` (a TimeHistory or
-    file), ``"field_seed"``, ``"run_seed"``: with ``model_seed=s`` and ``options={"desired": d,
-    "run_seed": s}`` a fixed gain g reproduces ``vrig.reconstruct(rig, d, gain=g, seed=s)``.
+    :data:`FIELD_REDRAWS` times (``info["field_seed"]`` is the one played). ``options`` may fix
+    ``"desired"`` (a TimeHistory or file), ``"field_seed"``, ``"run_seed"``: with
+    ``model_seed=s`` and ``options={"desired": d, "run_seed": s}`` a fixed gain g reproduces
+    ``vrig.reconstruct(rig, d, gain=g, seed=s)``.
+
+    **Split steps for batched rig runs.** ``step(action)`` is ``finish_step(play(
+    *prepare_step(action)))`` and ``reset`` is ``prepare_reset`` then ``finish_reset`` (again
+    while it returns None), where *play* plays ``(drive, iteration)`` on ``self.engine``
+    (``self.engine.play(drive, iteration)``) and gives its ``(drive, raw, processed, scores)``
+    tuple or the exception it raised. A vector env prepares N envs, plays their drives in one
+    batched rig call, then finishes each: the results are those of N ``step`` calls. The
+    contract (per env, in this order; anything else is a ``RuntimeError``):
+
+    1. ``drive, n = env.prepare_step(action)`` (or ``env.prepare_reset(seed=..., options=...)``);
+       ``drive is None`` means the update itself failed (a diverging free run): nothing to
+       play, pass ``None`` on;
+    2. play ``drive`` as iteration ``n`` on ``env.engine``; the outcome is the play tuple, or
+       the exception the play raised (:data:`~vrig.envs.physics.FAILURES` end the episode with
+       the trip penalty; any other exception is re-raised by the finish, which ends the
+       episode);
+    3. ``env.finish_step(outcome)`` -> ``(obs, reward, terminated, truncated, info)``, or
+       ``env.finish_reset(outcome)`` -> ``(obs, info)``, or None when the drawn target tripped
+       at IT00 and another was drawn: play ``env.pending`` (its IT00 drive) and finish again.
+
+    The split methods are the unwrapped env's: a vector env calling them applies the step budget
+    itself (as ``TimeLimit`` would) and the passive checker is not in the way.
+
+    **Version History**
+
+    * v1 (issue 16): ``TimeLimit`` alone owns truncation (the env never truncates;
+      ``max_iterations`` removed: a ``TypeError`` says to use ``max_episode_steps``; the
+      ``iteration`` observation is bounded by 99 instead of the budget; ``info["reason"]`` is
+      never ``"budget"`` from the env); the ``"complex"`` action mode (per band a gain
+      magnitude and a phase, ``phase_max``); ids for every rig; the step split
+      (``prepare_step`` / ``finish_step``, ``prepare_reset`` / ``finish_reset``) for batched
+      rig runs. Fixed-gain episodes of v0 and v1 are identical step for step.
+    * v0 (issue 5): initial: gains per channel x band, per channel or one, optional re-identify
+      flag; the env truncated itself at ``max_iterations`` (and ``make`` also wrapped it in
+      ``TimeLimit(max_episode_steps=10)``); ids for the SISO rigs with a side-car gym id.
 
     Parameters
     ----------
@@ -202,15 +335,19 @@ class DriveIterationEnv(gym.Env):
         files are read with :func:`vrig.io.read`).
     n_bands : int
         Number of observation / gain bands (default 4), log-spaced over the simulation band.
-    action_mode : {"bands", "channels", "scalar"}
-        Gains per drive channel and band (default), per drive channel, or one gain
-        (:class:`ActionLayout`).
+    action_mode : {"bands", "channels", "scalar", "complex"}
+        Gains per drive channel and band (default), per drive channel, one gain, or per drive
+        channel and band a gain magnitude and a phase (:class:`ActionLayout`).
     reidentify_action : bool
         Append the re-identify flag to the action (default False).
     gain_range : (float, float)
-        Bounds ``(low, high)`` of every gain, ``0 <= low < high`` (default (0, 2)).
-    max_iterations : int
-        Iteration budget (steps) before truncation; keep ``max_episode_steps`` of ``make`` equal.
+        Bounds ``(low, high)`` of every gain (magnitude), ``0 <= low < high`` (default (0, 2)).
+    phase_max : float
+        Bound of every phase in ``"complex"`` mode, ``[-phase_max, phase_max]`` rad,
+        ``0 < phase_max <= pi`` (default pi/2; ignored by the other modes).
+    max_iterations : None
+        Removed in v1 (the budget is ``TimeLimit``'s: ``gymnasium.make(...,
+        max_episode_steps=n)``); any value raises ``TypeError``.
     tolerance : float, optional
         η0 tolerance [%] (default: the rig's side-car tolerance ``rig.defaults.tolerance``,
         else :data:`FALLBACK_TOLERANCE`, 2 %; the rule: :mod:`vrig.envs`).
@@ -255,7 +392,8 @@ class DriveIterationEnv(gym.Env):
         action_mode: str = "bands",
         reidentify_action: bool = False,
         gain_range: tuple[float, float] = (0.0, 2.0),
-        max_iterations: int = 10,
+        phase_max: float = np.pi / 2,
+        max_iterations: None = None,
         tolerance: float | None = None,
         trip_penalty: float = 5.0,
         energy_penalty: float = 0.1,
@@ -268,7 +406,9 @@ class DriveIterationEnv(gym.Env):
         rig_options: dict | None = None,
         render_mode: str | None = None,
     ):
-        lo, hi = _check_env_options(render_mode, action_mode, max_iterations, gain_range)
+        lo, hi = _check_env_options(
+            render_mode, action_mode, max_iterations, gain_range, phase_max
+        )
         self.render_mode = None
         given = {
             "method": method,
@@ -294,42 +434,26 @@ class DriveIterationEnv(gym.Env):
         )
         ph = self.physics
         self.edges = band_edges(ph.band, n_bands)
-        if tolerance is None:
-            tolerance = getattr(getattr(ph.rig, "defaults", None), "tolerance", None)
-            tolerance = FALLBACK_TOLERANCE if tolerance is None else tolerance
-        if not (np.isfinite(tolerance) and tolerance > 0):
-            raise ValueError(f"tolerance must be a positive number [%], got {tolerance!r}")
         self.task = IterationTask(
             edges=self.edges,
-            tolerance=float(tolerance),
+            tolerance=_tolerance(ph.rig, tolerance),
             trip_penalty=trip_penalty,
             energy_penalty=energy_penalty,
             step_penalty=step_penalty,
         )
-        self.max_iterations = int(max_iterations)
         self.layout = ActionLayout(
-            action_mode, ph.n_inputs, n_bands, bool(reidentify_action), lo, hi
+            action_mode, ph.n_inputs, n_bands, bool(reidentify_action), lo, hi, float(phase_max)
         )
-        self._build_spaces(lo, hi)
+        self.action_space = spaces.Box(*self.layout.bounds(), dtype=np.float64)
+        self.observation_space = self.task.observation_space(ph.n_inputs, ph.n_outputs)
         self.desired_set = None if desired is None else [self._load(d) for d in desired]
         if self.desired_set is not None and not self.desired_set:
             raise ValueError("desired must hold at least one record")
         self.engine = None
+        self._pending = None
         self._done = True
 
     # ------------------------------------------------------------------ helpers
-    def _build_spaces(self, lo: float, hi: float) -> None:
-        """Action space (gains in ``[lo, hi]``, plus the re-identify flag in [0, 1]) and
-        observation space of the task."""
-        low = np.full(self.layout.size, lo)
-        high = np.full(self.layout.size, hi)
-        if self.layout.reidentify:
-            low[-1], high[-1] = 0.0, 1.0
-        self.action_space = spaces.Box(low, high, dtype=np.float64)
-        self.observation_space = self.task.observation_space(
-            self.physics.n_inputs, self.physics.n_outputs, self.max_iterations
-        )
-
     def _load(self, item) -> TimeHistory:
         if isinstance(item, (str, Path)):
             from ..io import read
@@ -346,6 +470,9 @@ class DriveIterationEnv(gym.Env):
         return TimeHistory(item.data, ph.fs, item.names, item.units)
 
     def _gains(self, action):
+        """The checked action: (gains, re-identify flag, whether a value was clipped); gains are
+        real (n_inputs, n_bands) / (n_inputs,) / (1,), or complex (n_inputs, n_bands) in
+        ``"complex"`` mode when a phase is not 0 (all phases 0: the real magnitudes)."""
         a = np.asarray(action, dtype=float)
         lay = self.layout
         if a.shape == () and lay.size == 1:
@@ -353,6 +480,7 @@ class DriveIterationEnv(gym.Env):
         if a.shape != (lay.size,):
             raise ValueError(
                 f"action must have shape ({lay.size},) ({lay.mode} gains"
+                + (" and phases" if lay.n_phases else "")
                 + (" + re-identify flag" if lay.reidentify else "")
                 + f"), got {a.shape}"
             )
@@ -362,8 +490,12 @@ class DriveIterationEnv(gym.Env):
         was_clipped = bool(np.any(clipped != a))
         g = clipped[: lay.n_gains]
         reid = bool(lay.reidentify and clipped[-1] >= 0.5)
-        if lay.mode == "bands":
+        if lay.mode in ("bands", "complex"):
             g = g.reshape(lay.n_inputs, lay.n_bands)
+        if lay.n_phases:
+            phi = clipped[lay.n_gains : lay.n_gains + lay.n_phases].reshape(g.shape)
+            if np.any(phi):
+                g = g * np.exp(1j * phi)
         return g, reid, was_clipped
 
     def _info(self, scores, *, reason: str = "", trip: str = "", clipped: bool = False) -> dict:
@@ -393,12 +525,36 @@ class DriveIterationEnv(gym.Env):
             iteration=self.iteration,
         )
 
+    def _play(self, drive, iteration: int):
+        """The outcome of playing ``drive`` on this env's engine: the play tuple, or the
+        :data:`~vrig.envs.physics.FAILURES` exception it raised (others propagate)."""
+        try:
+            return self.engine.play(drive, iteration)
+        except FAILURES as exc:
+            return exc
+
+    def _take_pending(self, kind: str) -> dict:
+        pending = self._pending
+        if pending is None or pending["kind"] != kind:
+            raise RuntimeError(f"finish_{kind} without a pending prepare_{kind}")
+        self._pending = None
+        return pending
+
+    @property
+    def pending(self):
+        """The prepared play ``(drive, iteration)`` waiting for its finish (``drive`` None: the
+        update failed, nothing to play), or None when nothing is pending."""
+        if self._pending is None:
+            return None
+        return self._pending["drive"], self.iteration
+
     # ------------------------------------------------------------------ API
     def reset(self, *, seed: int | None = None, options: dict | None = None):
         """Start an episode: draw a desired response, compute IT00DRV and play it.
 
-        As :meth:`gymnasium.Env.reset`; a reset that raises leaves no episode (``step`` then
-        raises until a reset succeeds).
+        As :meth:`gymnasium.Env.reset` (``prepare_reset``, play, ``finish_reset`` until it
+        returns the observation); a reset that raises leaves no episode (``step`` then raises
+        until a reset succeeds).
 
         Parameters
         ----------
@@ -428,9 +584,38 @@ class DriveIterationEnv(gym.Env):
             The IT00 drive of an explicit ``desired``/``field_seed``, of the ``desired`` set or
             of the last of :data:`FIELD_REDRAWS` redrawn targets exceeds a limit.
         """
+        drive, n = self.prepare_reset(seed=seed, options=options)
+        while True:
+            try:
+                done = self.finish_reset(self._play(drive, n))
+            except BaseException:
+                self._pending = None
+                raise
+            if done is not None:
+                return done
+            drive, n = self.pending
+
+    def prepare_reset(self, *, seed: int | None = None, options: dict | None = None):
+        """First half of :meth:`reset`: seed, draw the target, start the engine and compute its
+        IT00 drive (see the class docstring for the split contract).
+
+        Parameters
+        ----------
+        seed : int, optional
+            As :meth:`reset`'s.
+        options : dict, optional
+            As :meth:`reset`'s.
+
+        Returns
+        -------
+        (drive, iteration) : (ndarray (n, n_inputs), int)
+            IT00DRV and 0: play it on ``self.engine`` and pass the outcome to
+            :meth:`finish_reset`.
+        """
         # the episode is over until this reset succeeds: a reset that raises leaves no episode
         # for ``step`` to continue (it would mix the old drive with the new target)
         self._done = True
+        self._pending = None
         super().reset(seed=seed)
         options = dict(options or {})
         unknown = set(options) - {"desired", "field_seed", "run_seed"}
@@ -441,32 +626,72 @@ class DriveIterationEnv(gym.Env):
         draw = self.np_random.integers(0, 2**31 - 1, size=2)
         self.field_seed = int(options.get("field_seed", draw[0]))
         self.run_seed = int(options.get("run_seed", draw[1]))
-        ph = self.physics
         drawn = not ("desired" in options or "field_seed" in options or self.desired_set)
-        for attempt in range(FIELD_REDRAWS + 1):
-            if "desired" in options:
-                desired = self._load(options["desired"])
-            elif self.desired_set is not None:
-                desired = self.desired_set[self.field_seed % len(self.desired_set)]
-            else:
-                desired = ph.pseudo_field(self.field_seed)
-            self.desired = desired
-            self.engine = ph.start(desired, self.run_seed)
-            self.iteration = 0
-            drive = self.engine.first_drive()
+        return self._start_target(options, drawn, 0)
+
+    def _start_target(self, options: dict, drawn: bool, attempt: int):
+        """The engine and IT00 drive of this reset's target (attempt ``attempt``)."""
+        ph = self.physics
+        if "desired" in options:
+            desired = self._load(options["desired"])
+        elif self.desired_set is not None:
+            desired = self.desired_set[self.field_seed % len(self.desired_set)]
+        else:
+            desired = ph.pseudo_field(self.field_seed)
+        self.desired = desired
+        self.engine = ph.start(desired, self.run_seed)
+        self.iteration = 0
+        drive = self.engine.first_drive()
+        self._pending = {
+            "kind": "reset",
+            "drive": drive,
+            "options": options,
+            "drawn": drawn,
+            "attempt": attempt,
+        }
+        return drive, 0
+
+    def finish_reset(self, outcome):
+        """Second half of :meth:`reset`: take the IT00 play's outcome.
+
+        Parameters
+        ----------
+        outcome : tuple or BaseException
+            What playing the prepared IT00 drive gave: the ``(drive, raw, processed, scores)``
+            tuple of :meth:`vrig.reconstruction.DriveIteration.play`, or the exception raised.
+
+        Returns
+        -------
+        (observation, info) or None
+            As :meth:`reset`'s; None when a drawn pseudo-field target tripped at IT00 and
+            another was drawn (:data:`FIELD_REDRAWS`): play :attr:`pending` and finish again.
+
+        Raises
+        ------
+        RigLimitError
+            As :meth:`reset`'s (a trip that is not redrawn); any other exception ``outcome`` is
+            raised as it is.
+        """
+        pending = self._take_pending("reset")
+        if isinstance(outcome, BaseException):
             # IT00 cannot be refused quietly: there is no previous drive to fall back on. A
             # drawn pseudo-field target the linear inverse cannot start on (its IT00 drive trips
             # or exceeds the full scale: a hardening rig, e.g. the calibrated damper) is redrawn
-            try:
-                self.drive_th, self.raw, self.response, self.scores = self.engine.play(drive, 0)
-            except RigLimitError:
-                if not drawn or attempt == FIELD_REDRAWS:
-                    raise
-                self.field_seed = int(self.np_random.integers(0, 2**31 - 1))
-            else:
-                break
-        self.drive = drive
-        self.log_band_error = self.task.measure(self.engine.desres.data, self.response.data, ph.fs)
+            attempt = pending["attempt"]
+            if not (
+                isinstance(outcome, RigLimitError)
+                and pending["drawn"]
+                and attempt < FIELD_REDRAWS
+            ):
+                raise outcome
+            self.field_seed = int(self.np_random.integers(0, 2**31 - 1))
+            self._start_target(pending["options"], True, attempt + 1)
+            return None
+        self.drive_th, self.raw, self.response, self.scores = outcome
+        self.drive = pending["drive"]
+        self.log_band_error = self.task.measure(
+            self.engine.desres.data, self.response.data, self.physics.fs
+        )
         self.errors = [np.asarray(self.scores[0], dtype=float)]
         self._done = False
         return self._observe(None), self._info(self.scores)
@@ -474,14 +699,16 @@ class DriveIterationEnv(gym.Env):
     def step(self, action):
         """One iteration: update the drive with the action's gains and play it.
 
-        As :meth:`gymnasium.Env.step`.
+        As :meth:`gymnasium.Env.step` (``finish_step(play(*prepare_step(action)))``). An
+        exception other than a rig failure (e.g. ``KeyboardInterrupt`` during the play) ends the
+        episode.
 
         Parameters
         ----------
         action : array_like
             The flat action of :class:`ActionLayout` (``self.layout``), shape
-            ``self.action_space.shape``; gains outside ``gain_range`` are clipped, a wrong shape
-            or a non-finite value is a ``ValueError``.
+            ``self.action_space.shape``; gains (and phases) outside their bounds are clipped, a
+            wrong shape or a non-finite value is a ``ValueError``.
 
         Returns
         -------
@@ -494,68 +721,137 @@ class DriveIterationEnv(gym.Env):
             Every channel's η0 <= ``tolerance``, or a failure (drive beyond the limits, rig trip,
             unstable simulation or free run).
         truncated : bool
-            ``max_iterations`` steps reached without termination.
+            Always False: the budget is the ``TimeLimit`` wrapper's (``max_episode_steps``).
         info : dict
-            As :meth:`reset`'s, for this iteration: ``reason`` ``"tolerance"``, ``"budget"``,
-            ``"limit"``, ``"unstable"`` or ``""`` (the episode goes on); ``trip`` the failure's
-            message; ``action_clipped`` whether a gain was clipped. After a failure the errors are
-            the last played iteration's and ``success`` is False.
+            As :meth:`reset`'s, for this iteration: ``reason`` ``"tolerance"``, ``"limit"``,
+            ``"unstable"`` or ``""`` (the episode goes on); ``trip`` the failure's message;
+            ``action_clipped`` whether a value was clipped. After a failure the errors are the
+            last played iteration's and ``success`` is False.
 
         Raises
         ------
         RuntimeError
             No episode in progress (it ended, or the last ``reset`` raised).
         """
+        drive, n = self.prepare_step(action)
+        try:
+            outcome = None if drive is None else self._play(drive, n)
+        except BaseException:
+            self._pending, self._done = None, True
+            raise
+        return self.finish_step(outcome)
+
+    def prepare_step(self, action):
+        """First half of :meth:`step`: check the action and compute the next drive (see the
+        class docstring for the split contract).
+
+        Parameters
+        ----------
+        action : array_like
+            As :meth:`step`'s.
+
+        Returns
+        -------
+        (drive, iteration) : (ndarray (n, n_inputs) or None, int)
+            ITn+1DRV and n+1: play it on ``self.engine`` and pass the outcome to
+            :meth:`finish_step`. ``drive`` is None when the update itself failed (a diverging
+            inverse-model free run, recorded): pass ``None`` to :meth:`finish_step`.
+
+        Raises
+        ------
+        RuntimeError
+            No episode in progress, or a prepared step or reset not finished yet.
+        ValueError
+            A wrong shape or a non-finite action (nothing changes).
+        """
         if self._done:
             raise RuntimeError(
                 "no episode in progress (it ended, or the last reset() raised): call reset() first"
             )
+        if self._pending is not None:
+            raise RuntimeError(f"a prepared {self._pending['kind']} is not finished yet")
         gains, reidentify, clipped = self._gains(action)
         ph, task = self.physics, self.task
-        eta_before = self.scores[0]
-        energy_before = task.drive_energy(self.drive, ph.drive_full_scale)
-        previous = self.log_band_error
+        pending = {
+            "kind": "step",
+            "drive": None,
+            "failure": None,
+            "clipped": clipped,
+            "eta_before": self.scores[0],
+            "energy_before": task.drive_energy(self.drive, ph.drive_full_scale),
+            "previous": self.log_band_error,
+        }
         self.iteration += 1
-        truncated = self.iteration >= self.max_iterations
         try:
             if reidentify:
                 self.engine.reidentify(self.drive_th, self.raw)
             edges = self.edges if gains.ndim == 2 else None
-            drive = self.engine.next_drive(self.drive, self.response, gains, edges)
-            drv, raw, res, scores = self.engine.play(drive, self.iteration)
+            pending["drive"] = self.engine.next_drive(self.drive, self.response, gains, edges)
         except FAILURES as exc:
+            pending["failure"] = exc
+        self._pending = pending
+        return pending["drive"], self.iteration
+
+    def finish_step(self, outcome):
+        """Second half of :meth:`step`: take the play's outcome, observe and score it.
+
+        Parameters
+        ----------
+        outcome : tuple, BaseException or None
+            What playing the prepared drive gave: the ``(drive, raw, processed, scores)`` tuple
+            of :meth:`vrig.reconstruction.DriveIteration.play` or the exception raised; ignored
+            (pass None) when :meth:`prepare_step` returned no drive.
+
+        Returns
+        -------
+        (observation, reward, terminated, truncated, info)
+            As :meth:`step`'s.
+        """
+        pending = self._take_pending("step")
+        failure = pending["failure"]
+        if failure is None and isinstance(outcome, BaseException):
+            if not isinstance(outcome, FAILURES):
+                self._done = True
+                raise outcome
+            failure = outcome
+        if failure is not None:
             self._done = True
-            obs = self._observe(previous)
-            obs["iteration"][:] = self.iteration
-            reason = "limit" if isinstance(exc, RigLimitError) else "unstable"
-            info = self._info(self.scores, reason=reason, trip=str(exc), clipped=clipped)
+            obs = self._observe(pending["previous"])
+            reason = "limit" if isinstance(failure, RigLimitError) else "unstable"
+            info = self._info(
+                self.scores, reason=reason, trip=str(failure), clipped=pending["clipped"]
+            )
             info["success"] = False
-            return obs, -task.trip_penalty, True, False, info
-        self.drive_th, self.raw, self.response, self.scores, self.drive = (
-            drv,
-            raw,
-            res,
-            scores,
-            drive,
+            return obs, -self.task.trip_penalty, True, False, info
+        task, drive = self.task, pending["drive"]
+        self.drive_th, self.raw, self.response, self.scores = outcome
+        self.drive = drive
+        scores = self.scores
+        self.log_band_error = task.measure(
+            self.engine.desres.data, self.response.data, self.physics.fs
         )
-        self.log_band_error = task.measure(self.engine.desres.data, res.data, ph.fs)
         self.errors.append(np.asarray(scores[0], dtype=float))
         reward = task.reward(
-            eta_before, scores[0], energy_before, task.drive_energy(drive, ph.drive_full_scale)
+            pending["eta_before"],
+            scores[0],
+            pending["energy_before"],
+            task.drive_energy(drive, self.physics.drive_full_scale),
         )
         terminated = task.success(scores[0])
-        reason = "tolerance" if terminated else ("budget" if truncated else "")
-        self._done = terminated or truncated
+        self._done = terminated
         return (
-            self._observe(previous),
+            self._observe(pending["previous"]),
             reward,
             terminated,
-            truncated and not terminated,
-            self._info(scores, reason=reason, clipped=clipped),
+            False,
+            self._info(
+                scores, reason="tolerance" if terminated else "", clipped=pending["clipped"]
+            ),
         )
 
     def close(self):
         """End the episode and drop the engine (the rig and the cached inverse model stay);
         ``reset`` starts a new episode."""
         self.engine = None
+        self._pending = None
         self._done = True

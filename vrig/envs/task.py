@@ -12,7 +12,9 @@ from dataclasses import dataclass
 import numpy as np
 from gymnasium import spaces
 
-__all__ = ["IterationTask", "band_edges", "band_error_ratios"]
+from ..reconstruction.settings import MAX_ITERATIONS
+
+__all__ = ["ITERATION_MAX", "IterationTask", "band_edges", "band_error_ratios"]
 
 LOG_RATIO_RANGE = (-6.0, 3.0)
 """Range of the log10 band-error ratios in the observation (values beyond are clipped)."""
@@ -20,6 +22,10 @@ LOG_CHANGE_RANGE = (-3.0, 3.0)
 """Range of the log10 band-error changes in the observation (values beyond are clipped)."""
 PERCENT_MAX = 1000.0
 """η0 and RMS errors above this [%] are clipped in the observation (``info`` has the raw ones)."""
+ITERATION_MAX = MAX_ITERATIONS
+"""Upper bound of the ``iteration`` observation (99: the records are named IT00..IT99; the env
+does not know the episode's budget, which is the ``TimeLimit`` wrapper's); later iterations are
+observed as 99."""
 
 
 def band_edges(band: tuple[float, float], n_bands: int) -> np.ndarray:
@@ -127,17 +133,15 @@ class IterationTask:
         """Number of observation bands (``len(edges) - 1``)."""
         return len(self.edges) - 1
 
-    def observation_space(self, n_inputs: int, n_outputs: int, max_iterations: int) -> spaces.Dict:
+    def observation_space(self, n_inputs: int, n_outputs: int) -> spaces.Dict:
         """The gymnasium observation space of an episode: band errors and their change
-        (n_outputs, n_bands), η0 and RMS error per output [%], drive RMS and peak per input (fractions
-        of full scale) and the iteration number.
+        (n_outputs, n_bands), η0 and RMS error per output [%], drive RMS and peak per input
+        (fractions of full scale) and the iteration number (in [0, :data:`ITERATION_MAX`]).
 
         Parameters
         ----------
         n_inputs, n_outputs : int
             Numbers of drive and response channels.
-        max_iterations : int
-            The episode's iteration budget (upper bound of ``iteration``).
         """
         f32 = np.float32
         nb = self.n_bands
@@ -151,7 +155,7 @@ class IterationTask:
                 "rms_error": spaces.Box(0.0, PERCENT_MAX, shape=(n_outputs,), dtype=f32),
                 "drive_rms": spaces.Box(0.0, 1.0, shape=(n_inputs,), dtype=f32),
                 "drive_peak": spaces.Box(0.0, 1.0, shape=(n_inputs,), dtype=f32),
-                "iteration": spaces.Box(0.0, float(max_iterations), shape=(1,), dtype=f32),
+                "iteration": spaces.Box(0.0, float(ITERATION_MAX), shape=(1,), dtype=f32),
             }
         )
 
@@ -198,7 +202,7 @@ class IterationTask:
         full_scale : ndarray (n_inputs,)
             Full scale of each drive channel, same units.
         iteration : int
-            The iteration number (0: IT00).
+            The iteration number (0: IT00; observed as at most :data:`ITERATION_MAX`).
         """
         change = (
             np.zeros_like(log_band_error)
@@ -218,7 +222,7 @@ class IterationTask:
             "rms_error": box(rms_error, 0.0, PERCENT_MAX),
             "drive_rms": box(rms, 0.0, 1.0),
             "drive_peak": box(peak, 0.0, 1.0),
-            "iteration": np.array([iteration], dtype=np.float32),
+            "iteration": np.array([min(iteration, ITERATION_MAX)], dtype=np.float32),
         }
 
     @staticmethod

@@ -2,7 +2,8 @@
 
 The runner the baselines and the learned policy are compared with (``tests/test_policies.py``,
 ``benchmarks/learned_iteration.py``): ``env.reset``, then the policy's action each step until the
-episode terminates (tolerance met, a trip) or is truncated (iteration budget).
+episode terminates (tolerance met, a trip) or is truncated (the iteration budget of the
+``TimeLimit`` wrapper, ``gymnasium.make(..., max_episode_steps=n)``: reason ``"budget"``).
 """
 
 from __future__ import annotations
@@ -31,7 +32,8 @@ class EpisodeResult:
     total_reward : float
         Sum of the step rewards.
     reason : str
-        Why the episode ended (the env's ``info["reason"]``).
+        Why the episode ended: the env's ``info["reason"]`` (``"tolerance"``, ``"limit"``,
+        ``"unstable"``), or ``"budget"`` when the ``TimeLimit`` wrapper truncated it.
     """
 
     iterations: int
@@ -59,7 +61,8 @@ def run_episode(env, policy, *, seed=None, options=None) -> EpisodeResult:
     ----------
     env : gymnasium.Env
         A :class:`vrig.envs.DriveIterationEnv` (or a wrapper of one); its action layout sets the
-        shape of the actions.
+        shape of the actions. The episode's budget is its ``TimeLimit`` (the env itself never
+        truncates: an env without one runs until it terminates).
     policy : Policy
         The policy (reset after ``env.reset``, then called with each observation).
     seed : int, optional
@@ -79,7 +82,7 @@ def run_episode(env, policy, *, seed=None, options=None) -> EpisodeResult:
         res.final_eta0, res.success, res.reason = (
             info["eta0"],
             bool(info["success"]),
-            info["reason"],
+            "budget" if truncated and not terminated else info["reason"],
         )
         done = terminated or truncated
     return res

@@ -3,7 +3,9 @@
 A policy is built for one environment (it reads the env's :class:`~vrig.envs.ActionLayout`),
 ``reset()`` at the start of each episode and called with each observation; it returns a valid
 flat action (gains in the env's range). All of them work on any action mode (``bands``,
-``channels``, ``scalar``): band-wise decisions are averaged where the mode has no bands.
+``channels``, ``scalar``, ``complex``): band-wise decisions are averaged where the mode has no
+bands; in ``complex`` mode the phases are :meth:`Policy.phases` (0 unless a policy sets them:
+then the episode is the ``bands`` one, bit for bit).
 
 * :class:`FixedGain` - the classic: the same gain every iteration.
 * :class:`DecreasingGain` - ``max(floor, start * decay**n)``.
@@ -11,7 +13,8 @@ flat action (gains in the env's range). All of them work on any action mode (``b
   slowly while it falls.
 * :class:`BandRatioPolicy` - the learned one: per band ``g_b = exp(theta_b + alpha * change_b +
   beta * (error_b + 1) + gamma * n)`` from the observed log10 band-error ratio (``error_b``), its
-  change over the last iteration (``change_b``) and the iteration index ``n``; parameters found
+  change over the last iteration (``change_b``) and the iteration index ``n`` (in ``complex``
+  mode also a learned phase per band, ``phi_b``); parameters found
   by :func:`~vrig.policies.search.cross_entropy_search` (``benchmarks/learned_iteration.py``
   trains it). No GPU, no deep-learning library.
 
@@ -72,14 +75,34 @@ class Policy:
         """
         return False
 
+    def phases(self, obs):
+        """Phases [rad] per drive channel and band (n_inputs, n_bands), or anything broadcasting,
+        for the ``"complex"`` action mode (> 0: phase lead; clipped to the env's ``phase_max``;
+        default 0: the ``"bands"`` update). Not called in the other modes.
+
+        Parameters
+        ----------
+        obs : dict of str to ndarray
+            The environment's observation (``iteration``, ``band_error``,
+            ``band_error_change``, ...; see :class:`vrig.envs.DriveIterationEnv`).
+        """
+        return 0.0
+
     def __call__(self, obs) -> np.ndarray:
         lay = self.layout
-        g = np.broadcast_to(np.asarray(self.gains(obs), float), (lay.n_inputs, lay.n_bands))
+        shape = (lay.n_inputs, lay.n_bands)
+        g = np.broadcast_to(np.asarray(self.gains(obs), float), shape)
         if lay.mode == "channels":
             g = g.mean(axis=1)
         elif lay.mode == "scalar":
             g = np.array([g.mean()])
-        return lay.action(np.clip(g, lay.low, lay.high), self.reidentify(obs))
+        phases = None
+        if lay.mode == "complex":
+            phases = np.broadcast_to(np.asarray(self.phases(obs), float), shape)
+            phases = np.clip(phases, -lay.phase_max, lay.phase_max)
+        return lay.action(
+            np.clip(g, lay.low, lay.high), phases, reidentify=self.reidentify(obs)
+        )
 
     def __repr__(self) -> str:
         return self.name
@@ -212,15 +235,18 @@ class BandRatioPolicy(Policy):
     ``g_b = clip(exp(theta_b + alpha * change_b + beta * (error_b + 1) + gamma * n))``, with
     ``error_b`` the log10 band-error ratio and ``change_b`` its change over the last iteration
     (both taken as the maximum over output channels) and ``n`` the iteration index.
-    ``params = [theta_1 .. theta_B, alpha, beta, gamma]``.
+    ``params = [theta_1 .. theta_B, alpha, beta, gamma]``; in the ``"complex"`` action mode
+    followed by a phase per band ``[phi_1 .. phi_B]`` [rad] (the same for every drive channel and
+    iteration: a fixed correction of the inverse model's phase error per band).
 
     Parameters
     ----------
     env : gymnasium.Env
         A :class:`vrig.envs.DriveIterationEnv` (or a wrapper of one); its action layout sets the
         shape of the actions.
-    params : array_like, shape (n_bands + 3,)
-        ``[theta_1 .. theta_B, alpha, beta, gamma]`` (see above).
+    params : array_like, shape (n_params(env),)
+        ``[theta_1 .. theta_B, alpha, beta, gamma]`` (see above), plus ``[phi_1 .. phi_B]`` in
+        the ``"complex"`` action mode.
     """
 
     def __init__(self, env, params):
@@ -233,7 +259,8 @@ class BandRatioPolicy(Policy):
 
     @staticmethod
     def n_params(env) -> int:
-        """Length of the parameter vector for ``env``: its number of bands plus 3.
+        """Length of the parameter vector for ``env``: its number of bands plus 3 (plus the
+        number of bands again in the ``"complex"`` action mode: the phases).
 
         Parameters
         ----------
@@ -241,11 +268,12 @@ class BandRatioPolicy(Policy):
             A :class:`vrig.envs.DriveIterationEnv` (or a wrapper of one); its action layout sets the
             shape of the actions.
         """
-        return env.unwrapped.layout.n_bands + 3
+        lay = env.unwrapped.layout
+        return lay.n_bands + 3 + (lay.n_bands if lay.mode == "complex" else 0)
 
     @staticmethod
     def initial(env, gain: float = 0.8) -> np.ndarray:
-        """Parameters of the fixed gain ``gain`` (a starting point for the search).
+        """Parameters of the fixed gain ``gain`` (a starting point for the search; phases 0).
 
         Parameters
         ----------
@@ -256,7 +284,7 @@ class BandRatioPolicy(Policy):
             The fixed gain the parameters reproduce.
         """
         p = np.zeros(BandRatioPolicy.n_params(env))
-        p[:-3] = np.log(gain)
+        p[: env.unwrapped.layout.n_bands] = np.log(gain)
         return p
 
     def gains(self, obs):
@@ -269,10 +297,22 @@ class BandRatioPolicy(Policy):
             ``band_error_change``, ...; see :class:`vrig.envs.DriveIterationEnv`).
         """
         nb = self.layout.n_bands
-        theta, (alpha, beta, gamma) = self.params[:nb], self.params[nb:]
+        theta, (alpha, beta, gamma) = self.params[:nb], self.params[nb : nb + 3]
         err = np.asarray(obs["band_error"], float).max(axis=0)
         change = np.asarray(obs["band_error_change"], float).max(axis=0)
         n = float(obs["iteration"][0])
         x = theta + alpha * change + beta * (err + 1.0) + gamma * n
         return np.exp(np.clip(x, -20, 5))[None, :]
 
+    def phases(self, obs):
+        """The learned phase per band [rad] (``params[n_bands + 3:]``; ``"complex"`` mode only),
+        the same for every drive channel.
+
+        Parameters
+        ----------
+        obs : dict of str to ndarray
+            The environment's observation (``iteration``, ``band_error``,
+            ``band_error_change``, ...; see :class:`vrig.envs.DriveIterationEnv`).
+        """
+        nb = self.layout.n_bands
+        return self.params[nb + 3 : 2 * nb + 3][None, :]

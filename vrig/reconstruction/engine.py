@@ -392,6 +392,13 @@ class DriveIteration:
     def next_drive(self, drive: np.ndarray, response: TimeHistory, gain, edges=None) -> np.ndarray:
         """``ITn+1DRV = ITnDRV + gain * (inverse(DESRES) - inverse(ITnRES))``.
 
+        With complex per-band gains ``g * exp(1j * phi)`` the correction's band is scaled by
+        ``g`` and its phase advanced by ``phi`` rad (:func:`~vrig.processing.band_gains`; a
+        pure delay of the band's content when ``phi < 0``), then tapered again like the drive
+        (:meth:`shape`: the phase shift spreads the correction a little into the tapered ends,
+        and the rig starts and ends at rest). Complex gains with all phases 0 are the real
+        gains, bit for bit.
+
         Parameters
         ----------
         drive : ndarray (n, n_inputs)
@@ -399,7 +406,8 @@ class DriveIteration:
         response : TimeHistory
             ITnRES (processed).
         gain : float, sequence or ndarray (n_inputs, n_bands)
-            A scalar, one value per drive channel, or one per channel and band.
+            A scalar, one value per drive channel, or one per channel and band (real, or
+            complex: magnitude and phase per channel and band).
         edges : sequence of float, optional
             Band edges [Hz] of per-band gains (see :func:`~vrig.processing.band_gains`).
 
@@ -409,12 +417,31 @@ class DriveIteration:
             ITn+1DRV.
         """
         corr = self.correction(response)
-        g = np.asarray(gain, dtype=float)
+        g = np.asarray(gain)
+        if np.iscomplexobj(g) and np.any(g.imag):
+            if g.ndim != 2 or edges is None:
+                raise ValueError(
+                    "complex (phase-shifting) gains must be per channel and band (n_inputs, "
+                    f"n_bands) with the band edges, got shape {g.shape}"
+                )
+            return drive + self._taper(band_gains(corr, self.rig.fs, g, edges))
+        g = np.asarray(g.real if np.iscomplexobj(g) else g, dtype=float)
         if g.ndim == 2:
             if edges is None:
                 raise ValueError("per-band gains need the band edges")
             return drive + band_gains(corr, self.rig.fs, g, edges)
         return drive + np.broadcast_to(g, (self.n_inputs,)) * corr
+
+    def _taper(self, y: np.ndarray) -> np.ndarray:
+        """``y`` tapered to zero over its first and last ``taper`` seconds (the ramp of
+        :meth:`shape`, without the band limit)."""
+        m = min(round(self.taper * self.rig.fs), self.n // 4)
+        if m > 0:
+            ramp = windows.hann(2 * m + 1)[:m]
+            y = y.copy()
+            y[:m] *= ramp[:, None]
+            y[self.n - m :] *= ramp[::-1, None]
+        return y
 
 
 def play_batch(engines, drives, iterations, *, threads: int | None = None) -> list:
