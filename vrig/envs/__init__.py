@@ -48,12 +48,14 @@ from ..rigs.spec import read_defaults
 from .drive_iteration import FALLBACK_TOLERANCE, ActionLayout, DriveIterationEnv
 from .physics import IterationPhysics, clear_model_cache
 from .task import IterationTask, band_edges, band_error_ratios
+from .vector import DriveIterationVectorEnv
 
 __all__ = [
     "ENV_IDS",
     "FALLBACK_TOLERANCE",
     "ActionLayout",
     "DriveIterationEnv",
+    "DriveIterationVectorEnv",
     "IterationPhysics",
     "IterationTask",
     "band_edges",
@@ -62,6 +64,7 @@ __all__ = [
 ]
 
 _ENTRY_POINT = "vrig.envs.drive_iteration:DriveIterationEnv"
+_VECTOR_ENTRY_POINT = "vrig.envs.vector:DriveIterationVectorEnv"
 MAX_EPISODE_STEPS = 10
 _GENERIC_ID = "vrig/DriveIteration-v0"
 
@@ -89,6 +92,7 @@ for _id, _kwargs in ENV_IDS.items():
         register(
             id=_id,
             entry_point=_ENTRY_POINT,
+            vector_entry_point=_VECTOR_ENTRY_POINT,
             max_episode_steps=MAX_EPISODE_STEPS,
             kwargs=dict(_kwargs),
         )

@@ -20,7 +20,13 @@ from ..timehistory import TimeHistory
 from .physics import FAILURES, IterationPhysics
 from .task import IterationTask, band_edges
 
-__all__ = ["FALLBACK_TOLERANCE", "FIELD_REDRAWS", "ActionLayout", "DriveIterationEnv"]
+__all__ = [
+    "FALLBACK_TOLERANCE",
+    "FIELD_REDRAWS",
+    "PHYSICS_OPTIONS",
+    "ActionLayout",
+    "DriveIterationEnv",
+]
 
 FALLBACK_TOLERANCE = 2.0
 """Default η0 tolerance [%, every channel] on a rig whose side-car names none
@@ -195,6 +201,47 @@ def _tolerance(rig, tolerance) -> float:
     return float(tolerance)
 
 
+PHYSICS_OPTIONS = frozenset(
+    {"settings", "method", "method_options", "fast", "fidelity", "seconds", "bandwidth",
+     "model_seed", "id_duration", "id_rms", "decimation", "rig_seed", "rig_options"}
+)  # fmt: skip
+"""The :class:`DriveIterationEnv` arguments that build its :class:`IterationPhysics` (the rest are
+the task's and the action's): left unset when the env is given an ``IterationPhysics``."""
+
+
+def _check_shared_physics(given: dict, **options) -> None:
+    """No physics-building argument next to a given :class:`IterationPhysics` (they are its own)."""
+    defaults = {"fast": False, "rig_seed": 0}
+    named = [k.replace("id_seed", "model_seed") for k, v in given.items() if v is not None]
+    named += [k for k, v in options.items() if v is not None and v != defaults.get(k, None)]
+    if named:
+        raise ValueError(
+            f"{sorted(named)} cannot be given with an IterationPhysics: they are the physics' own"
+        )
+
+
+def _physics(rig, given: dict, settings, *, fast, fidelity, seconds, rig_seed, rig_options):
+    """The env's :class:`IterationPhysics`: ``rig`` itself when it is one (shared, see
+    :func:`_check_shared_physics`), else built from the rig and the settings."""
+    if isinstance(rig, IterationPhysics):  # shared (a batched vector env's sub-envs)
+        _check_shared_physics(
+            given, settings=settings, fast=fast, fidelity=fidelity, seconds=seconds,
+            rig_seed=rig_seed, rig_options=rig_options,
+        )  # fmt: skip
+        return rig
+    settings = IterationSettings.build(settings, **{k: v for k, v in given.items() if v is not None})
+    if fast and settings.id_duration is None:
+        settings = settings.replace(id_duration=FAST_ID_SECONDS)
+    return IterationPhysics(
+        rig,
+        settings,
+        seconds=seconds if seconds is not None else (FAST_SECONDS if fast else 20.0),
+        fidelity=fidelity or ("fast" if fast else "full"),
+        rig_seed=rig_seed,
+        rig_options=rig_options,
+    )
+
+
 class DriveIterationEnv(gym.Env):
     """Drive iteration (response reconstruction) on a virtual rig as a gymnasium environment.
 
@@ -310,8 +357,11 @@ class DriveIterationEnv(gym.Env):
 
     Parameters
     ----------
-    rig : str or Rig
-        Rig name (``vrig.list_rigs()``) or rig object.
+    rig : str, Rig or IterationPhysics
+        Rig name (``vrig.list_rigs()``) or rig object; or an :class:`IterationPhysics` to share
+        (its rig, identification settings and cached inverse model: the sub-envs of
+        :class:`~vrig.envs.DriveIterationVectorEnv`), with none of :data:`PHYSICS_OPTIONS` given
+        (a ``ValueError`` otherwise).
     settings : IterationSettings, optional
         The identification settings (method and options, band, identification drive, taper,
         ``id_seed``, ...); the keyword arguments below, when given, override its values. The
@@ -419,19 +469,10 @@ class DriveIterationEnv(gym.Env):
             "decimation": decimation,
             "id_seed": model_seed,
         }
-        settings = IterationSettings.build(
-            settings, **{k: v for k, v in given.items() if v is not None}
-        )
-        if fast and settings.id_duration is None:
-            settings = settings.replace(id_duration=FAST_ID_SECONDS)
-        self.physics = IterationPhysics(
-            rig,
-            settings,
-            seconds=seconds if seconds is not None else (FAST_SECONDS if fast else 20.0),
-            fidelity=fidelity or ("fast" if fast else "full"),
-            rig_seed=rig_seed,
-            rig_options=rig_options,
-        )
+        self.physics = _physics(
+            rig, given, settings, fast=fast, fidelity=fidelity, seconds=seconds,
+            rig_seed=rig_seed, rig_options=rig_options,
+        )  # fmt: skip
         ph = self.physics
         self.edges = band_edges(ph.band, n_bands)
         self.task = IterationTask(
