@@ -10,7 +10,13 @@ result is checked bit for bit against the single one (``identical``). Figures ar
 minute on this machine (``os.cpu_count()`` and the load average are printed: threads beyond the
 free cores only share them).
 
-    python -m benchmarks.rig_batch [--quick] [--rigs shock-absorber fuel-tank-7ch]
+The gym section (``--env``, on by default) counts drive iterations per minute of the gymnasium
+environments (fast, 4 s targets, gain 0.8 every step, the tolerance out of reach so every
+episode runs its 10 iterations; a reset plays IT00 and counts as an iteration): one env, and
+``num_envs`` envs as gymnasium's ``SyncVectorEnv`` and as vrig's batched
+:class:`~vrig.envs.DriveIterationVectorEnv` (``gymnasium.make_vec``'s default for a vrig id).
+
+    python -m benchmarks.rig_batch [--quick] [--rigs shock-absorber fuel-tank-7ch] [--no-env]
 """
 
 from __future__ import annotations
@@ -86,10 +92,46 @@ def _plays(rig, xs, threads_list, fraction) -> list[tuple[str, float, bool]]:
     return rows
 
 
+def _env_rate(env, n: int, steps: int) -> float:
+    """Drive iterations per minute of ``steps`` vector steps of ``env`` (n sub-envs) after a reset
+    (the reset, identification included, is not timed)."""
+    env.reset(seed=0)
+    action = np.full(env.action_space.shape, 0.8)
+    t0 = time.perf_counter()
+    for _ in range(steps):
+        env.step(action)
+    return _per_minute(n * steps, time.perf_counter() - t0)
+
+
+def env_throughput(rig: str, n: int, steps: int) -> list[tuple[str, float]]:
+    """(mode, drive iterations per minute) of one env and of ``n`` envs, sync and batched."""
+    import gymnasium as gym
+
+    from vrig.envs import ENV_IDS
+
+    env_id = next(i for i, kw in ENV_IDS.items() if kw.get("rig") == rig)
+    kw = {"fast": True, "tolerance": 1e-9}
+    rows = []
+    for label, make in (
+        ("one env", lambda: gym.make_vec(env_id, 1, vectorization_mode="sync", **kw)),
+        (f"sync x{n}", lambda: gym.make_vec(env_id, n, vectorization_mode="sync", **kw)),
+        (f"batched x{n}", lambda: gym.make_vec(env_id, n, **kw)),
+    ):
+        env = make()
+        try:
+            k = env.num_envs
+            rows.append((label, _env_rate(env, k, max(2, steps // k))))
+        finally:
+            env.close()
+    return rows
+
+
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("--quick", action="store_true", help="batch size 8, 2 threads only")
     p.add_argument("--rigs", nargs="+", default=["shock-absorber", "fuel-tank-7ch"])
+    p.add_argument("--no-env", action="store_true", help="leave out the gym section")
+    p.add_argument("--no-rig", action="store_true", help="leave out the rig / engine section")
     args = p.parse_args(argv)
     sizes, threads = ([8], [2]) if args.quick else ([8, 16], [2, 4])
     print(f"rig batch throughput: {SECONDS:g} s drives, fast fidelity, "
@@ -98,7 +140,7 @@ def main(argv=None) -> int:
     header = f"{'rig':<16} {'batch':>5}  {'mode':<18} {'runs/min':>9} {'iter/min':>9}  identical"
     print(header)
     print("-" * len(header))
-    for name in args.rigs:
+    for name in [] if args.no_rig else args.rigs:
         rig = vrig.load_rig(name, seed=0, fidelity="fast")
         fraction = _fraction(rig)  # also compiles the callbacks and makes the clones
         for size in sizes:
@@ -108,6 +150,13 @@ def main(argv=None) -> int:
             for (mode, rpm, same_r), (_, ipm, same_p) in zip(runs, plays, strict=True):
                 same = "yes" if same_r and same_p else "NO"
                 print(f"{name:<16} {size:>5}  {mode:<18} {rpm:>9.0f} {ipm:>9.0f}  {same}")
+    if not args.no_env:
+        n, steps = (4, 24) if args.quick else (8, 80)
+        print(f"\ngym drive iterations per minute (fast, 4 s targets, {n} envs, gain 0.8, "
+              f"load average {os.getloadavg()[0]:.1f}):")  # fmt: skip
+        for name in args.rigs:
+            for label, rate in env_throughput(name, n, steps):
+                print(f"{name:<16} {label:<14} {rate:>9.0f} iterations/min", flush=True)
     return 0
 
 
