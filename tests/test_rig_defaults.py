@@ -20,7 +20,7 @@ from vrig.rigs import ChannelSpec, FileRig, OutputSubset, RigDefaults
 from vrig.rigs.spec import MethodDefaults, read_defaults
 
 MODELS = Path(__file__).resolve().parents[1] / "models"
-GENERIC_ID = "vrig/DriveIteration-v0"
+GENERIC_ID = "vrig/DriveIteration-v1"
 
 
 def _side_cars() -> dict:
@@ -114,9 +114,9 @@ def test_variant_severity_and_overrides_do_not_change_the_defaults(name):
         ({"description": "x", "band": [-1.0, 10.0]}, r"reconstruction.band\[0\]"),
         ({"band": [10.0, 60.0]}, "description"),  # a band says why
         ({"gym": {"id": "Shaker", "tolerance": 1.0, "description": "x"}}, "reconstruction.gym.id"),
-        ({"gym": {"id": "vrig/X-v0", "tolerance": 0.0, "description": "x"}}, "tolerance"),
-        ({"gym": {"id": "vrig/X-v0", "description": "x"}}, "tolerance"),
-        ({"gym": {"id": "vrig/X-v0", "tolerance": 1.0, "description": "x", "tol": 1}}, "tol"),
+        ({"gym": {"id": "vrig/X-v1", "tolerance": 0.0, "description": "x"}}, "tolerance"),
+        ({"gym": {"id": "vrig/X-v1", "description": "x"}}, "tolerance"),
+        ({"gym": {"id": "vrig/X-v1", "tolerance": 1.0, "description": "x", "tol": 1}}, "tol"),
     ],
 )
 def test_a_bad_side_car_default_is_refused_naming_the_file(tmp_path, block, key):
@@ -214,7 +214,7 @@ def test_the_env_tolerance_is_the_side_cars(tmp_path):
     env = gym.make(documented["id"], fast=True)
     assert env.unwrapped.task.tolerance == documented["tolerance"]
     env.close()
-    # the side-car's tolerance, also for a user side-car and under vrig/DriveIteration-v0
+    # the side-car's tolerance, also for a user side-car and under vrig/DriveIteration-v1
     user = _user_side_car(
         tmp_path,
         "shock-absorber",

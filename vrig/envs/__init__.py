@@ -62,21 +62,26 @@ __all__ = [
 
 _ENTRY_POINT = "vrig.envs.drive_iteration:DriveIterationEnv"
 MAX_EPISODE_STEPS = 10
-_GENERIC_ID = "vrig/DriveIteration-v0"
+_GENERIC_ID = "vrig/DriveIteration-v1"
 
 
 def _shipped_env_ids() -> dict:
-    """The generic id, then each shipped rig's side-car gym id (``{"rig": name}``); an id
-    named twice is a :class:`~vrig.errors.RigModelError` naming both side-cars."""
+    """The generic id, then each shipped rig's side-car gym id (``{"rig": name}``, plus
+    ``"method"`` where the side-car's ``gym.method`` names one); an id named twice is a
+    :class:`~vrig.errors.RigModelError` naming both side-cars."""
     ids, where = {_GENERIC_ID: {}}, {_GENERIC_ID: "vrig.envs"}
     for name in list_rigs():
         path = rig_path(name)
-        gym_id = read_defaults(path).gym_id
+        defaults = read_defaults(path)
+        gym_id = defaults.gym_id
         if gym_id is None:
             continue
         if gym_id in ids:
             raise RigModelError(f"{path}: gym id {gym_id!r} is already {where[gym_id]}'s")
-        ids[gym_id], where[gym_id] = {"rig": name}, str(path)
+        kwargs = {"rig": name}
+        if defaults.gym_method is not None:
+            kwargs["method"] = defaults.gym_method
+        ids[gym_id], where[gym_id] = kwargs, str(path)
     return ids
 
 
