@@ -296,6 +296,10 @@ class RigDefaults:
         The env's default inverse-model method on this rig (side-car ``gym.method``; the id's
         ``method`` keyword, global default ``"arx"``), e.g. ``"split"`` where the full-spectrum
         methods are ``unsupported``.
+    gym_gain : float or None
+        The fixed gain in (0, 2] of the tolerance rule (:mod:`vrig.envs`) where it differs from
+        the method's or the rig's ``gain`` (side-car ``gym.gain``): the fixed-gain baseline of
+        the env on this rig. The env's gains are its actions; this sets none of them.
     tolerance : float or None
         Default η0 tolerance [%] of the drive-iteration env on this rig, measured by the rule
         stated in :mod:`vrig.envs` (global default 2 %).
@@ -310,6 +314,7 @@ class RigDefaults:
     gain: float | None = None
     gym_id: str | None = None
     gym_method: str | None = None
+    gym_gain: float | None = None
     tolerance: float | None = None
     id_rms: float | None = None
     methods: Mapping[str, MethodDefaults] = field(default_factory=lambda: MappingProxyType({}))
@@ -836,6 +841,7 @@ def _read_defaults(raw: dict, fs: float, where: str) -> RigDefaults:
         gain=None if "gain" not in block else float(block["gain"]),
         gym_id=gym.get("id"),
         gym_method=gym_method,
+        gym_gain=None if "gain" not in gym else float(gym["gain"]),
         tolerance=None if "tolerance" not in gym else float(gym["tolerance"]),
         id_rms=None if "id_rms" not in block else float(block["id_rms"]),
         methods=MappingProxyType(methods),
