@@ -115,6 +115,9 @@ class IterationPhysics:
         decimation, taper, ``id_seed``); the band defaults to :func:`vrig.field.default_band` and
         ``id_duration`` to ``seconds``. ``id_seed`` is fixed for the life of the physics, so every
         episode reuses the same identified model; the run seed is per episode (:meth:`start`).
+        The rig's side-car defaults for the method (options, identification level) fill what
+        the settings leave unset (:func:`rig_settings`); a method the side-car marks
+        ``unsupported`` is a ``ValueError``.
     seconds : float
         Length of the pseudo-field desired responses [s].
     fidelity : {"full", "fast"}
