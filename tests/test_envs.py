@@ -3,12 +3,9 @@ vrig.reconstruct, observation/reward meaning and invalid actions (fast rigs, 4 s
 
 from __future__ import annotations
 
-import warnings
-
 import gymnasium as gym
 import numpy as np
 import pytest
-from gymnasium.utils.env_checker import check_env
 
 import vrig
 from identification import metrics
@@ -70,14 +67,7 @@ def test_environments_are_registered_on_import_vrig():
     assert vrig.envs.DriveIterationEnv is not None
 
 
-@pytest.mark.parametrize("env_id", list(ENV_IDS))
-def test_check_env_passes_for_every_registered_env(env_id):
-    e = make_short(env_id)
-    with warnings.catch_warnings():
-        # the gains are not a [-1, 1] box on purpose (gain 0.8 means 0.8): that advice only
-        warnings.filterwarnings("ignore", message=".*symmetric and normalized.*")
-        check_env(e.unwrapped)
-    e.close()
+# check_env of every registered id: tests/test_gym_ids.py (the seven-channel tank's is slow)
 
 
 def test_the_same_seed_gives_identical_trajectories():
