@@ -1,7 +1,7 @@
 """Learned drive-iteration strategies against the classic fixed gain (issue 5).
 
 For each rig (shock-absorber, elastomeric-damper), on the ``fast`` environment
-(``gymnasium.make("vrig/<Rig>-v0", fast=True)``: reduced-fidelity rig, 4 s pseudo-field
+(``gymnasium.make("vrig/<Rig>-v1", fast=True)``: reduced-fidelity rig, 4 s pseudo-field
 targets, the rig's default tolerance, budget 10 iterations):
 
 1. trains :class:`vrig.policies.BandRatioPolicy` (per-band gains from the observed band-error
@@ -224,7 +224,7 @@ def episode_times(rigs=("shock-absorber", "elastomeric-damper", "shaker"), repea
     out = {}
     for rig in rigs:
         for label, kw in (("fast", {"fast": True}), ("default", {})):
-            env = gym.make("vrig/DriveIteration-v0", rig=rig, tolerance=1e-9, **kw)
+            env = gym.make("vrig/DriveIteration-v1", rig=rig, tolerance=1e-9, **kw)
             env.reset(seed=0)  # identifies the model (cached) and warms up
             times = []
             for r in range(repeats):

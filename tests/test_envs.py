@@ -3,12 +3,9 @@ vrig.reconstruct, observation/reward meaning and invalid actions (fast rigs, 4 s
 
 from __future__ import annotations
 
-import warnings
-
 import gymnasium as gym
 import numpy as np
 import pytest
-from gymnasium.utils.env_checker import check_env
 
 import vrig
 from identification import metrics
@@ -18,11 +15,11 @@ from vrig.io import write
 from vrig.reconstruction import reconstruct
 
 
-def make(env_id="vrig/ShockAbsorber-v0", **kw):
+def make(env_id="vrig/ShockAbsorber-v1", **kw):
     return gym.make(env_id, fast=True, **kw)
 
 
-def make_short(env_id="vrig/ShockAbsorber-v0", **kw):
+def make_short(env_id="vrig/ShockAbsorber-v1", **kw):
     """API checks only: 2 s targets (the shortest allowed) keep them quick."""
     return make(env_id, seconds=2.0, **kw)
 
@@ -60,8 +57,8 @@ def test_environments_are_registered_on_import_vrig():
         spec = gym.spec(env_id)
         assert spec.max_episode_steps == 10
         assert spec.entry_point == "vrig.envs.drive_iteration:DriveIterationEnv"
-    assert gym.spec("vrig/ElastomericDamper-v0").kwargs["rig"] == "elastomeric-damper"
-    assert gym.spec("vrig/LightTruckFront-v0").kwargs["rig"] == "light-truck-front"
+    assert gym.spec("vrig/ElastomericDamper-v1").kwargs["rig"] == "elastomeric-damper"
+    assert gym.spec("vrig/LightTruckFront-v1").kwargs["rig"] == "light-truck-front"
     # every per-rig id has a measured tolerance (its side-car's), not the 2 % fallback
     for env_id, kwargs in ENV_IDS.items():
         if "rig" in kwargs:
@@ -70,14 +67,7 @@ def test_environments_are_registered_on_import_vrig():
     assert vrig.envs.DriveIterationEnv is not None
 
 
-@pytest.mark.parametrize("env_id", list(ENV_IDS))
-def test_check_env_passes_for_every_registered_env(env_id):
-    e = make_short(env_id)
-    with warnings.catch_warnings():
-        # the gains are not a [-1, 1] box on purpose (gain 0.8 means 0.8): that advice only
-        warnings.filterwarnings("ignore", message=".*symmetric and normalized.*")
-        check_env(e.unwrapped)
-    e.close()
+# check_env of every registered id: tests/test_gym_ids.py (the seven-channel tank's is slow)
 
 
 def test_the_same_seed_gives_identical_trajectories():
@@ -309,7 +299,7 @@ def test_a_drawn_target_whose_it00_trips_is_redrawn_an_explicit_one_raises(monke
 
 @pytest.mark.slow
 @pytest.mark.parametrize(
-    "env_id,seed", [("vrig/LightTruckFront-v0", 0), ("vrig/ShockAbsorber-v0", 1)]
+    "env_id,seed", [("vrig/LightTruckFront-v1", 0), ("vrig/ShockAbsorber-v1", 1)]
 )
 def test_the_default_tolerance_is_reached_at_gain_08_but_not_at_it00(env_id, seed):
     """The tolerance rule (vrig.envs) on the default (full-fidelity, 20 s) env: the slowest of the

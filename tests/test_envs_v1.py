@@ -19,7 +19,7 @@ from vrig.policies import BandRatioPolicy, FixedGain, run_episode
 from vrig.processing import band_gains
 
 
-def make_short(env_id="vrig/ShockAbsorber-v0", **kw):
+def make_short(env_id="vrig/ShockAbsorber-v1", **kw):
     """2 s targets on the fast rig: quick."""
     return gym.make(env_id, fast=True, seconds=2.0, **kw)
 

@@ -20,7 +20,7 @@ from vrig.rigs import ChannelSpec, FileRig, OutputSubset, RigDefaults
 from vrig.rigs.spec import MethodDefaults, read_defaults
 
 MODELS = Path(__file__).resolve().parents[1] / "models"
-GENERIC_ID = "vrig/DriveIteration-v0"
+GENERIC_ID = "vrig/DriveIteration-v1"
 
 
 def _side_cars() -> dict:
@@ -58,6 +58,8 @@ def test_rig_defaults_are_the_side_cars_values(name):
         band=None if "band" not in block else tuple(block["band"]),
         gain=block.get("gain"),
         gym_id=gym_block.get("id"),
+        gym_method=gym_block.get("method"),
+        gym_gain=gym_block.get("gain"),
         tolerance=gym_block.get("tolerance"),
         id_rms=block.get("id_rms"),
         methods=methods,
@@ -83,6 +85,10 @@ def test_the_shipped_side_cars_name_the_documented_defaults():
         "shaker": 0.5,
         "radiator": 3.0,
         "light-truck-front": 4.1,
+        "motorcycle-rear": 6.4,
+        "pneumatic-trailer": 6.8,
+        "fuel-tank-2ch": 22.0,
+        "fuel-tank-7ch": 14.0,
     }
 
 
@@ -114,9 +120,24 @@ def test_variant_severity_and_overrides_do_not_change_the_defaults(name):
         ({"description": "x", "band": [-1.0, 10.0]}, r"reconstruction.band\[0\]"),
         ({"band": [10.0, 60.0]}, "description"),  # a band says why
         ({"gym": {"id": "Shaker", "tolerance": 1.0, "description": "x"}}, "reconstruction.gym.id"),
-        ({"gym": {"id": "vrig/X-v0", "tolerance": 0.0, "description": "x"}}, "tolerance"),
-        ({"gym": {"id": "vrig/X-v0", "description": "x"}}, "tolerance"),
-        ({"gym": {"id": "vrig/X-v0", "tolerance": 1.0, "description": "x", "tol": 1}}, "tol"),
+        ({"gym": {"id": "vrig/X-v1", "tolerance": 0.0, "description": "x"}}, "tolerance"),
+        ({"gym": {"id": "vrig/X-v1", "description": "x"}}, "tolerance"),
+        ({"gym": {"id": "vrig/X-v1", "tolerance": 1.0, "description": "x", "tol": 1}}, "tol"),
+        (
+            {"gym": {"id": "vrig/X-v1", "method": "ARX", "tolerance": 1.0, "description": "x"}},
+            "reconstruction.gym.method",
+        ),
+        (
+            {"gym": {"id": "vrig/X-v1", "gain": 2.5, "tolerance": 1.0, "description": "x"}},
+            "reconstruction.gym.gain",
+        ),
+        (  # the env's default method cannot be one the side-car marks unsupported
+            {
+                "methods": {"narx": {"description": "x", "unsupported": "the text says so"}},
+                "gym": {"id": "vrig/X-v1", "method": "narx", "tolerance": 1.0, "description": "x"},
+            },
+            "reconstruction.gym.method",
+        ),
     ],
 )
 def test_a_bad_side_car_default_is_refused_naming_the_file(tmp_path, block, key):
@@ -196,7 +217,11 @@ def test_an_output_subset_has_no_side_car_defaults():
 # ---------------------------------------------------------------------------------------------
 def test_the_registered_ids_are_those_the_side_cars_declare():
     declared = {
-        d["reconstruction"]["gym"]["id"]: {"rig": name}
+        d["reconstruction"]["gym"]["id"]: {
+            "rig": name,
+            **({"method": d["reconstruction"]["gym"]["method"]}
+               if "method" in d["reconstruction"]["gym"] else {}),
+        }
         for name, d in _side_cars().items()
         if "gym" in d.get("reconstruction", {})
     }
@@ -214,7 +239,7 @@ def test_the_env_tolerance_is_the_side_cars(tmp_path):
     env = gym.make(documented["id"], fast=True)
     assert env.unwrapped.task.tolerance == documented["tolerance"]
     env.close()
-    # the side-car's tolerance, also for a user side-car and under vrig/DriveIteration-v0
+    # the side-car's tolerance, also for a user side-car and under vrig/DriveIteration-v1
     user = _user_side_car(
         tmp_path,
         "shock-absorber",
@@ -223,9 +248,10 @@ def test_the_env_tolerance_is_the_side_cars(tmp_path):
     env = gym.make(GENERIC_ID, rig=vrig.load_rig(user), fast=True)
     assert env.unwrapped.task.tolerance == 7.5
     env.close()
-    # a rig whose side-car names none: the global fallback
-    side_car = json.loads(vrig.rig_path("motorcycle-rear").read_text())
-    assert "gym" not in side_car.get("reconstruction", {})
-    env = gym.make(GENERIC_ID, rig="motorcycle-rear", fast=True)
+    # a rig whose side-car names none (every shipped rig names one): the global fallback
+    user = _user_side_car(
+        tmp_path, "motorcycle-rear", lambda d: d["reconstruction"].pop("gym")
+    )
+    env = gym.make(GENERIC_ID, rig=vrig.load_rig(user), method="frf", fast=True)
     assert env.unwrapped.task.tolerance == FALLBACK_TOLERANCE
     env.close()

@@ -19,12 +19,12 @@ from identification.errors import SimulationDivergedError
 
 from ..errors import RigLimitError, SimulationInstabilityError
 from ..field import default_band, pseudo_field
-from ..reconstruction import DriveIteration, IterationSettings
+from ..reconstruction import DriveIteration, InverseArx, InverseNarx, IterationSettings
 from ..reconstruction.settings import cache_key
 from ..rigs import load_rig
 from ..timehistory import TimeHistory
 
-__all__ = ["IterationPhysics", "clear_model_cache"]
+__all__ = ["IterationPhysics", "clear_model_cache", "rig_settings"]
 
 _CACHE_SIZE = 16
 _FIELD_CACHE_SIZE = 256  # pseudo-field records per physics (a 20 s SISO record is 80 kB)
@@ -34,6 +34,72 @@ _MODELS: OrderedDict = OrderedDict()
 def clear_model_cache() -> None:
     """Forget every identified inverse model (the next reset identifies again)."""
     _MODELS.clear()
+
+
+def _method_options(name: str, m, band) -> dict:
+    """The side-car's :class:`~vrig.rigs.spec.MethodDefaults` ``m`` of method ``name`` as
+    keyword arguments of :func:`~vrig.reconstruction.methods.make_method`, built as
+    ``vrig reconstruct`` builds the method (``order``, ``degree``, ``focus``, ``split_hz``;
+    ``split`` without a side-car split: the command's default, the geometric mean of the band
+    [Hz], or a quarter of its upper edge when it starts at 0 Hz)."""
+    if name == "arx":
+        return {"order": m.order} if m.order is not None else {}
+    if name in ("narx", "error-signal"):
+        order = "order" if name == "narx" else "linear_order"
+        given = {order: m.order, "degree": m.degree, "focus": m.focus}
+        return {k: v for k, v in given.items() if v is not None}
+    if name == "split":
+        lo, hi = band
+        split = m.split_hz if m.split_hz is not None else (np.sqrt(lo * hi) if lo > 0 else hi / 4)
+        out = {"split_hz": float(split)}
+        if m.order is not None or m.degree is not None:
+            order = 4 if m.order is None else m.order
+            out["low"] = InverseNarx(order, m.degree) if m.degree else InverseArx(order)
+            out["high"] = InverseArx(order)
+        return out
+    return {}  # frf: no option in the side-car's vocabulary
+
+
+def rig_settings(rig, settings: IterationSettings, band) -> IterationSettings:
+    """``settings`` with the rig's own defaults for its method where the caller gave none: the
+    side-car's ``reconstruction.methods.METHOD`` options (``order``, ``degree``, ``focus``,
+    ``split_hz``; a key of ``settings.method_options`` wins) and identification level
+    (``id_rms``, a fraction of each drive's full scale, else the rig's ``id_rms``; used unless
+    ``settings.id_rms`` is set), as ``vrig reconstruct`` takes them. The iteration gain is not
+    taken (the env's actions are the gains); the band is :func:`vrig.field.default_band`'s.
+
+    Parameters
+    ----------
+    rig : Rig
+        The rig; one without ``defaults`` (not built from a side-car) or a method given as an
+        object leaves ``settings`` unchanged.
+    settings : IterationSettings
+        The caller's settings.
+    band : (float, float)
+        The simulation band [Hz] (the default split frequency of ``split`` derives from it).
+
+    Raises
+    ------
+    ValueError
+        The side-car marks the method ``unsupported`` on this rig (the message quotes why).
+    """
+    defaults = getattr(rig, "defaults", None)
+    name = settings.method
+    if defaults is None or not isinstance(name, str):
+        return settings
+    m = defaults.method(name)
+    if m.unsupported:
+        raise ValueError(
+            f"method {name!r} is not supported on rig {getattr(rig, 'name', rig)!r}: "
+            f"{m.unsupported} (its side-car's reconstruction.methods.{name}; the env's default "
+            f"method on this rig: {defaults.gym_method or 'arx'!r})"
+        )
+    options = {**_method_options(name, m, band), **settings.method_options}
+    changes = {"method_options": options}
+    level = m.id_rms if m.id_rms is not None else defaults.id_rms
+    if settings.id_rms is None and level is not None:
+        changes["id_rms"] = tuple(float(level * c.full_scale) for c in rig.inputs)
+    return settings.replace(**changes)
 
 
 class IterationPhysics:
@@ -49,6 +115,9 @@ class IterationPhysics:
         decimation, taper, ``id_seed``); the band defaults to :func:`vrig.field.default_band` and
         ``id_duration`` to ``seconds``. ``id_seed`` is fixed for the life of the physics, so every
         episode reuses the same identified model; the run seed is per episode (:meth:`start`).
+        The rig's side-car defaults for the method (options, identification level) fill what
+        the settings leave unset (:func:`rig_settings`); a method the side-car marks
+        ``unsupported`` is a ``ValueError``.
     seconds : float
         Length of the pseudo-field desired responses [s].
     fidelity : {"full", "fast"}
@@ -86,6 +155,7 @@ class IterationPhysics:
             options["id_seed"] = options.pop("model_seed")
         settings = IterationSettings.build(settings, **options)
         band = tuple(float(b) for b in (settings.bandwidth or default_band(self.rig)))
+        settings = rig_settings(self.rig, settings, band)
         duration = settings.id_duration if settings.id_duration is not None else float(seconds)
         self.settings = settings.replace(bandwidth=band, id_duration=float(duration))
         self.band = band

@@ -290,8 +290,16 @@ class RigDefaults:
     gain : float or None
         Iteration gain in (0, 2] of ``vrig reconstruct`` (global default 0.8).
     gym_id : str or None
-        The gymnasium id of the rig (``"vrig/Shaker-v0"``); a shipped rig's id is registered on
+        The gymnasium id of the rig (``"vrig/Shaker-v1"``); a shipped rig's id is registered on
         ``import vrig`` (:data:`vrig.envs.ENV_IDS`).
+    gym_method : str or None
+        The env's default inverse-model method on this rig (side-car ``gym.method``; the id's
+        ``method`` keyword, global default ``"arx"``), e.g. ``"split"`` where the full-spectrum
+        methods are ``unsupported``.
+    gym_gain : float or None
+        The fixed gain in (0, 2] of the tolerance rule (:mod:`vrig.envs`) where it differs from
+        the method's or the rig's ``gain`` (side-car ``gym.gain``): the fixed-gain baseline of
+        the env on this rig. The env's gains are its actions; this sets none of them.
     tolerance : float or None
         Default η0 tolerance [%] of the drive-iteration env on this rig, measured by the rule
         stated in :mod:`vrig.envs` (global default 2 %).
@@ -305,6 +313,8 @@ class RigDefaults:
     band: tuple[float, float] | None = None
     gain: float | None = None
     gym_id: str | None = None
+    gym_method: str | None = None
+    gym_gain: float | None = None
     tolerance: float | None = None
     id_rms: float | None = None
     methods: Mapping[str, MethodDefaults] = field(default_factory=lambda: MappingProxyType({}))
@@ -817,10 +827,21 @@ def _read_defaults(raw: dict, fs: float, where: str) -> RigDefaults:
             raise RigParameterError(
                 f"{where}: {key} must be {allowed}, got {split:g}", key, split, allowed
             )
+    gym_method = gym.get("method")
+    if gym_method is not None and gym_method in methods and methods[gym_method].unsupported:
+        key = "reconstruction.gym.method"
+        raise RigParameterError(
+            f"{where}: {key} {gym_method!r} is marked unsupported in reconstruction.methods",
+            key,
+            gym_method,
+            "a method not marked unsupported",
+        )
     return RigDefaults(
         band=None if band is None else _band(band, fs, where, "reconstruction.band"),
         gain=None if "gain" not in block else float(block["gain"]),
         gym_id=gym.get("id"),
+        gym_method=gym_method,
+        gym_gain=None if "gain" not in gym else float(gym["gain"]),
         tolerance=None if "tolerance" not in gym else float(gym["tolerance"]),
         id_rms=None if "id_rms" not in block else float(block["id_rms"]),
         methods=MappingProxyType(methods),
