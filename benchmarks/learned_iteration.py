@@ -19,7 +19,8 @@ default tolerance, budget 10 iterations):
 3. prints mean iterations-to-tolerance (an episode that never meets the tolerance counts as
    budget + 1), success rate, mean and max final η0 and trips, and the best learned policy
    (CEM or SB3) against the best fixed gain: target >= 25 % fewer iterations at equal or lower
-   mean final η0 on a SISO rig, fewer iterations at equal or lower final η0 on a MIMO rig.
+   mean final η0 on a SISO rig, better on a MIMO rig (:func:`compare`). "final η0" is the mean
+   over the response channels; the tolerance applies to every channel.
 
     python -m benchmarks.learned_iteration            # full: ~18 min on this busy 2-core box
     python -m benchmarks.learned_iteration --quick    # ~3 min (a smoke run: tiny training)
@@ -307,7 +308,8 @@ def compare(rows: dict, mimo: bool) -> dict:
 
     Best = fewest mean iterations to tolerance, then lowest mean final η0. Target: on a SISO
     rig >= :data:`TARGET` (25 %) fewer iterations at equal or lower mean final η0; on a MIMO
-    rig fewer iterations at equal or lower mean final η0.
+    rig better in that order: fewer iterations at equal or lower mean final η0, or as many
+    iterations (e.g. all never met: budget + 1) at a lower mean final η0.
 
     Parameters
     ----------
@@ -326,9 +328,13 @@ def compare(rows: dict, mimo: bool) -> dict:
     best_learned = best([k for k in rows if k.startswith(("learned", "SB3"))])
     f, lrn = rows[best_fixed], rows[best_learned]
     reduction = 1.0 - lrn["mean_iterations"] / f["mean_iterations"]
-    aim = 0.0 if mimo else TARGET
     ok = lrn["mean_final_eta0"] <= f["mean_final_eta0"] + 1e-12
-    met = (reduction > 0 if mimo else reduction >= aim) and ok
+    if mimo:
+        fewer = lrn["mean_iterations"] < f["mean_iterations"]
+        lower = lrn["mean_final_eta0"] < f["mean_final_eta0"]
+        met = ok and (fewer or (lrn["mean_iterations"] == f["mean_iterations"] and lower))
+    else:
+        met = ok and reduction >= TARGET
     return {
         "best_fixed": best_fixed,
         "best_learned": best_learned,
@@ -421,7 +427,7 @@ def policy_records(results: list[dict]) -> list[dict]:
 def _print(res):
     print(
         f"\n{res['rig']} ({res['env']}, fast, {res['segment_s']:g} s targets, tolerance "
-        f"{res['tolerance_percent']:g} % η0, budget {res['budget']}; "
+        f"{res['tolerance_percent']:g} % η0 on every channel, budget {res['budget']}; "
         f"{len(res['held_out_seeds'])} held-out targets)"
     )
     print(
