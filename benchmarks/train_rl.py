@@ -23,13 +23,15 @@ IT00 drive trips the rig, drawn from [0, 2**31)) is never used: a target that tr
 by the wrapper from the same range. The held-out targets of ``learned_iteration.py`` start at
 ``HELD_OUT_BASE`` = 100001.
 
-**Why SAC by default.** A fast SISO episode step costs ~0.1 s of rig simulation, so a 25 min
-budget is ~15,000 env steps: an off-policy learner that re-uses every transition many times
-(SAC: one gradient step per env step from a replay buffer) fits that budget; on-policy PPO
-discards each rollout after a few epochs. In a 4 min trial on the shock absorber (``--minutes
-4``, see ``benchmarks/README.md``) SAC's mean episode return rose above PPO's. The gains'
-``Box`` [0, 2] suits SAC's squashed Gaussian (PPO's Gaussian is clipped at the bounds: at its
-initial mean 0 half of its gains are clipped to 0).
+**Why SAC by default.** A fast SISO step costs 0.1-0.4 s of rig simulation (idle vs busy
+2-core box) and a reset ~1 s more (the new pseudo-field target), so a 25 min budget is a few
+thousand env steps: an off-policy learner that re-uses every transition (SAC: one gradient step
+per env step from a replay buffer) fits that budget; on-policy PPO discards each rollout after a
+few epochs. In a 5 min trial on the shock absorber (``--minutes 5``, both at once; figures in
+``benchmarks/README.md``) SAC's mean return over the last 20 episodes was +2.71 at 7.9
+iterations per episode, PPO's +1.95 at 9.95. The gains' ``Box`` [0, 2] suits SAC's squashed
+Gaussian (PPO's Gaussian is clipped at the bounds: at its initial mean 0 half of its gains are
+clipped to 0).
 
 Progress lines every ``--progress`` s (default 20): steps, episodes, steps/s, mean return and
 mean iterations (episode length) over the last 20 episodes. ``--minutes`` stops training
