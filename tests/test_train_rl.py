@@ -196,6 +196,8 @@ def test_training_saves_the_model_and_its_record(trained):
     assert on_disk["steps"] == rec["steps"] >= 30
     assert on_disk["train_seed_range"] == [1, 100_000] and on_disk["held_out_base"] == 100_001
     assert on_disk["curve"] and on_disk["wall_s"] > 0 and on_disk["torch_threads"] == 1
+    # 30 steps are at most 3 episodes, fewer than the best-return window: the final policy
+    assert on_disk["kept"] == "final" and on_disk["best_steps"] is None
     assert not [p for p in out.iterdir() if p.name.startswith(".")]  # no temporary left
 
 
@@ -229,3 +231,32 @@ def test_the_wall_clock_budget_stops_training_and_still_saves(tmp_path):
     )  # fmt: skip
     # the budget is over before the first step ends: the callback stops at once
     assert rec["steps"] == 1 and (tmp_path / f"{RIG}-ppo.zip").is_file()
+
+
+def test_the_kept_policy_is_the_one_at_the_best_rolling_training_return():
+    pytest.importorskip("stable_baselines3")
+    from collections import deque
+    from types import SimpleNamespace
+
+    params = {"w": np.zeros(2)}
+    policy = SimpleNamespace(state_dict=lambda: params)
+    model = SimpleNamespace(ep_info_buffer=deque(maxlen=100), policy=policy)
+    cb = train_rl._budget_callback(1e9, 1e9, 0.0, [], lambda line: None)
+    cb.model = model
+
+    def episodes(ret, n, steps):
+        for _ in range(n):
+            model.ep_info_buffer.append({"r": ret, "l": 10})
+        cb.num_timesteps = steps
+        cb._keep_best(1)
+
+    episodes(1.0, train_rl.BEST_WINDOW - 1, 190)
+    assert cb.best["params"] is None  # fewer episodes than the window: nothing kept yet
+    episodes(1.0, 1, 200)
+    assert cb.best["steps"] == 200 and cb.best["mean_return"] == pytest.approx(1.0)
+    params["w"] += 5.0  # training goes on and changes the parameters ...
+    episodes(3.0, train_rl.BEST_WINDOW, 400)  # ... to a better window
+    assert cb.best["steps"] == 400 and cb.best["mean_return"] == pytest.approx(3.0)
+    params["w"] += 1.0
+    episodes(0.5, train_rl.BEST_WINDOW, 600)  # worse: the copy of step 400 stays
+    assert cb.best["steps"] == 400 and np.array_equal(cb.best["params"]["w"], [5.0, 5.0])
