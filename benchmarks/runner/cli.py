@@ -41,6 +41,12 @@ from .registry import (
 )
 from .report import write_outputs
 
+POLICIES = Path("results/learned_iteration.json")
+_POLICIES_HELP = (
+    "learned-iteration results for the leaderboard's Policies section (default "
+    "results/learned_iteration.json; python -m benchmarks.learned_iteration makes it)"
+)
+
 __all__ = ["FULL", "QUICK", "main"]
 
 FULL = Settings(seconds=30.0, iterations=5, gain=0.8, fidelity="full", tolerance=5.0)
@@ -102,12 +108,14 @@ def _parser() -> argparse.ArgumentParser:
         "--overwrite", action="store_true", help="delete records made with other settings"
     )
     run.add_argument("--no-plots", action="store_true", help="skip the plots")
+    run.add_argument("--policies", type=Path, default=POLICIES, help=_POLICIES_HELP)
     run.add_argument("--no-thesis", action="store_true", help="skip the thesis reproduction")
     run.add_argument("--quiet", action="store_true", help="no per-record lines")
 
     rep = sub.add_parser("report", help="rebuild records.json/.csv, leaderboard and plots")
     rep.add_argument("--out", type=Path, default=Path("results/benchmarks"), help="results folder")
     rep.add_argument("--no-plots", action="store_true")
+    rep.add_argument("--policies", type=Path, default=POLICIES, help=_POLICIES_HELP)
 
     lst = sub.add_parser("list", help="rigs and registered methods")
     lst.add_argument("--plugin", action="append", default=[], metavar="MODULE_OR_FILE")
@@ -343,7 +351,9 @@ def cmd_run(args) -> int:
         return 130
     wanted = {store.path(k).name for k in keys}
     records = [r for r in store.all_records(settings) if f"{r['id']}.json" in wanted]
-    written = write_outputs(out, records, asdict(settings), plots=not args.no_plots)
+    written = write_outputs(
+        out, records, asdict(settings), plots=not args.no_plots, policies=args.policies
+    )
     if thesis is not None:
         if not args.quiet:
             print("records done; waiting for the thesis reproduction ...", flush=True)
@@ -396,7 +406,7 @@ def cmd_report(args) -> int:
         return 2
     settings_path = args.out / "settings.json"
     settings = json.loads(settings_path.read_text()) if settings_path.exists() else None
-    write_outputs(args.out, records, settings, plots=not args.no_plots)
+    write_outputs(args.out, records, settings, plots=not args.no_plots, policies=args.policies)
     print(f"{len(records)} records -> {args.out / 'leaderboard.md'}")
     return 0
 

@@ -5,6 +5,8 @@
 * ``leaderboard.md`` — the overall ranking and one table per rig (see :func:`leaderboard`);
   a rig run at a non-linearity severity s is its own "rig" ``rig@s`` there; when a rig has
   records at more than one severity, a section "Severity" follows (:func:`severity_section`);
+  given the learned-iteration results (``policies=``, the runner's ``--policies``, default
+  ``results/learned_iteration.json``), a section "Policies" ends it (:func:`policies_section`);
 * ``plots/bars_<rig>.png`` — mean η0 at IT00 and at the best iteration per method
   (``bars_<rig>--sev<s>.png`` at severity s);
 * ``plots/error_vs_iteration_<method>.png`` — mean η0 versus iteration, one line per record;
@@ -33,6 +35,7 @@ __all__ = [
     "leaderboard",
     "method_linearity",
     "plot_severity",
+    "policies_section",
     "severity_crossover",
     "severity_section",
     "severity_tables",
@@ -602,17 +605,83 @@ def plot_iterations(method: str, records: list[dict], path: Path) -> Path:
     return _save(fig, path)
 
 
+# ---------------------------------------------------------------------------------------------
+# the policy leaderboard (benchmarks/learned_iteration.py)
+# ---------------------------------------------------------------------------------------------
+POLICIES_HOWTO = "python -m benchmarks.learned_iteration"
+
+
+def policies_section(path) -> list[str]:
+    """The "## Policies" section: a policy × rig table of the learned-iteration benchmark.
+
+    Each cell is ``mean iterations to tolerance / mean final η0 % / trips`` over the held-out
+    targets (an episode that never met the tolerance counts as budget + 1), read from the
+    ``policies`` list of ``path`` (``results/learned_iteration.json``, written by
+    ``python -m benchmarks.learned_iteration``). Rows in the order of the file; a policy not
+    scored on a rig has an empty cell. A missing file gives one line saying how to make it; a
+    file without a readable ``policies`` list raises ``ValueError`` naming it.
+
+    Parameters
+    ----------
+    path : str or Path
+        The learned-iteration results (JSON).
+    """
+    path = Path(path)
+    if not path.exists():
+        return [f"Policy leaderboard: no {path} (make it with `{POLICIES_HOWTO}`).", ""]
+    try:
+        recs = json.loads(path.read_text(encoding="utf-8"))["policies"]
+        cells = {
+            (r["policy"], r["rig"]): (
+                float(r["mean_iterations"]), float(r["mean_final_eta0"]), int(r["trips"]),
+                int(r["held_out"]),
+            )
+            for r in recs
+        }  # fmt: skip
+    except (ValueError, KeyError, TypeError) as exc:
+        raise ValueError(
+            f"{path}: not learned-iteration results with a 'policies' list ({exc!r}); "
+            f"remake it with `{POLICIES_HOWTO}`"
+        ) from None
+    policies = list(dict.fromkeys(p for p, _ in cells))
+    rigs = list(dict.fromkeys(r for _, r in cells))
+    n = sorted({c[3] for c in cells.values()})
+    lines = [
+        "## Policies",
+        "",
+        f"Drive-iteration policies on held-out desired responses ({'/'.join(map(str, n))} per "
+        f"rig; `{path}`, made by `{POLICIES_HOWTO}`). Cell: mean iterations to tolerance "
+        "(never met = budget + 1) / mean final η0 % / trips; lower is better.",
+        "",
+        "| policy | " + " | ".join(rigs) + " |",
+        "|---|" + "---:|" * len(rigs),
+    ]
+    for p in policies:
+        row = []
+        for rig in rigs:
+            c = cells.get((p, rig))
+            row.append("" if c is None else f"{c[0]:.2f} / {c[1]:.2f} / {c[2]}")
+        lines.append(f"| {p} | " + " | ".join(row) + " |")
+    lines.append("")
+    return lines
+
+
 def write_outputs(
-    out: Path, records: list[dict], settings: dict | None, *, plots=True
+    out: Path, records: list[dict], settings: dict | None, *, plots=True, policies=None
 ) -> list[Path]:
-    """Write records.json, records.csv, leaderboard.md and the plots into ``out``."""
+    """Write records.json, records.csv, leaderboard.md and the plots into ``out``; with
+    ``policies`` (the path of ``results/learned_iteration.json``) the leaderboard ends with
+    :func:`policies_section`."""
     out = Path(out)
     records = sorted(records, key=lambda r: r["id"])
     written = []
+    board = leaderboard(records, settings)
+    if policies is not None:
+        board = board.rstrip("\n") + "\n\n" + "\n".join(policies_section(policies)) + "\n"
     for name, text in (
         ("records.json", json.dumps(records, indent=1, ensure_ascii=False) + "\n"),
         ("records.csv", _records_csv(records)),
-        ("leaderboard.md", leaderboard(records, settings)),
+        ("leaderboard.md", board),
     ):
         write_atomic(out / name, text)
         written.append(out / name)
