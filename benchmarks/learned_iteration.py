@@ -63,6 +63,27 @@ RIG_IDS = {kwargs["rig"]: env_id for env_id, kwargs in ENV_IDS.items() if "rig" 
 MIMO_RIG = "fuel-tank-2ch" if "fuel-tank-2ch" in RIG_IDS else "light-truck-front"
 """The multi-channel rig scored by default: the two-channel fuel tank once it has an id."""
 DEFAULT_RIGS = ("shock-absorber", "elastomeric-damper", MIMO_RIG)
+FAST_TOLERANCE = {"fuel-tank-2ch": 1.9}
+"""η0 tolerance [%, every channel] of the fast env where the side-car's is no converged figure.
+
+The side-car tolerance of the two-channel fuel tank (22 %) is what the rule of :mod:`vrig.envs`
+gives at full fidelity, where the iteration does not converge in 10 steps; on the fast env
+(reduced fidelity, 4 s targets) it converges, and 22 % is met after one or two iterations. The
+same rule on the fast env (largest max-channel η0 at IT07 over ``reset(seed=0..2)`` at gain 0.8:
+1.38 / 1.85 / 1.24 %, rounded up to two significant figures) gives 1.9 %, used here and by
+``benchmarks.train_rl``. The SISO rigs keep their side-car tolerances."""
+
+
+def env_kwargs_of(rig: str) -> dict:
+    """The ``gymnasium.make`` keywords of ``rig``'s fast env beyond the id's (its
+    :data:`FAST_TOLERANCE`, if any).
+
+    Parameters
+    ----------
+    rig : str
+        Rig name.
+    """
+    return {"tolerance": FAST_TOLERANCE[rig]} if rig in FAST_TOLERANCE else {}
 
 
 def env_id_of(rig: str) -> str:
@@ -183,7 +204,8 @@ def sb3_models(rig: str, folder=RL_DIR) -> list[Path]:
 
 def _make(env_id):
     # TimeLimit owns truncation: the budget is max_episode_steps
-    return gym.make(env_id, fast=True, max_episode_steps=BUDGET)
+    rig = ENV_IDS[env_id].get("rig")
+    return gym.make(env_id, fast=True, max_episode_steps=BUDGET, **env_kwargs_of(rig))
 
 
 def _init(env_id):

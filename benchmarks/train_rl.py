@@ -54,7 +54,7 @@ import gymnasium as gym
 import numpy as np
 
 import vrig  # noqa: F401  (registers the environments)
-from benchmarks.learned_iteration import BUDGET, HELD_OUT_BASE, env_id_of
+from benchmarks.learned_iteration import BUDGET, HELD_OUT_BASE, env_id_of, env_kwargs_of
 from vrig.errors import RigLimitError
 from vrig.files import atomic_write
 
@@ -144,9 +144,11 @@ def make_env(rig: str, *, fast: bool = True, **env_kwargs):
     fast : bool
         The reduced-fidelity env (4 s targets).
     **env_kwargs
-        Further ``gymnasium.make`` keywords (e.g. ``seconds``, ``action_mode``).
+        Further ``gymnasium.make`` keywords (e.g. ``seconds``, ``action_mode``); the rig's
+        :data:`benchmarks.learned_iteration.FAST_TOLERANCE` unless ``tolerance`` is given.
     """
-    env = gym.make(env_id_of(rig), fast=fast, max_episode_steps=BUDGET, **env_kwargs)
+    kwargs = {**env_kwargs_of(rig), **env_kwargs}  # the benchmark's fast tolerance, if any
+    env = gym.make(env_id_of(rig), fast=fast, max_episode_steps=BUDGET, **kwargs)
     return TrainingTargets(env)
 
 
