@@ -24,11 +24,15 @@ default tolerance, budget 10 iterations):
    mean final η0 on a SISO rig, better on a MIMO rig (:func:`compare`). "final η0" is the mean
    over the response channels; the tolerance applies to every channel.
 
-    python -m benchmarks.learned_iteration            # full: ~18 min on this busy 2-core box
-    python -m benchmarks.learned_iteration --quick    # ~3 min (a smoke run: tiny training)
+    python -m benchmarks.learned_iteration            # full (see below for the time)
+    python -m benchmarks.learned_iteration --quick    # a smoke run: tiny CEM training
     python -m benchmarks.learned_iteration --timing   # 10-iteration episode times, fast/default
 
-Episodes run in ``--workers`` processes (default 2), each with its own environment.
+Episodes run in ``--workers`` processes (default 2), each with its own environment. Time on
+the shared 2-core box: the two SISO rigs took ~18 min in full, ~3 min with ``--quick`` (issue 5,
+30 held-out targets); ``--quick`` with 20 held-out targets took 1.5 min (shock absorber) and
+2.5 min (damper) here; a MIMO step (light-truck-front, 6 drives) costs ~2-3 times a SISO one,
+and the full run with it was not timed.
 
 Results go to ``results/learned_iteration.json`` (git-ignored; written atomically), with a
 ``policies`` list (policy, rig, mean iterations, success rate, final η0, trips, held-out n) that
