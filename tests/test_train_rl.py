@@ -176,6 +176,20 @@ def test_sb3_models_are_found_by_rig_and_an_absent_model_says_how_to_train(tmp_p
     assert "SB3: not trained (run python -m benchmarks.train_rl --rig light-truck-front)" in missing
 
 
+def test_targets_whose_it00_trips_are_left_out_and_replaced(monkeypatch):
+    stub = RecordingEnv(trips={li.HELD_OUT_BASE + 1, li.HELD_OUT_BASE + 3})
+    monkeypatch.setitem(li._WORKER, "env", stub)
+    seeds, skipped = li.playable_targets(map, li.HELD_OUT_BASE, 4)
+    base = li.HELD_OUT_BASE
+    assert seeds == [base, base + 2, base + 4, base + 5]
+    assert skipped == [base + 1, base + 3]
+    # training targets may not run into the held-out range
+    stub = RecordingEnv(trips={li.HELD_OUT_BASE - 1})
+    monkeypatch.setitem(li._WORKER, "env", stub)
+    with pytest.raises(RuntimeError, match="fewer than 2 playable"):
+        li.playable_targets(map, li.HELD_OUT_BASE - 2, 2, li.HELD_OUT_BASE)
+
+
 # ------------------------------------------------------------------ training (needs SB3)
 @pytest.fixture(scope="module")
 def trained(tmp_path_factory):
