@@ -68,11 +68,18 @@ class RigLimitError(VrigError, RuntimeError):
     ):
         self.kind, self.channel = kind, channel
         self.time, self.value, self.limit, self.unit = float(time), float(value), float(limit), unit
+        self.hint = hint
         when = "before the drive was sent" if time != time else f"at t = {time:.4f} s"
         super().__init__(
             f"interlock: {kind} limit on channel {channel!r} {when}: {value:.6g} {unit} exceeds "
             f"{limit:.6g} {unit}. {hint}".rstrip()
         )
+
+    def __reduce__(self):
+        """Pickle by the constructor's arguments (the default pickles ``args``, the message
+        alone, which ``__init__`` cannot take): a trip in a worker process reaches the parent."""
+        fields = (self.kind, self.channel, self.time, self.value, self.limit, self.unit, self.hint)
+        return type(self), fields, self.__dict__
 
 
 class SimulationInstabilityError(VrigError, RuntimeError):
@@ -139,6 +146,9 @@ class ReconstructionError(VrigError, RuntimeError):
         self.cause = cause
         self.stage = stage
 
+    def __reduce__(self):  # picklable (worker processes): the keywords are not in ``args``
+        return _rebuild_reconstruction_error, (type(self), str(self), self.__dict__)
+
 
 class FileFormatError(VrigError, ValueError):
     """A file is not what its name or reader expects: truncated, corrupt, foreign, of another
@@ -166,3 +176,9 @@ class FileFormatError(VrigError, ValueError):
 
     def __reduce__(self):  # picklable (worker processes)
         return type(self), (self.path, self.format, self.detail)
+
+
+def _rebuild_reconstruction_error(cls, message: str, state: dict):
+    """Unpickle a :class:`ReconstructionError` (``__reduce__``): its constructor takes
+    keywords, which ``pickle`` cannot pass."""
+    return cls(message, **state)
