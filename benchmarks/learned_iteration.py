@@ -8,7 +8,9 @@ default tolerance, budget 10 iterations):
 
 1. trains :class:`vrig.policies.BandRatioPolicy` (per-band gains from the observed band-error
    ratios, 7 parameters) by the cross-entropy method on the *training* targets (pseudo-field
-   seeds 1..N);
+   seeds 1..N), and its phase-aware variant on the ``action_mode="complex"`` env (a learned
+   phase per band besides the gains, 11 parameters: "learned (CEM, phase)"; ``--no-phase``
+   leaves it out);
 2. evaluates fixed gain 0.5, 0.8, 1.0, the decreasing schedule, the per-band adaptive rule, the
    learned policy and every Stable-Baselines3 model trained for the rig
    (``results/rl/<rig>-sac.zip`` / ``-ppo.zip`` from ``python -m benchmarks.train_rl``, through
@@ -209,15 +211,27 @@ def sb3_models(rig: str, folder=RL_DIR) -> list[Path]:
     return sorted(p for p in Path(folder).glob(f"{rig}-*.zip") if p.stem[len(rig) + 1 :].isalpha())
 
 
-def _make(env_id):
+def _make(env_id, **kwargs):
     # TimeLimit owns truncation: the budget is max_episode_steps
     rig = ENV_IDS[env_id].get("rig")
-    return gym.make(env_id, fast=True, max_episode_steps=BUDGET, **env_kwargs_of(rig))
+    return gym.make(env_id, fast=True, max_episode_steps=BUDGET, **env_kwargs_of(rig), **kwargs)
+
+
+def _env(spec):
+    """The worker's env for a policy spec: the ``"complex"``-mode env (made on first use; the
+    same rig, targets and cached inverse model) for the phase-aware CEM policy, else the
+    ``"bands"`` env."""
+    if spec[0] != "learned-complex":
+        return _WORKER["env"]
+    if "env_complex" not in _WORKER:
+        _WORKER["env_complex"] = _make(_WORKER["env_id"], action_mode="complex")
+    return _WORKER["env_complex"]
 
 
 def _init(env_id):
     """Process-pool initialiser: one environment per worker (model identified once each)."""
     _WORKER.clear()
+    _WORKER["env_id"] = env_id
     _WORKER["env"] = _make(env_id)
 
 
@@ -241,15 +255,14 @@ def _episode(job):
     """One episode of a policy spec on one target: (iterations to tolerance, success, final
     mean η0, reason). Target seed s: pseudo-field seed s, rig-noise seed s."""
     spec, seed = job
-    env = _WORKER["env"]
+    env = _env(spec)
     r = run_episode(env, _policy(env, spec), options={"field_seed": seed, "run_seed": seed})
     return r.iterations_to_tolerance(BUDGET), r.success, float(np.mean(r.final_eta0)), r.reason
 
 
 def _playable(seed) -> bool:
     """Whether target ``seed``'s IT00 drive plays (the same for every policy: IT00 is
-    inverse(DESRES)). A worker answers False instead of letting the RigLimitError cross the
-    process boundary (vrig's exceptions do not unpickle)."""
+    inverse(DESRES)); a RigLimitError there is the answer False."""
     try:
         _WORKER["env"].reset(options={"field_seed": seed, "run_seed": seed})
     except RigLimitError:
@@ -308,27 +321,29 @@ def _summary(rows):
     }
 
 
-def _train_cem(rig, env, tol, pmap, args, t0, train_seeds):
-    """CEM training of :class:`BandRatioPolicy` on the training targets; returns (best
-    parameters, best objective)."""
+def _train_cem(rig, env, tol, pmap, args, t0, train_seeds, kind="learned"):
+    """CEM training of :class:`BandRatioPolicy` on the training targets (``kind``
+    ``"learned"``: gains per band; ``"learned-complex"``: gains and phases per band, on the
+    ``"complex"``-mode env ``env``); returns (best parameters, best objective)."""
 
     def generation(_objective, candidates):
-        jobs = [(("learned", tuple(c)), s) for c in candidates for s in train_seeds]
+        jobs = [((kind, tuple(c)), s) for c in candidates for s in train_seeds]
         out = list(pmap(_episode, jobs))
         k = len(train_seeds)
         return [_score(out[i * k : (i + 1) * k], tol) for i in range(len(candidates))]
 
     def report(gen, best, score):
         print(
-            f"  [{rig}] generation {gen + 1}/{args.generations}: best objective "
+            f"  [{rig}{' complex' if kind != 'learned' else ''}] generation {gen + 1}/{args.generations}: best objective "
             f"{score:.3f} (params {np.round(best, 2).tolist()}), "
             f"{time.perf_counter() - t0:.0f} s",
             flush=True,
         )
 
     n = BandRatioPolicy.n_params(env)
-    mean = BandRatioPolicy.initial(env, gain=1.0)
-    std = np.r_[np.full(n - 3, 0.25), 0.5, 0.3, 0.1]
+    nb = env.unwrapped.layout.n_bands
+    mean = BandRatioPolicy.initial(env, gain=1.0)  # phases (complex mode) 0
+    std = np.r_[np.full(nb, 0.25), 0.5, 0.3, 0.1, np.full(n - nb - 3, 0.3)]
     best, best_score, _history = cross_entropy_search(
         lambda p: generation(None, [p])[0],
         mean,
@@ -343,7 +358,7 @@ def _train_cem(rig, env, tol, pmap, args, t0, train_seeds):
     return best, best_score
 
 
-def _specs(rig, best, args):
+def _specs(rig, best, best_complex, args):
     """The policies scored on the held-out targets, and the SB3 rows that are missing."""
     specs = {
         "fixed 0.5": ("fixed", 0.5),
@@ -353,6 +368,8 @@ def _specs(rig, best, args):
         "adaptive per band": ("adaptive",),
         "learned (CEM)": ("learned", tuple(best)),
     }
+    if best_complex is not None:
+        specs["learned (CEM, phase)"] = ("learned-complex", tuple(best_complex))
     if args.quick:
         del specs["decreasing"]
     models = sb3_models(rig, args.rl_dir) if _has_sb3() else []
@@ -438,8 +455,15 @@ def run_rig(rig, env_id, args):
         train_seeds, train_skipped = playable_targets(pmap, 1, args.train, HELD_OUT_BASE)
         held_out, skipped = playable_targets(pmap, HELD_OUT_BASE, args.held_out)
         best, best_score = _train_cem(rig, env, tol, pmap, args, t0, train_seeds)
+        best_c = score_c = None
+        if getattr(args, "phase", False):
+            env_c = _make(env_id, action_mode="complex")
+            best_c, score_c = _train_cem(
+                rig, env_c, tol, pmap, args, t0, train_seeds, kind="learned-complex"
+            )
+            env_c.close()
         train_s = time.perf_counter() - t0
-        specs, missing = _specs(rig, best, args)
+        specs, missing = _specs(rig, best, best_c, args)
         t1 = time.perf_counter()
         jobs = [(spec, s) for spec in specs.values() for s in held_out]
         out = list(pmap(_episode, jobs))
@@ -465,6 +489,8 @@ def run_rig(rig, env_id, args):
         "held_out_left_out": skipped,
         "learned_params": best.tolist(),
         "train_objective": best_score,
+        "learned_phase_params": None if best_c is None else best_c.tolist(),
+        "train_objective_phase": score_c,
         "table": rows,
         "sb3_missing": missing,
         **compare(rows, n_inputs > 1),
@@ -559,6 +585,10 @@ def main(argv=None):
     """
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--quick", action="store_true", help="small training budget (a few minutes)")
+    ap.add_argument(
+        "--no-phase", dest="phase", action="store_false",
+        help="leave out the phase-aware CEM policy (complex action mode)",
+    )  # fmt: skip
     ap.add_argument(
         "--rigs", nargs="+", default=list(DEFAULT_RIGS), choices=sorted(RIG_IDS),
         help=f"rigs with a gym id (default {' '.join(DEFAULT_RIGS)})",

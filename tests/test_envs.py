@@ -6,6 +6,7 @@ from __future__ import annotations
 import gymnasium as gym
 import numpy as np
 import pytest
+from helpers import records_equal
 
 import vrig
 from identification import metrics
@@ -42,14 +43,6 @@ def _rollout(env, seed, actions):
     return trace
 
 
-def _equal(a, b):
-    if isinstance(a, dict):
-        return a.keys() == b.keys() and all(_equal(a[k], b[k]) for k in a)
-    if isinstance(a, (tuple, list)):
-        return len(a) == len(b) and all(_equal(x, y) for x, y in zip(a, b, strict=True))
-    if isinstance(a, np.ndarray):
-        return np.array_equal(a, b)
-    return a == b
 
 
 def test_environments_are_registered_on_import_vrig():
@@ -75,7 +68,7 @@ def test_the_same_seed_gives_identical_trajectories():
     a.action_space.seed(5)
     actions = [a.action_space.sample() for _ in range(3)]
     ta, tb = _rollout(a, 7, actions), _rollout(b, 7, actions)
-    assert _equal(ta, tb)
+    assert records_equal(ta, tb)
     tc = _rollout(a, 8, actions)
     assert not np.array_equal(tc[0][0]["band_error"], ta[0][0]["band_error"])
 

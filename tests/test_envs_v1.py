@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 from gymnasium.utils import seeding
 from gymnasium.utils.env_checker import check_env
+from helpers import records_equal
 
 import vrig
 from identification.errors import SimulationDivergedError
@@ -30,14 +31,6 @@ def burst(t, f0, centre, sigma, phase=0.0):
     return np.exp(-0.5 * ((t - centre) / sigma) ** 2) * np.cos(2 * np.pi * f0 * (t - centre) + phase)
 
 
-def _equal(a, b):
-    if isinstance(a, dict):
-        return a.keys() == b.keys() and all(_equal(a[k], b[k]) for k in a)
-    if isinstance(a, (tuple, list)):
-        return len(a) == len(b) and all(_equal(x, y) for x, y in zip(a, b, strict=True))
-    if isinstance(a, np.ndarray):
-        return np.array_equal(a, b)
-    return a == b
 
 
 # ---------------------------------------------------------------- complex band gains
@@ -121,7 +114,7 @@ def test_phase_zero_complex_steps_equal_bands_steps_bit_for_bit():
             trace.append(e.unwrapped.drive.copy())
         traces.append(trace)
         e.close()
-    assert _equal(traces[0], traces[1])
+    assert records_equal(traces[0], traces[1])
 
 
 def test_a_complex_step_rotates_the_correction_of_its_band_by_the_phase():
@@ -203,7 +196,7 @@ def test_prepare_play_finish_is_step_bit_for_bit():
     for x in actions:
         drive, n = u.prepare_step(x)
         tb.append(u.finish_step(u.engine.play(drive, n)))
-    assert _equal(ta, tb)
+    assert records_equal(ta, tb)
     np.testing.assert_array_equal(a.unwrapped.drive, u.drive)
 
 
@@ -257,7 +250,7 @@ def test_finish_reset_redraws_a_drawn_target_that_tripped_at_it00():
     assert info["field_seed"] == redraw and info["run_seed"] == drawn[1] and n == 0
     ref = make_short()
     ref_obs, ref_info = ref.reset(seed=0, options={"field_seed": redraw, "run_seed": int(drawn[1])})
-    assert _equal(obs, ref_obs) and ref_info["eta0"].tolist() == info["eta0"].tolist()
+    assert records_equal(obs, ref_obs) and ref_info["eta0"].tolist() == info["eta0"].tolist()
     # an explicit target is not redrawn: the trip is raised
     u.prepare_reset(seed=5, options={"field_seed": 3})
     with pytest.raises(vrig.RigLimitError):
