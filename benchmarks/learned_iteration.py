@@ -72,27 +72,32 @@ RIG_IDS = {kwargs["rig"]: env_id for env_id, kwargs in ENV_IDS.items() if "rig" 
 MIMO_RIG = "fuel-tank-2ch" if "fuel-tank-2ch" in RIG_IDS else "light-truck-front"
 """The multi-channel rig scored by default: the two-channel fuel tank once it has an id."""
 DEFAULT_RIGS = ("shock-absorber", "elastomeric-damper", MIMO_RIG)
-FAST_TOLERANCE = {"fuel-tank-2ch": 1.9}
-"""η0 tolerance [%, every channel] of the fast env where the side-car's is no converged figure.
+FAST_TOLERANCE = {"shock-absorber": 1.1, "elastomeric-damper": 1.6, "fuel-tank-2ch": 1.9}
+"""η0 tolerance [%, every channel] of each scored rig's *fast* env, by the rule of :mod:`vrig.envs`.
 
-The side-car tolerance of the two-channel fuel tank (22 %) is what the rule of :mod:`vrig.envs`
-gives at full fidelity, where the iteration does not converge in 10 steps; on the fast env
-(reduced fidelity, 4 s targets) it converges, and 22 % is met after one or two iterations. The
-same rule on the fast env (largest max-channel η0 at IT07 over ``reset(seed=0..2)`` at gain 0.8:
-1.38 / 1.85 / 1.24 %, rounded up to two significant figures) gives 1.9 %, used here and by
-``benchmarks.train_rl``. The SISO rigs keep their side-car tolerances."""
+The side-car tolerances were measured by the rule on the full-fidelity env (20 s targets); this
+benchmark runs the fast env (reduced fidelity, 4 s targets), where the same rule - the largest
+max-channel η0 at IT07 over ``reset(seed=0..2)`` at the rule's fixed gain, rounded up to two
+significant figures - gives other figures: shock absorber (gain 0.8) 0.89 / 1.08 / 0.74 % ->
+1.1 % (side-car 1.7 %: met at IT04 by a fixed gain); elastomeric damper (gain 0.5, its
+side-car gain) 1.52 / 1.04 / 1.27 % -> 1.6 % (side-car 0.91 %: at the edge of reach in 10 fast
+iterations, met by fixed 0.5 on 80 % of the targets); two-channel fuel tank (gain 0.8) 1.38 /
+1.85 / 1.24 % -> 1.9 % (side-car 22 %, the full-fidelity stall level: met in 1-2 fast
+iterations). ``--side-car-tolerance`` scores with the side-car tolerances instead."""
 
 
 def env_kwargs_of(rig: str) -> dict:
     """The ``gymnasium.make`` keywords of ``rig``'s fast env beyond the id's (its
-    :data:`FAST_TOLERANCE`, if any).
+    :data:`FAST_TOLERANCE`, if any, unless ``--side-car-tolerance``).
 
     Parameters
     ----------
     rig : str
         Rig name.
     """
-    return {"tolerance": FAST_TOLERANCE[rig]} if rig in FAST_TOLERANCE else {}
+    if rig not in FAST_TOLERANCE or _SIDE_CAR_TOLERANCE[0]:
+        return {}
+    return {"tolerance": FAST_TOLERANCE[rig]}
 
 
 def env_id_of(rig: str) -> str:
@@ -121,6 +126,7 @@ TARGET = 0.25
 SISO rigs (issue 16); on the MIMO rig the aim is any reduction."""
 
 _WORKER: dict = {}
+_SIDE_CAR_TOLERANCE = [False]  # --side-car-tolerance (read by env_kwargs_of, workers too)
 
 
 class SB3Policy(Policy):
@@ -228,8 +234,9 @@ def _env(spec):
     return _WORKER["env_complex"]
 
 
-def _init(env_id):
+def _init(env_id, side_car_tolerance=False):
     """Process-pool initialiser: one environment per worker (model identified once each)."""
+    _SIDE_CAR_TOLERANCE[0] = side_car_tolerance
     _WORKER.clear()
     _WORKER["env_id"] = env_id
     _WORKER["env"] = _make(env_id)
@@ -446,7 +453,9 @@ def run_rig(rig, env_id, args):
     tol = env.unwrapped.task.tolerance
     t0 = time.perf_counter()
     if args.workers > 1:
-        pool = mp.get_context("spawn").Pool(args.workers, initializer=_init, initargs=(env_id,))
+        pool = mp.get_context("spawn").Pool(
+            args.workers, initializer=_init, initargs=(env_id, _SIDE_CAR_TOLERANCE[0])
+        )
         pmap = partial(pool.map, chunksize=1)
     else:
         pool, pmap = None, map
@@ -481,6 +490,7 @@ def run_rig(rig, env_id, args):
         "env": env_id,
         "n_inputs": n_inputs,
         "tolerance_percent": tol,
+        "tolerance_source": "fast rule (FAST_TOLERANCE)" if env_kwargs_of(rig) else "side-car",
         "budget": BUDGET,
         "segment_s": env.unwrapped.physics.seconds,
         "train_seeds": train_seeds,
@@ -586,6 +596,10 @@ def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--quick", action="store_true", help="small training budget (a few minutes)")
     ap.add_argument(
+        "--side-car-tolerance", action="store_true",
+        help="score with the side-car tolerances (measured at full fidelity), not FAST_TOLERANCE",
+    )  # fmt: skip
+    ap.add_argument(
         "--no-phase", dest="phase", action="store_false",
         help="leave out the phase-aware CEM policy (complex action mode)",
     )  # fmt: skip
@@ -605,6 +619,7 @@ def main(argv=None):
     ap.add_argument("--output", default="results/learned_iteration.json")
     args = ap.parse_args(argv)
     quick = args.quick
+    _SIDE_CAR_TOLERANCE[0] = args.side_car_tolerance
     if args.timing:
         print("episode wall time (min / median of 3; this machine is shared, so noisy):")
         episode_times()
