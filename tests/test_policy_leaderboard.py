@@ -76,3 +76,9 @@ def test_runner_commands_take_the_results_path():
         args = parser.parse_args([*cmd, "--policies", "x.json"])
         assert str(args.policies) == "x.json"
         assert str(parser.parse_args(cmd).policies) == "results/learned_iteration.json"
+
+
+def test_rig_columns_name_the_tolerance_the_file_says_they_were_scored_at(tmp_path):
+    doc = dict(RESULTS, rigs=[{"rig": "shock-absorber", "tolerance_percent": 1.1}])
+    lines = policies_section(_write(tmp_path, doc))
+    assert "| policy | shock-absorber (η0 ≤ 1.1 %) | light-truck-front |" in lines

@@ -630,7 +630,8 @@ def policies_section(path) -> list[str]:
     if not path.exists():
         return [f"Policy leaderboard: no {path} (make it with `{POLICIES_HOWTO}`).", ""]
     try:
-        recs = json.loads(path.read_text(encoding="utf-8"))["policies"]
+        doc = json.loads(path.read_text(encoding="utf-8"))
+        recs = doc["policies"]
         cells = {
             (r["policy"], r["rig"]): (
                 float(r["mean_iterations"]), float(r["mean_final_eta0"]), int(r["trips"]),
@@ -645,6 +646,9 @@ def policies_section(path) -> list[str]:
         ) from None
     policies = list(dict.fromkeys(p for p, _ in cells))
     rigs = list(dict.fromkeys(r for _, r in cells))
+    tolerance = {  # the η0 tolerance each rig was scored at, when the file says
+        r.get("rig"): r.get("tolerance_percent") for r in doc.get("rigs", []) if isinstance(r, dict)
+    }
     n = sorted({c[3] for c in cells.values()})
     lines = [
         "## Policies",
@@ -653,7 +657,12 @@ def policies_section(path) -> list[str]:
         f"rig; `{path}`, made by `{POLICIES_HOWTO}`). Cell: mean iterations to tolerance "
         "(never met = budget + 1) / mean final η0 % / trips; lower is better.",
         "",
-        "| policy | " + " | ".join(rigs) + " |",
+        "| policy | "
+        + " | ".join(
+            rig if tolerance.get(rig) is None else f"{rig} (η0 ≤ {tolerance[rig]:g} %)"
+            for rig in rigs
+        )
+        + " |",
         "|---|" + "---:|" * len(rigs),
     ]
     for p in policies:
