@@ -8,7 +8,7 @@ default tolerance, budget 10 iterations):
 
 1. trains :class:`vrig.policies.BandRatioPolicy` (per-band gains from the observed band-error
    ratios, 7 parameters) by the cross-entropy method on the *training* targets (pseudo-field
-   seeds 1..N), and its phase-aware variant on the ``action_mode="complex"`` env (a learned
+   seeds 1..N; starting from the rig's side-car gain, else 1.0), and its phase-aware variant on the ``action_mode="complex"`` env (a learned
    phase per band besides the gains, 11 parameters: "learned (CEM, phase)"; ``--no-phase``
    leaves it out);
 2. evaluates fixed gain 0.5, 0.8, 1.0, the decreasing schedule, the per-band adaptive rule, the
@@ -349,7 +349,10 @@ def _train_cem(rig, env, tol, pmap, args, t0, train_seeds, kind="learned"):
 
     n = BandRatioPolicy.n_params(env)
     nb = env.unwrapped.layout.n_bands
-    mean = BandRatioPolicy.initial(env, gain=1.0)  # phases (complex mode) 0
+    # start at the rig's own iteration gain (its side-car's: 0.5 on the hardening damper, where
+    # 0.8 and 1.0 diverge), else 1.0; phases (complex mode) 0
+    gain = getattr(getattr(env.unwrapped.physics.rig, "defaults", None), "gain", None) or 1.0
+    mean = BandRatioPolicy.initial(env, gain=gain)
     std = np.r_[np.full(nb, 0.25), 0.5, 0.3, 0.1, np.full(n - nb - 3, 0.3)]
     best, best_score, _history = cross_entropy_search(
         lambda p: generation(None, [p])[0],
@@ -365,7 +368,7 @@ def _train_cem(rig, env, tol, pmap, args, t0, train_seeds, kind="learned"):
     return best, best_score
 
 
-def _specs(rig, best, best_complex, args):
+def _specs(rig, best, args, best_complex=None):
     """The policies scored on the held-out targets, and the SB3 rows that are missing."""
     specs = {
         "fixed 0.5": ("fixed", 0.5),
@@ -472,7 +475,7 @@ def run_rig(rig, env_id, args):
             )
             env_c.close()
         train_s = time.perf_counter() - t0
-        specs, missing = _specs(rig, best, best_c, args)
+        specs, missing = _specs(rig, best, args, best_c)
         t1 = time.perf_counter()
         jobs = [(spec, s) for spec in specs.values() for s in held_out]
         out = list(pmap(_episode, jobs))
