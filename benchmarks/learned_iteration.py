@@ -86,16 +86,18 @@ iterations, met by fixed 0.5 on 80 % of the targets); two-channel fuel tank (gai
 iterations). ``--side-car-tolerance`` scores with the side-car tolerances instead."""
 
 
-def env_kwargs_of(rig: str) -> dict:
+def env_kwargs_of(rig: str, *, side_car_tolerance: bool = False) -> dict:
     """The ``gymnasium.make`` keywords of ``rig``'s fast env beyond the id's (its
-    :data:`FAST_TOLERANCE`, if any, unless ``--side-car-tolerance``).
+    :data:`FAST_TOLERANCE`, if any).
 
     Parameters
     ----------
     rig : str
         Rig name.
+    side_car_tolerance : bool
+        Keep the side-car tolerance (``--side-car-tolerance``): no keyword then.
     """
-    if rig not in FAST_TOLERANCE or _SIDE_CAR_TOLERANCE[0]:
+    if rig not in FAST_TOLERANCE or side_car_tolerance:
         return {}
     return {"tolerance": FAST_TOLERANCE[rig]}
 
@@ -126,7 +128,6 @@ TARGET = 0.25
 SISO rigs (issue 16); on the MIMO rig the aim is any reduction."""
 
 _WORKER: dict = {}
-_SIDE_CAR_TOLERANCE = [False]  # --side-car-tolerance (read by env_kwargs_of, workers too)
 
 
 class SB3Policy(Policy):
@@ -217,10 +218,11 @@ def sb3_models(rig: str, folder=RL_DIR) -> list[Path]:
     return sorted(p for p in Path(folder).glob(f"{rig}-*.zip") if p.stem[len(rig) + 1 :].isalpha())
 
 
-def _make(env_id, **kwargs):
+def _make(env_id, side_car_tolerance=False, **kwargs):
     # TimeLimit owns truncation: the budget is max_episode_steps
     rig = ENV_IDS[env_id].get("rig")
-    return gym.make(env_id, fast=True, max_episode_steps=BUDGET, **env_kwargs_of(rig), **kwargs)
+    extra = env_kwargs_of(rig, side_car_tolerance=side_car_tolerance)
+    return gym.make(env_id, fast=True, max_episode_steps=BUDGET, **extra, **kwargs)
 
 
 def _env(spec):
@@ -230,16 +232,18 @@ def _env(spec):
     if spec[0] != "learned-complex":
         return _WORKER["env"]
     if "env_complex" not in _WORKER:
-        _WORKER["env_complex"] = _make(_WORKER["env_id"], action_mode="complex")
+        _WORKER["env_complex"] = _make(
+            _WORKER["env_id"], _WORKER["side_car_tolerance"], action_mode="complex"
+        )
     return _WORKER["env_complex"]
 
 
 def _init(env_id, side_car_tolerance=False):
     """Process-pool initialiser: one environment per worker (model identified once each)."""
-    _SIDE_CAR_TOLERANCE[0] = side_car_tolerance
     _WORKER.clear()
+    _WORKER["side_car_tolerance"] = side_car_tolerance
     _WORKER["env_id"] = env_id
-    _WORKER["env"] = _make(env_id)
+    _WORKER["env"] = _make(env_id, side_car_tolerance)
 
 
 def _policy(env, spec):
@@ -452,24 +456,25 @@ def run_rig(rig, env_id, args):
         The command line (``train``, ``held_out``, ``generations``, ``population``,
         ``workers``, ``quick``, ``rl_dir``).
     """
-    env = _make(env_id)
+    side_car = getattr(args, "side_car_tolerance", False)
+    env = _make(env_id, side_car)
     tol = env.unwrapped.task.tolerance
     t0 = time.perf_counter()
     if args.workers > 1:
         pool = mp.get_context("spawn").Pool(
-            args.workers, initializer=_init, initargs=(env_id, _SIDE_CAR_TOLERANCE[0])
+            args.workers, initializer=_init, initargs=(env_id, side_car)
         )
         pmap = partial(pool.map, chunksize=1)
     else:
         pool, pmap = None, map
-        _init(env_id)
+        _init(env_id, side_car)
     try:
         train_seeds, train_skipped = playable_targets(pmap, 1, args.train, HELD_OUT_BASE)
         held_out, skipped = playable_targets(pmap, HELD_OUT_BASE, args.held_out)
         best, best_score = _train_cem(rig, env, tol, pmap, args, t0, train_seeds)
         best_c = score_c = None
         if getattr(args, "phase", False):
-            env_c = _make(env_id, action_mode="complex")
+            env_c = _make(env_id, side_car, action_mode="complex")
             best_c, score_c = _train_cem(
                 rig, env_c, tol, pmap, args, t0, train_seeds, kind="learned-complex"
             )
@@ -493,7 +498,7 @@ def run_rig(rig, env_id, args):
         "env": env_id,
         "n_inputs": n_inputs,
         "tolerance_percent": tol,
-        "tolerance_source": "fast rule (FAST_TOLERANCE)" if env_kwargs_of(rig) else "side-car",
+        "tolerance_source": "side-car" if side_car or rig not in FAST_TOLERANCE else "fast rule",
         "budget": BUDGET,
         "segment_s": env.unwrapped.physics.seconds,
         "train_seeds": train_seeds,
@@ -622,7 +627,6 @@ def main(argv=None):
     ap.add_argument("--output", default="results/learned_iteration.json")
     args = ap.parse_args(argv)
     quick = args.quick
-    _SIDE_CAR_TOLERANCE[0] = args.side_car_tolerance
     if args.timing:
         print("episode wall time (min / median of 3; this machine is shared, so noisy):")
         episode_times()
