@@ -91,6 +91,10 @@ class MujocoRig:
         variant and the overrides — 0 the linearised rig, 1 (``None``, default) the rig as
         loaded, 2 twice as non-linear. A rig without a severity axis (a linear rig) refuses
         it with :class:`~vrig.errors.RigParameterError`.
+    spec_edit : callable, optional
+        ``spec_edit(spec)``: edits the :class:`mujoco.MjSpec` after the parameters are applied
+        and before it is compiled (e.g. :mod:`vrig.service` mounts the specimen in its service
+        environment with it); it may raise :class:`~vrig.errors.RigModelError`.
     **overrides
         Documented parameters (see :meth:`describe`).
 
@@ -102,6 +106,8 @@ class MujocoRig:
         Largest timestep [s] at which the linearised model (its springs, dampers and oil
         columns, :mod:`vrig.rigs.stability`) does not grow; a documented timestep beyond it
         gives a ``RuntimeWarning`` at load.
+    overrides : dict
+        The parameter overrides given (``**overrides``), as given.
 
     Raises
     ------
@@ -122,6 +128,7 @@ class MujocoRig:
         fidelity: str = "full",
         variant: str | None = None,
         severity: float | None = None,
+        spec_edit=None,
         **overrides,
     ):
         desc = (
@@ -150,6 +157,7 @@ class MujocoRig:
                 allowed=", ".join(sorted(desc.variants)),
             )
         self._desc = desc
+        self.overrides = dict(overrides)  # as given (a field twin rebuilds the rig from them)
         self.fidelity = fidelity
         self.variant = desc.default_variant if variant is None else variant
         chosen = desc.variants[self.variant].values if self.variant in desc.variants else {}
@@ -169,6 +177,8 @@ class MujocoRig:
         self._air = list(desc.air_springs)  # gas springs (vrig.rigs.gas_spring), parameter rules may change them
         for name, value in self.parameters.items():
             self._apply(spec, desc.parameters[name], value)
+        if spec_edit is not None:
+            spec_edit(spec)
         n_hyd = sum(1 for c in self._inputs if c.hydraulic is not None)
         spec.nuserdata = max(spec.nuserdata, 8 + 8 * n_hyd)
         documented, ratio = self._compile(spec)

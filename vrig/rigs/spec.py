@@ -381,6 +381,9 @@ class RigDescription:
         The gas-spring elements (side-car ``"air_springs"``; :mod:`vrig.rigs.gas_spring`).
     defaults : RigDefaults
         The rig's own defaults (side-car ``"reconstruction"``: band, gain, gym id, tolerance).
+    service : dict
+        The side-car's ``"service"`` block as validated by the schema: service scenarios by name
+        (read by :mod:`vrig.service`; empty: the specimen has no field twin).
     """
 
     name: str
@@ -402,6 +405,7 @@ class RigDescription:
     severity: Severity | None = None  # the non-linearity severity axis; None: a linear rig
     air_springs: tuple = ()  # AirSpring elements (vrig.rigs.gas_spring), side-car "air_springs"
     defaults: RigDefaults = RigDefaults()  # side-car "reconstruction": band, gain, gym, tolerance
+    service: dict = field(default_factory=dict)  # side-car "service": scenarios (vrig.service)
 
 
 MILD = "mild"
@@ -968,5 +972,6 @@ def read_description(path) -> RigDescription:
         severity=_read_severity(raw.get("severity"), params, where),
         air_springs=_read_air_springs(raw.get("air_springs", []), where),
         defaults=_read_defaults(raw, fs, where),
+        service=dict(raw.get("service", {})),
     )
 
