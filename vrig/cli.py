@@ -64,7 +64,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .field import default_band, pseudo_field
+from .field import TARGET_KINDS, default_band, desired_response, parse_target, pseudo_field
 
 __all__ = ["EXIT_CODE_MEANINGS", "STOP_EXIT", "ExitCode", "main"]
 
@@ -233,6 +233,14 @@ def _add_reconstruct_parser(sub) -> None:
         "sample rate; one column per response, matched by name, else by position), then one "
         "row of numbers per sample, comma-separated; a file without the header row is refused",
     )
+    rec.add_argument(
+        "--target",
+        metavar="KIND",
+        help="desired response to generate when no --desired file is given: 'pseudo-field' "
+        "(default: the rig's response to a road-like random drive), 'field:SCENARIO' (the rig's "
+        "specimen in its vehicle driven over a road: a service record, `vrig describe RIG` lists "
+        "the scenarios) or 'field' (the rig's first scenario); a file path works as --desired",
+    )
     rec.add_argument("--iterations", type=int, default=5, help="iterations after IT00 (default 5)")
     rec.add_argument(
         "--gain",
@@ -251,8 +259,8 @@ def _add_reconstruct_parser(sub) -> None:
     rec.add_argument(
         "--seconds",
         type=float,
-        help="length of the pseudo-field record (default 30 s); with --desired, use only the "
-        "first SECONDS of the file",
+        help="length of the generated record (--target, default 30 s); with --desired, use "
+        "only the first SECONDS of the file",
     )
     rec.add_argument("--seed", type=int, default=0, help="random seed, an integer >= 0 (default 0)")
     rec.add_argument(
@@ -616,16 +624,23 @@ def _read_field(args, rig, band):
     Returns (field, description, extra records)."""
     from . import io
 
+    target = getattr(args, "target", None)
+    if target is not None and args.desired is not None:
+        raise _UsageError("give --desired FILE or --target KIND, not both")
+    if target is not None and target.partition(":")[0] not in TARGET_KINDS:
+        args.desired, target = target, None  # a file path given as the target
     if args.desired is None:
         seconds = 30.0 if args.seconds is None else args.seconds
-        desdrv, field = pseudo_field(rig, band, seconds, seed=args.seed)
-        rms = np.sqrt(np.mean(desdrv.data**2, axis=0)) / [c.full_scale for c in rig.inputs]
-        source = (
-            f"pseudo-field response to a {seconds:g} s random drive (triangular PSD "
-            f"{band[0]:g}-{band[1]:g} Hz, {100 * rms.max():.3g} % of full scale rms, seed "
-            f"{args.seed})"
+        try:
+            parse_target(rig, target or "pseudo-field")
+        except ValueError as exc:
+            raise _UsageError(f"--target: {exc}") from None
+        field, source, extra = desired_response(
+            rig, target or "pseudo-field", seconds, seed=args.seed, band=band
         )
-        return field, source, {"DESDRV": desdrv}
+        if target is not None and target != "pseudo-field":
+            _check_content(field, rig)
+        return field, source, extra
     try:
         field = io.read(args.desired)
     except Exception as exc:  # whatever a damaged file makes the reader raise: bad input

@@ -1,16 +1,24 @@
-"""Desired responses without a field measurement: the pseudo-field record (reference text §6.5).
+"""Desired responses without a field measurement: pseudo-field records and service records.
 
 A *pseudo-field* desired response is the rig's own response to a road-like drive (triangular
-PSD over the simulation band): the reconstruction then has a known, reachable answer (DESDRV), so
-the error of an iteration method can be judged against a drive that exists. Used by the CLI's
-main command, the gymnasium environments and the benchmarks.
+PSD over the simulation band, reference text §6.5): the reconstruction then has a known,
+reachable answer (DESDRV), so the error of an iteration method can be judged against a drive
+that exists. A *service* (field) desired response is the record of the rig's specimen in its
+vehicle driven over a road (:mod:`vrig.service`): the kind of target the text's NARX results
+came from (§6.1.1's slow ditch, §6.4.1's road record) — non-Gaussian, with content the rig's own
+drives may not reach. :func:`desired_response` makes either from a target name; the CLI, the
+gymnasium environments and the benchmarks choose their targets through it.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["default_band", "pseudo_field"]
+__all__ = ["TARGET_KINDS", "default_band", "desired_response", "parse_target", "pseudo_field"]
+
+TARGET_KINDS = ("pseudo-field", "field")
+"""The generated target kinds: ``"pseudo-field"`` and ``"field:<scenario>"`` (``"field"`` alone:
+the rig's first service scenario, :func:`vrig.service.field_scenarios`)."""
 
 _FIELD_FRACTION = 0.10  # pseudo-field drive RMS as a fraction of full scale (5 mm on the damper)
 _FIELD_HEADROOM = 2 / 3  # pseudo-field responses peak below this fraction of the transducer range
@@ -113,3 +121,93 @@ def pseudo_field(rig, band: tuple[float, float], seconds: float, *, seed: int = 
     if last_error is not None:
         raise last_error
     return drive, response
+
+
+def parse_target(rig, target: str) -> tuple[str, str | None]:
+    """The kind and scenario of a target name: ``("pseudo-field", None)`` or ``("field", name)``.
+
+    Parameters
+    ----------
+    rig : Rig
+        The rig (its service scenarios name the field targets).
+    target : str
+        ``"pseudo-field"``, ``"field:<scenario>"`` or ``"field"`` (the rig's first scenario).
+
+    Raises
+    ------
+    ValueError
+        Not a target name, a rig without service scenarios, an unknown scenario (the message
+        lists the rig's).
+    """
+    from .service import field_scenarios
+
+    if not isinstance(target, str):
+        raise TypeError(f"target must be a string, got {type(target).__name__}")
+    kind, _, scenario = target.partition(":")
+    if kind == "pseudo-field" and not scenario:
+        return "pseudo-field", None
+    if kind != "field":
+        raise ValueError(
+            f"unknown target {target!r}: 'pseudo-field', 'field' or 'field:<scenario>'"
+        )
+    names = field_scenarios(rig)
+    if not names:
+        raise ValueError(f"rig {rig.name!r} has no service scenario: its targets are pseudo-field")
+    if not scenario:
+        return "field", names[0]
+    if scenario not in names:
+        raise ValueError(
+            f"rig {rig.name!r} has no service scenario {scenario!r}; its scenarios: {names}"
+        )
+    return "field", scenario
+
+
+def desired_response(rig, target: str = "pseudo-field", seconds: float = 30.0, *, seed=0,
+                     band=None) -> tuple:  # fmt: skip
+    """A generated desired (field) record for ``rig``: pseudo-field or service.
+
+    Parameters
+    ----------
+    rig : Rig
+        The rig to reconstruct on.
+    target : str
+        ``"pseudo-field"`` (:func:`pseudo_field` over ``band``) or ``"field:<scenario>"`` (the
+        scenario's field twin over its default road, :func:`vrig.service.field_record`).
+    seconds : float
+        Record length [s].
+    seed : int
+        Seed of the random drive (pseudo-field) or of the road (field).
+    band : (float, float), optional
+        Drive band of a pseudo-field record [Hz] (default :func:`default_band`).
+
+    Returns
+    -------
+    (field, source, extra) : TimeHistory, str, dict
+        The record at the rig's fs with its response channels, a one-line description of
+        where it comes from, and the records that made it (``{"DESDRV": ...}`` for a
+        pseudo-field record, ``{"ROAD": ...}`` for a service record).
+    """
+    kind, scenario = parse_target(rig, target)
+    if kind == "pseudo-field":
+        band = default_band(rig) if band is None else tuple(band)
+        desdrv, field = pseudo_field(rig, band, seconds, seed=seed)
+        rms = np.sqrt(np.mean(desdrv.data**2, axis=0)) / [c.full_scale for c in rig.inputs]
+        source = (
+            f"pseudo-field response to a {seconds:g} s random drive (triangular PSD "
+            f"{band[0]:g}-{band[1]:g} Hz, {100 * rms.max():.3g} % of full scale rms, seed {seed})"
+        )
+        return field, source, {"DESDRV": desdrv}
+    from .progress import status
+    from .service import field_record
+    from .service import scenario as get_scenario
+
+    sc = get_scenario(rig, scenario)
+    status(f"desired response: {seconds:g} s service record {rig.name}:{scenario} ...")
+    road, field = field_record(rig, scenario, seconds, seed=seed, with_road=True)
+    source = (
+        f"service record '{scenario}' ({seconds:g} s): the specimen in its vehicle on an ISO "
+        f"8608 class-{sc.road.road_class} road at {sc.road.speed_kmh:g} km/h"
+        + (f" with {', '.join(e['kind'] for e in sc.road.events)}" if sc.road.events else "")
+        + f", seed {seed}"
+    )
+    return field, source, {"ROAD": road}

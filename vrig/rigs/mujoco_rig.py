@@ -568,6 +568,9 @@ class MujocoRig:
                 lines.append(
                     f"  {k} = {self.parameters[k]!r} {p.unit}: {p.description} [{p.source}]"
                 )
+        if d.service:
+            lines.append("service scenarios (field records: vrig reconstruct --target field:NAME):")
+            lines.extend(f"  {k}: {v.get('description', '')}" for k, v in d.service.items())
         return "\n".join(lines)
 
     def __repr__(self) -> str:

@@ -254,8 +254,9 @@ def road_drive(sc: Scenario, fs: float, seconds: float, *, speed_kmh, road_class
 
 
 def field_record(
-    rig, scenario_name: str, seconds: float, *, speed_kmh=None, road_class=None, seed: int = 0
-) -> TimeHistory:
+    rig, scenario_name: str, seconds: float, *, speed_kmh=None, road_class=None, seed: int = 0,
+    with_road: bool = False,
+):  # fmt: skip
     """A service record (FIELD) of ``rig``'s response channels in scenario ``scenario_name``.
 
     The scenario's field twin (:func:`field_twin`) is driven over a seeded ISO 8608 road of
@@ -276,11 +277,14 @@ def field_record(
     seed : int
         Seed of the road profile (the twin's noise runs with ``seed + 20_000``); the same seed
         gives the same record, bit for bit.
+    with_road : bool
+        Return the road drive too.
 
     Returns
     -------
-    TimeHistory
-        At the rig's fs, with the rig's response channel names and units.
+    TimeHistory, or (TimeHistory, TimeHistory) with ``with_road``
+        At the rig's fs, with the rig's response channel names and units (FIELD); with
+        ``with_road``, ``(road, field)``: the twin's drive first.
 
     Raises
     ------
@@ -295,4 +299,5 @@ def field_record(
     drive = road_drive(sc, rig.fs, seconds, speed_kmh=speed, road_class=cls, seed=seed)
     twin = field_twin(rig, scenario_name, seed=seed)
     field = twin.run(drive, seed=seed + 20_000)
-    return TimeHistory(field.data, field.fs, field.names, field.units)
+    field = TimeHistory(field.data, field.fs, field.names, field.units)
+    return (drive, field) if with_road else field
