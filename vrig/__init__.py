@@ -5,6 +5,7 @@ signals, processing, reconstruction workflow, gymnasium environments and CLI liv
 """
 
 from . import envs as _envs  # noqa: F401  (registers the vrig/ gymnasium environments)
+from . import roads
 from .errors import (
     ERRORS,
     FileFormatError,
@@ -15,10 +16,11 @@ from .errors import (
     SimulationInstabilityError,
     VrigError,
 )
-from .field import pseudo_field
+from .field import desired_response, pseudo_field
 from .linearity import LinearityResult, check_linearity, check_rig_linearity
 from .reconstruction import IterationSettings, ReconstructionResult, reconstruct
 from .rigs import ChannelSpec, FileRig, MujocoRig, list_rigs, load_rig, rig_path, severity_rigs
+from .service import field_record, field_scenarios
 from .testfolder import TestFolder
 from .timehistory import TimeHistory
 
@@ -46,10 +48,14 @@ __all__ = [
     "__version__",
     "check_linearity",
     "check_rig_linearity",
+    "desired_response",
+    "field_record",
+    "field_scenarios",
     "list_rigs",
     "load_rig",
     "pseudo_field",
     "reconstruct",
     "rig_path",
+    "roads",
     "severity_rigs",
 ]

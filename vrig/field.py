@@ -185,7 +185,8 @@ def desired_response(rig, target: str = "pseudo-field", seconds: float = 30.0, *
     (field, source, extra) : TimeHistory, str, dict
         The record at the rig's fs with its response channels, a one-line description of
         where it comes from, and the records that made it (``{"DESDRV": ...}`` for a
-        pseudo-field record, ``{"ROAD": ...}`` for a service record).
+        pseudo-field record, ``{"FIELDDRV01": ...}`` for a service record: the road inputs of
+        the field twin).
     """
     kind, scenario = parse_target(rig, target)
     if kind == "pseudo-field":
@@ -210,4 +211,4 @@ def desired_response(rig, target: str = "pseudo-field", seconds: float = 30.0, *
         + (f" with {', '.join(e['kind'] for e in sc.road.events)}" if sc.road.events else "")
         + f", seed {seed}"
     )
-    return field, source, {"ROAD": road}
+    return field, source, {"FIELDDRV01": road}

@@ -72,6 +72,7 @@ _NAME_PATTERNS = (
     r"IDDRV",
     r"IDRES",
     r"FIELD\d\d",
+    r"FIELDDRV\d\d",  # the road inputs of a field twin's record FIELDnn (vrig.service)
     r"DESRES\d\d",
     r"R?IT\d\d(?:DRV|RES)",
     r"FINDRV\d\d",
