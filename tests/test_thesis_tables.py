@@ -63,6 +63,7 @@ class _Calls(list):
     def __init__(self):
         super().__init__()
         self.normal = []
+        self.targets = []  # (rig, variant, target) of every table run
 
 
 def _fake_runs(monkeypatch):
@@ -70,9 +71,11 @@ def _fake_runs(monkeypatch):
     (the normal tables' runs, also with the drive level, in ``calls.normal``)."""
     calls = _Calls()
 
-    def run_table(table, *, variant, severity, **_kw):
-        calls.append((table.rig, variant, severity))
-        return [[10.0 + len(calls)] * len(table.channels) for _ in table.rows]
+    def run_table(table, *, variant, severity, target="pseudo-field", **_kw):
+        calls.targets.append((table.rig, variant, target))
+        if target == "pseudo-field":  # one call per setting on the pseudo-field target
+            calls.append((table.rig, variant, severity))
+        return [[10.0 + len(calls.targets)] * len(table.channels) for _ in table.rows]
 
     monkeypatch.setattr(thesis_tables, "run_table", run_table)
     monkeypatch.setattr(
@@ -104,10 +107,16 @@ def test_several_variants_run_each_table_per_variant_the_rig_has(tmp_path, monke
     assert [v for r, v, _s in calls if r == "motorcycle-rear"] == [motorcycle_default]
     assert "the rig has no 'thesis'" in text
     assert (
-        "vrig(mild) spring_strain [%] | vrig(thesis) spring_strain [%] | text spring_strain" in text
+        "vrig(mild, field:rough-road) spring_strain [%] | vrig(mild, pseudo-field) spring_strain "
+        "[%] | vrig(thesis, field:rough-road) spring_strain [%] | vrig(thesis, pseudo-field) "
+        "spring_strain [%] | text spring_strain" in text
     )
     damper = text[text.index("### Table 6.3") : text.index("### Table 6.16")]
-    assert "vrig(mild) ran on variant 'mild'; vrig(thesis) ran on variant 'thesis'" in damper
+    assert (
+        "vrig(mild, field:slow-ditch) ran on variant 'mild' with a field:slow-ditch desired "
+        "response; vrig(mild, pseudo-field) ran on variant 'mild' with a pseudo-field desired "
+        "response; vrig(thesis, field:slow-ditch) ran on variant 'thesis'" in damper
+    )
     assert (tmp_path / "thesis_reproduction_mild_thesis.md").read_text() == text
 
 
@@ -392,3 +401,18 @@ def test_narx_beats_arx_on_the_pneumatic_pressure_to_strain():
         )
         arx_ls, narx, arx_sim = (v[0] for v in values)
         assert narx < arx_sim and narx < arx_ls
+
+
+def test_each_table_runs_on_the_texts_kind_of_target_and_on_pseudo_field(tmp_path, monkeypatch):
+    """Issue 22: 6.3 the slow ditch, 6.12 a road record, 3.4/3.5 road simulations (service
+    records of the field twins), 6.16 pseudo-field as the text's; pseudo-field beside each."""
+    calls = _fake_runs(monkeypatch)
+    thesis_tables.thesis_report(tmp_path, True, log=lambda *_: None)
+    texts = {
+        "elastomeric-damper": "field:slow-ditch", "radiator": "field:truck-front",
+        "fuel-tank-2ch": "field:chassis-road", "motorcycle-rear": "field:rough-road",
+    }  # fmt: skip
+    for table in TABLES:
+        ran = [t for r, _v, t in calls.targets if r == table.rig]
+        want = [texts[table.rig], "pseudo-field"] if table.rig in texts else ["pseudo-field"]
+        assert ran == want, table.name
