@@ -10,6 +10,8 @@ no drive moves is unreachable; the drive that made a target is the drive it need
 
 from __future__ import annotations
 
+import contextlib
+import io
 import json
 import warnings
 
@@ -18,6 +20,7 @@ import pytest
 from scipy import signal
 
 import vrig
+from vrig.cli import main
 from vrig.field import default_band, pseudo_field
 from vrig.processing import gprepro
 from vrig.signals import flat_psd, random_drive
@@ -361,3 +364,91 @@ def _drive_for(rig, seconds=10.0):
         seed=1,
         names=[rig.inputs[0].name],
     )
+
+
+# ----------------------------------------------------------------------------------------- CLI
+def _cli(argv):
+    out, err = io.StringIO(), io.StringIO()
+    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+        code = main(argv)
+    return code, out.getvalue(), err.getvalue()
+
+
+@pytest.fixture(scope="module")
+def shock_target(tmp_path_factory):
+    rig = vrig.load_rig("shock-absorber")
+    _, target = pseudo_field(rig, default_band(rig), 10.0, seed=0)
+    path = tmp_path_factory.mktemp("targets") / "target.npz"
+    vrig.io.write(path, target)
+    return path, target
+
+
+def test_cli_check_target_prints_the_ranges_and_the_check(shock_target):
+    path, _ = shock_target
+    code, out, _ = _cli(["check-target", "--rig", "shock-absorber", "--desired", str(path)])
+    assert code == 0
+    assert "transducer range" in out and "unreachable" in out and "needed peak" in out
+    line = next(
+        ln
+        for ln in out.splitlines()
+        if ln.startswith("damper_load") and "%" in ln and "N" in ln and "±" not in ln
+    )
+    assert float(line.split()[-4]) < 2.0  # unreachable [%] of a pseudo-field target
+
+
+def test_cli_check_target_rejects_bad_input(shock_target, tmp_path):
+    path, target = shock_target
+    code, _, err = _cli(["check-target", "--rig", "shock-absorber", "--desired", str(tmp_path)])
+    assert code == 2 and "a folder, not a file" in err
+    wrong_fs = tmp_path / "fs.npz"
+    vrig.io.write(wrong_fs, vrig.TimeHistory(target.data, 400.0, target.names, target.units))
+    code, _, err = _cli(["check-target", "--rig", "shock-absorber", "--desired", str(wrong_fs)])
+    assert code == 2 and "resample it first" in err
+    short = tmp_path / "short.npz"
+    vrig.io.write(short, target.window(0.0, 2.0))
+    code, _, err = _cli(["check-target", "--rig", "shock-absorber", "--desired", str(short)])
+    assert code == 2 and "too short for the spectral estimate" in err
+    code, _, err = _cli(
+        ["check-target", "--rig", "shock-absorber", "--desired", str(path), "--seconds", "1"]
+    )
+    assert code == 2 and "--seconds must be" in err
+
+
+def _reconstruct(out):
+    return _cli(
+        [
+            "reconstruct",
+            "--rig",
+            "shock-absorber",
+            "--seconds",
+            "10",
+            "--iterations",
+            "0",
+            "--out",
+            str(out),
+        ]
+    )
+
+
+def test_reconstruct_records_the_target_check_in_the_summary(tmp_path):
+    code, _, _ = _reconstruct(tmp_path / "rec")
+    assert code == 0
+    summary = json.loads((tmp_path / "rec" / "summary.json").read_text())
+    check = summary["target_check"]
+    assert check["rig"] == "shock-absorber" and check["band_hz"] == summary["bandwidth_hz"]
+    assert check["channels"][0]["unreachable"] < 0.02
+    assert check["id_seconds"] == pytest.approx(summary["duration_s"])  # its own IDRES
+
+
+def test_a_failing_target_check_never_loses_the_run(tmp_path, monkeypatch):
+    import vrig.targets
+
+    def broken(*args, **kwargs):
+        raise RuntimeError("no spectra today")
+
+    monkeypatch.setattr(vrig.targets, "check_target", broken)
+    code, _, _ = _reconstruct(tmp_path / "rec")
+    assert code == 0
+    summary = json.loads((tmp_path / "rec" / "summary.json").read_text())
+    assert summary["target_check"] == {"error": "RuntimeError: no spectra today"}
+    assert summary["iterations_run"] == 0
