@@ -452,3 +452,50 @@ def test_a_failing_target_check_never_loses_the_run(tmp_path, monkeypatch):
     summary = json.loads((tmp_path / "rec" / "summary.json").read_text())
     assert summary["target_check"] == {"error": "RuntimeError: no spectra today"}
     assert summary["iterations_run"] == 0
+
+
+# ----------------------------------------------------------------------- the Belgian record
+@pytest.fixture(scope="module")
+def belgian_path():
+    from vrig.records import belgian_block_path
+
+    try:
+        return belgian_block_path()
+    except FileNotFoundError as exc:
+        pytest.skip(f"public data absent: {exc}")
+
+
+def test_the_belgian_record_maps_to_the_four_vertical_responses(belgian_path):
+    from vrig.records import belgian_block_desired, belgian_block_record, belgian_block_rig
+
+    rig = vrig.load_rig("fuel-tank-7ch", fidelity="fast")
+    desired = belgian_block_desired(rig, seconds=10.0, start=20.0, scale=0.25)
+    names = ("LF_vertical_acc", "RF_vertical_acc", "LR_vertical_acc", "RR_vertical_acc")
+    assert desired.names == names and desired.units == ("m/s^2",) * 4
+    assert desired.fs == rig.fs and desired.n_samples == 2500
+    assert [c.name for c in belgian_block_rig(rig).outputs] == list(names)
+    # independent F2D of the record at its own rate: g -> m/s^2, x 0.25, 1-40 Hz band-pass
+    raw = belgian_block_record(belgian_path)
+    wheels = [
+        "WFT1@LF_Z_Acceler.RN_1",
+        "WFT1@RF_Z_Acceler.RN_1",
+        "WFT2@LR_Z_Acceler.RN_1",
+        "WFT2@RR_Z_Acceler.RN_1",
+    ]
+    x = raw[wheels].data[20 * 256 : 30 * 256] * 9.80665 * 0.25
+    sos = signal.butter(4, [1.0, 40.0], btype="bandpass", fs=256.0, output="sos")
+    ref = signal.sosfiltfilt(sos, signal.detrend(x, axis=0), axis=0)
+    mid = slice(250, -250)  # away from the filters' edges
+    np.testing.assert_allclose(desired.data[mid].std(axis=0), ref[64:-64].std(axis=0), rtol=0.03)
+
+
+def test_the_belgian_record_says_where_it_is_missing(tmp_path):
+    from vrig.records import belgian_block_desired
+
+    rig = vrig.load_rig("fuel-tank-7ch", fidelity="fast")
+    with pytest.raises(FileNotFoundError, match=str(tmp_path)):
+        belgian_block_desired(rig, tmp_path / "none.rsp", scale=1.0)
+    with pytest.raises(ValueError, match="must lie in the record"):
+        belgian_block_desired(rig, seconds=60.0, start=280.0, scale=1.0)
+    with pytest.raises(ValueError, match="no response"):
+        belgian_block_desired(vrig.load_rig("shock-absorber", fidelity="fast"), scale=1.0)
