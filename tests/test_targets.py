@@ -118,6 +118,18 @@ def test_multiple_coherence_of_a_linear_system_with_output_noise_is_s_over_s_plu
         np.testing.assert_allclose(_blocks(gamma2[:, j]), _blocks(truth), atol=0.03)
 
 
+def test_multiple_coherence_of_one_drive_is_the_ordinary_coherence():
+    rng = np.random.default_rng(1)
+    x = rng.standard_normal(5000)
+    y = signal.lfilter([1.0, 0.5], [1.0, -0.3], x) + rng.standard_normal(5000)
+    f, gamma2 = multiple_coherence(x, y, FS, nperseg=255)
+    f_ref, ref = signal.coherence(x, y, fs=FS, nperseg=255)
+    np.testing.assert_allclose(f, f_ref)
+    np.testing.assert_allclose(gamma2[:, 0], ref, atol=1e-12)
+    with pytest.raises(ValueError, match="nperseg must be"):
+        multiple_coherence(x, y, FS, nperseg=10_000)
+
+
 # --------------------------------------------------------------------- reachability (known rig)
 def test_a_square_rig_reaches_any_target_also_one_with_independent_channels():
     rig = LinearRig(FIR)
@@ -212,7 +224,10 @@ def test_check_target_refuses_targets_it_cannot_judge():
 
 def test_the_check_reads_as_a_table_and_as_json():
     rig = LinearRig(FIR)
-    check = check_target(rig, rig.run(_drive(rig), seed=9))
+    target = rig.run(_drive(rig), seed=9)
+    check = check_target(rig, target)
+    in_band = gprepro(target, default_band(rig)).data.std(axis=0)  # Parseval: the same power
+    np.testing.assert_allclose([c.target_rms for c in check.channels], in_band, rtol=0.05)
     text = str(check)
     assert "unreachable" in text and "needed peak" in text and "y1" in text and "x0" in text
     data = json.loads(json.dumps(check.to_dict()))

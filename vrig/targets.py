@@ -112,6 +112,7 @@ _WANT_LINES = 16  # ... and the resolution it asks for when the record is long e
 _MIN_AVERAGES = 16  # Welch segments (also at least 4 per drive channel)
 _FALSE_ALARM = 0.01  # a response independent of the drives is taken as driven this often
 _MAX_DENOMINATOR = 1000  # of the rational resampling ratio
+_BLOCK = 64  # Welch segments transformed at once
 _DEFINITION = (
     "unreachable: residual of the best linear drive (usable drive directions of the "
     "identification run, relative-error weighting) as a fraction of the target's variance in "
@@ -466,13 +467,29 @@ def identification_records(
 
 # ------------------------------------------------------------------------------ spectra
 def _spectra(z: np.ndarray, fs: float, nperseg: int) -> tuple[np.ndarray, np.ndarray]:
-    """Welch cross-spectral matrices ``G[f, i, j] = E[Z_i Z_j*]`` of the columns of ``z``."""
-    f, G = signal.csd(z[:, None, :], z[:, :, None], fs=fs, nperseg=nperseg, axis=0)
+    """Welch cross-spectral matrices ``G[f, i, j] = E[Z_i Z_j*]`` of the columns of ``z``.
+
+    The one-sided densities :func:`scipy.signal.csd` gives (Hann window, 50 % overlap, the mean
+    removed per segment), accumulated over blocks of segments: the memory is that of one block,
+    not of the channel pairs times the record."""
+    step = nperseg - nperseg // 2  # scipy's noverlap = nperseg // 2
+    window = signal.get_window("hann", nperseg)
+    segments = np.lib.stride_tricks.sliding_window_view(z, nperseg, axis=0)[::step]
+    f = np.fft.rfftfreq(nperseg, 1.0 / fs)
+    G = np.zeros((f.size, z.shape[1], z.shape[1]), dtype=complex)
+    for i in range(0, segments.shape[0], _BLOCK):  # one block of segments at a time
+        seg = segments[i : i + _BLOCK]
+        Z = np.fft.rfft((seg - seg.mean(axis=-1, keepdims=True)) * window, axis=-1)
+        G += np.einsum("kif,kjf->fij", Z, np.conj(Z))
+    G *= 2.0 / (fs * np.sum(window**2) * segments.shape[0])
+    G[0] /= 2
+    if nperseg % 2 == 0:
+        G[-1] /= 2
     return f, G
 
 
 def _averages(n: int, nperseg: int) -> int:
-    return (n - nperseg) // (nperseg // 2) + 1 if n >= nperseg else 0
+    return (n - nperseg) // (nperseg - nperseg // 2) + 1 if n >= nperseg else 0
 
 
 def _h1(Sxx: np.ndarray, Sxy: np.ndarray) -> np.ndarray:
@@ -510,6 +527,8 @@ def multiple_coherence(x, y, fs: float, *, nperseg: int = 256):
     x, y = (v[:, None] if v.ndim == 1 else v for v in (x, y))
     if x.shape[0] != y.shape[0]:
         raise ValueError(f"x has {x.shape[0]} samples, y {y.shape[0]}")
+    if not (isinstance(nperseg, (int, np.integer)) and 2 <= nperseg <= x.shape[0]):
+        raise ValueError(f"nperseg must be an integer in 2..{x.shape[0]} samples, got {nperseg!r}")
     m = x.shape[1]
     f, S = _spectra(np.hstack([x, y]), fs, nperseg)
     Sxx, Sxy, Syy = S[:, :m, :m], S[:, :m, m:], S[:, m:, m:]
