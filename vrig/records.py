@@ -28,7 +28,7 @@ accelerations (F2D, :func:`vrig.targets.f2d`):
   linear drive (:func:`vrig.targets.check_target`, one identification run) needs at most half
   of every actuator's stroke, full scale and velocity limit, and the target at most half of
   every transducer range. Why: at its own level the record (2.4 g RMS, 14 g peak of wheel-hub
-  acceleration, mostly at 5-20 Hz) needs about 2.4 m/s of actuator velocity where the rig's
+  acceleration, mostly at 5-20 Hz) needs about 2 m/s of actuator velocity where the rig's
   actuators make 0.525 m/s; the transducer range (50 g) is not what limits it, so a rule "peak at
   half the range" would scale the record *up* into the actuators' limits. The half is headroom
   for the iterations' overshoot, for the estimate, and for the following-error and force
