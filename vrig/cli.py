@@ -7,6 +7,7 @@
     vrig reconstruct --rig shock-absorber --method arx
     vrig repeatability --rig shock-absorber
     vrig check-linearity --rig elastomeric-damper --plot   # is NARX worth it? (§5.8)
+    vrig check-target --rig fuel-tank-2ch --desired road.rsp   # can the rig reach it? (§2.3.2)
     vrig demo                                   # identify a generated non-linear MIMO system
     vrig bench run --quick                      # the benchmark runner (= python -m benchmarks)
 
@@ -176,6 +177,7 @@ def _parser() -> argparse.ArgumentParser:
     _add_bench_parser(sub)
     _add_repeatability_parser(sub)
     _add_linearity_parser(sub)
+    _add_check_target_parser(sub)
     return p
 
 
@@ -385,6 +387,43 @@ def _add_linearity_parser(sub) -> None:
     lin.add_argument("--seed", type=int, default=0, help="random seed, an integer >= 0 (default 0)")
     lin.add_argument("--plot", action="store_true", help="write linearity.png into --out")
     lin.add_argument("--out", help="folder of the plot (default ./results/<rig>-linearity)")
+
+
+def _add_check_target_parser(sub) -> None:
+    """Add the `check-target` subcommand."""
+    chk = sub.add_parser(
+        "check-target",
+        help="can the rig reach a desired response? unreachable fraction per response, needed "
+        "drive against the actuator limits (§2.3.2)",
+        description="Play one identification drive on the rig (random, triangular PSD over the "
+        "identification band, as reconstruct does) and print: the desired response against the "
+        "transducer ranges; per response the fraction of the target no drive can reach (the "
+        "residual of the best linear drive) and the rig's incoherence at the target's "
+        "frequencies; per drive the peak drive and velocity the target needs against the "
+        "actuator's limits. The definitions: vrig.targets.",
+        epilog=_EXIT_CODES,
+    )
+    chk.add_argument("--rig", required=True, help="rig name (see `vrig rigs`) or rig file")
+    chk.add_argument(
+        "--desired",
+        required=True,
+        metavar="FILE",
+        help="desired response with the rig's response channels at the rig's sample rate "
+        "(formats as for `vrig reconstruct --desired`)",
+    )
+    chk.add_argument(
+        "--band",
+        type=float,
+        nargs=2,
+        metavar=("LOW", "HIGH"),
+        help="simulation bandwidth [Hz] (default as for reconstruct)",
+    )
+    chk.add_argument(
+        "--seconds",
+        type=float,
+        help="length of the identification run [s] (default: the desired record's length)",
+    )
+    chk.add_argument("--seed", type=int, default=0, help="random seed, an integer >= 0 (default 0)")
 
 
 # ---------------------------------------------------------------------------------------------
@@ -619,11 +658,10 @@ def _cmd_describe(args) -> int:
 
 
 def _read_field(args, rig, band):
-    """The desired (field) record: ``--desired`` or a pseudo-field response.
+    """The desired (field) record: ``--desired``, else ``--target`` (a pseudo-field or a
+    service record, :func:`vrig.field.desired_response`).
 
     Returns (field, description, extra records)."""
-    from . import io
-
     target = getattr(args, "target", None)
     if target is not None and args.desired is not None:
         raise _UsageError("give --desired FILE or --target KIND, not both")
@@ -641,11 +679,7 @@ def _read_field(args, rig, band):
         if target is not None and target != "pseudo-field":
             _check_content(field, rig)
         return field, source, extra
-    try:
-        field = io.read(args.desired)
-    except Exception as exc:  # whatever a damaged file makes the reader raise: bad input
-        raise _UsageError(f"--desired: cannot read {args.desired}: {exc}") from None
-    field, notes = _check_desired(field, rig)
+    field, notes = _read_desired(args.desired, rig)
     if args.seconds is not None:
         if args.seconds > field.duration:
             raise _UsageError(
@@ -662,6 +696,18 @@ def _read_field(args, rig, band):
     for note in notes:
         print(f"note: {note}")
     return field, f"{args.desired} ({field.duration:g} s)", {}
+
+
+def _read_desired(path, rig):
+    """Read a ``--desired`` file and match it to the rig's responses (:func:`_check_desired`):
+    (record, notes)."""
+    from . import io
+
+    try:
+        field = io.read(path)
+    except Exception as exc:  # whatever a damaged file makes the reader raise: bad input
+        raise _UsageError(f"--desired: cannot read {path}: {exc}") from None
+    return _check_desired(field, rig)
 
 
 def _check_reconstruct_args(args) -> None:
@@ -780,8 +826,12 @@ def _save(result, out: Path, rig, args, save: dict) -> list[Path]:
     from .progress import status
     from .testfolder import TestFolder
 
+    status("checking the target's reachability (the identification records: no rig run) ...")
+    check = {"target_check": _target_check(rig, result)}
     status(f"writing the test folder {out}/ ...")
-    written = TestFolder(out).save(result, fmt=args.fmt, rig=rig, overwrite=args.overwrite, **save)
+    written = TestFolder(out).save(
+        result, fmt=args.fmt, rig=rig, overwrite=args.overwrite, summary_extra=check, **save
+    )
     status("drawing the plots (overlay, zoom, PSD, error per iteration, drive vs limits) ...")
     plots = save_reconstruction_plots(result, out, rig=rig)
     names = [p.name for p in written]
@@ -789,6 +839,27 @@ def _save(result, out: Path, rig, args, save: dict) -> list[Path]:
     print(f"\ntest folder {out}/ ({len(written)} files: {', '.join(shown)})")
     print("plots      " + ", ".join(str(p) for p in plots))
     return written + plots
+
+
+def _target_check(rig, result) -> dict:
+    """:func:`vrig.targets.check_target` of DESRES from the reconstruction's own identification
+    records (no rig run) as ``summary.json``'s ``target_check``; a failure is recorded as
+    ``{"error": ...}``, never raised (it must not lose the run)."""
+    from .targets import check_target
+
+    if result.id_drive is None or result.id_response is None:
+        return {"error": "no identification records: the identification drive was not played"}
+    try:
+        check = check_target(
+            rig,
+            result.desired,
+            band=result.bandwidth,
+            id_drive=result.id_drive,
+            id_response=result.id_response,
+        )
+    except Exception as exc:  # whatever it is, the reconstruction's records come first
+        return {"error": f"{type(exc).__name__}: {exc}"}
+    return check.to_dict()
 
 
 _NARROWER = "a narrower --band, a lower --order or --method frf"
@@ -921,6 +992,33 @@ def _cmd_check_linearity(args) -> int:
     return 0
 
 
+def _cmd_check_target(args) -> int:
+    from .targets import check_target, range_report
+
+    if args.seconds is not None and not (
+        np.isfinite(args.seconds) and 2 <= args.seconds <= _MAX_SECONDS
+    ):
+        raise _UsageError(f"--seconds must be 2..{_MAX_SECONDS:g}, got {args.seconds:g}")
+    _check_seed(args.seed)
+    if not Path(args.desired).is_file():
+        what = "a folder, not a file" if Path(args.desired).is_dir() else "no file"
+        raise _UsageError(f"--desired: {what} {args.desired}")
+    rig = _load_rig(args.rig, seed=args.seed)
+    band = _band(rig, args.band)
+    desired, notes = _read_desired(args.desired, rig)
+    for note in notes:
+        print(f"note: {note}")
+    print(f"rig       {rig.name} (variant {rig.variant}): {rig.description.title}")
+    print(f"desired   {args.desired} ({desired.duration:g} s)\n")
+    print(range_report(rig, desired).table() + "\n", flush=True)
+    try:
+        check = check_target(rig, desired, band=band, seconds=args.seconds, seed=args.seed)
+    except ValueError as exc:  # a record too short for the spectral estimate
+        raise _UsageError(str(exc)) from exc
+    print(check.table())
+    return 0
+
+
 def _cmd_demo(args) -> int:
     from identification.errors import SimulationDivergedError, UnstableModelError
 
@@ -949,6 +1047,7 @@ _COMMANDS = {
     "reconstruct": _cmd_reconstruct,
     "repeatability": _cmd_repeatability,
     "check-linearity": _cmd_check_linearity,
+    "check-target": _cmd_check_target,
 }
 
 

@@ -265,6 +265,15 @@ def _summary(result, rig, fmt: str, files: dict, models: dict, model_note: str, 
     }
 
 
+def _extra_entries(summary: dict, extra: Mapping | None) -> dict:
+    """``extra`` as summary entries: keys the summary has already are refused."""
+    extra = dict(extra or {})
+    clash = sorted(set(extra) & set(summary))
+    if clash:
+        raise ValueError(f"summary_extra may not replace the summary's own entries {clash}")
+    return _plain(extra)
+
+
 @dataclass(frozen=True)
 class IterationRecord:
     """The records and scores of one iteration read back from a test folder.
@@ -317,6 +326,7 @@ class TestFolder:
         records: Mapping[str, TimeHistory] | None = None,
         settings: Mapping | None = None,
         overwrite: bool = False,
+        summary_extra: Mapping | None = None,
     ) -> list[Path]:
         """Write a reconstruction as QanTiM files and ``summary.json``.
 
@@ -343,6 +353,9 @@ class TestFolder:
         overwrite : bool
             Allow replacing a non-empty folder: the QanTiM records, models and summary of a
             previous save are replaced by the new ones; other files (plots, notes...) are kept.
+        summary_extra : mapping, optional
+            Further top-level entries of ``summary.json`` (JSON-able), e.g. ``{"target_check":
+            ...}`` (:func:`vrig.targets.check_target`); a key the summary has already is refused.
 
         Returns
         -------
@@ -374,6 +387,7 @@ class TestFolder:
             files = self._write_records(staging, _records(result, field, extra), fmt)
             models, model_note = _save_models(staging, result.method)
             summary = _summary(result, rig, fmt, files, models, model_note, settings)
+            summary.update(_extra_entries(summary, summary_extra))
             with atomic_write(staging / SUMMARY, "w", encoding="utf-8") as f:
                 f.write(json.dumps(summary, indent=2, ensure_ascii=False) + "\n")
         names = [*files.values(), *(m["file"] for m in models.values()), SUMMARY]
