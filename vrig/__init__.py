@@ -21,6 +21,7 @@ from .linearity import LinearityResult, check_linearity, check_rig_linearity
 from .reconstruction import IterationSettings, ReconstructionResult, reconstruct
 from .rigs import ChannelSpec, FileRig, MujocoRig, list_rigs, load_rig, rig_path, severity_rigs
 from .service import field_record, field_scenarios
+from .targets import TargetCheck, check_target, f2d, range_report
 from .testfolder import TestFolder
 from .timehistory import TimeHistory
 
@@ -42,18 +43,22 @@ __all__ = [
     "RigModelError",
     "RigParameterError",
     "SimulationInstabilityError",
+    "TargetCheck",
     "TestFolder",
     "TimeHistory",
     "VrigError",
     "__version__",
     "check_linearity",
     "check_rig_linearity",
+    "check_target",
     "desired_response",
+    "f2d",
     "field_record",
     "field_scenarios",
     "list_rigs",
     "load_rig",
     "pseudo_field",
+    "range_report",
     "reconstruct",
     "rig_path",
     "roads",
