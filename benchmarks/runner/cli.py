@@ -508,7 +508,7 @@ def _note_skipped(target: str, skipped: list[str], why: str, n_rigs: int) -> Non
         )
     print(
         f"note: target {target} skipped on {', '.join(skipped)}: not a service scenario of "
-        "th" + ("at rig" if len(skipped) == 1 else "ose rigs")
+        + ("that rig" if len(skipped) == 1 else "those rigs")
     )
 
 
