@@ -5,6 +5,7 @@ Short records on the fast shock-absorber rig (6 s, one iteration) keep this file
 
 from __future__ import annotations
 
+import importlib.util
 import json
 import os
 import re
@@ -13,6 +14,7 @@ import sys
 import time
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -389,3 +391,166 @@ def test_a_long_record_gets_status_lines_on_stderr(tmp_path, monkeypatch, capsys
     with pytest.raises(KeyboardInterrupt):
         execute(KEYS[:2], SETTINGS, store, backend="serial", log=None)
     assert capsys.readouterr().err == ""  # --quiet: no status lines either
+
+
+# ---------------------------------------------------------------------------------------------
+# the target axis (issue 22): pseudo-field (default) and field:<scenario> records
+# ---------------------------------------------------------------------------------------------
+HAVE_ROADS = importlib.util.find_spec("vrig.roads") is not None
+
+
+@pytest.fixture
+def fake_field(monkeypatch):
+    """``vrig.field.desired_response`` replaced for field targets: half the pseudo-field record
+    of the same seed (reachable and quick), with a source line naming it; the runner's
+    per-process cache of desired responses is emptied before and after."""
+    import vrig.field
+    from benchmarks.runner import record
+
+    real = vrig.field.desired_response
+
+    def fake(rig, target="pseudo-field", seconds=30.0, *, seed=0, band=None):
+        field, source, extra = real(rig, "pseudo-field", seconds, seed=seed, band=band)
+        if target == "pseudo-field":
+            return field, source, extra
+        half = field.with_data(0.5 * field.data)
+        return half, f"stand-in service record {target} seed {seed}", {}
+
+    record._target.cache_clear()
+    monkeypatch.setattr(vrig.field, "desired_response", fake)
+    yield
+    record._target.cache_clear()
+
+
+def test_the_record_key_holds_the_target_and_a_pseudo_field_key_is_written_as_before():
+    from benchmarks.runner.record import key_dict, record_id
+
+    old = RecordKey("shock-absorber", "arx", 0, 0)
+    assert old == RecordKey("shock-absorber", "arx", 0, 0, None, "pseudo-field")
+    assert record_id(old) == "shock-absorber--arx--d0--s0"  # the id before the axis
+    assert key_dict(old) == {"rig": "shock-absorber", "method": "arx", "desired": 0, "seed": 0}
+    field = RecordKey("shock-absorber", "arx", 0, 0, target="field:rough-road")
+    assert field != old and sorted([field, old]) == [old, field]
+    assert record_id(field) == "shock-absorber--arx--d0--s0--field-rough-road"
+    assert key_dict(field)["target"] == "field:rough-road"
+    both = RecordKey("shock-absorber", "arx", 0, 0, 0.5, "field:rough-road")
+    assert record_id(both) == "shock-absorber--arx--d0--s0--sev0.5--field-rough-road"
+    for bad in ("field", "field:", "road", "pseudo-field:x", None):
+        with pytest.raises(ValueError, match="target must be"):
+            RecordKey("shock-absorber", "arx", 0, 0, target=bad)
+
+
+def test_a_record_without_a_target_loads_as_pseudo_field(serial_run, tmp_path):
+    """A record file as written before the target axis (no ``target`` in its key, the old id)
+    is a finished pseudo-field record: resumed, not recomputed, and ranked as pseudo-field."""
+    from benchmarks.runner.record import check_record
+    from benchmarks.runner.report import target_of
+
+    store, _ = serial_run
+    rec = store.load(KEYS[0])
+    assert set(rec["key"]) == {"rig", "method", "desired", "seed"}
+    assert rec["id"] == "shock-absorber--arx--d0--s0" and "target_source" not in rec
+    other = Store(tmp_path)
+    other.prepare(SETTINGS)
+    (other.records_dir / f"{rec['id']}.json").write_text(json.dumps(rec))
+    assert other.finished(RecordKey("shock-absorber", "arx", 0, 0, target="pseudo-field"), SETTINGS)
+    assert target_of(rec) == "pseudo-field"
+    board = leaderboard(other.all_records(SETTINGS))
+    assert "## Field targets" not in board and "## Pseudo-field targets" not in board
+    named = {**rec, "key": {**rec["key"], "target": "pseudo-field"}}
+    assert "has no target" in check_record(named)  # written only for a field target
+    bad = {**rec, "key": {**rec["key"], "target": "field:"}}
+    assert "target must be" in check_record(bad)
+
+
+def test_targets_run_as_an_axis_with_a_field_section_and_a_skip_note(tmp_path, capsys, fake_field):
+    """``--targets pseudo-field field:rough-road`` on the shock absorber and the shaker: the
+    shaker has no service scenario, so its field target is skipped with one note; the field
+    record is its own record (key, id, source) and the leaderboard ranks it in its own
+    section."""
+    from benchmarks.runner.cli import main
+
+    out = tmp_path / "run"
+    args = [
+        "run", "--rigs", "shock-absorber", "shaker", "--methods", "arx", "--desired", "0",
+        "--seconds", "4", "--iterations", "1", "--fidelity", "fast", "--no-thesis",
+        "--no-plots", "--backend", "serial", "--out", str(out),
+        "--targets", "pseudo-field", "field:rough-road",
+    ]  # fmt: skip
+    assert main(args) == 0
+    stdout = capsys.readouterr().out
+    notes = [line for line in stdout.splitlines() if line.startswith("note: target")]
+    assert notes == [
+        "note: target field:rough-road skipped on shaker (no scenario): not a service scenario "
+        "of that rig"
+    ]
+    records = {r["id"]: r for r in Store(out).all_records()}
+    assert sorted(records) == [
+        "shaker--arx--d0--s0",
+        "shock-absorber--arx--d0--s0",
+        "shock-absorber--arx--d0--s0--field-rough-road",
+    ]
+    field = records["shock-absorber--arx--d0--s0--field-rough-road"]
+    assert field["status"] == "ok", field["error"]
+    assert field["key"]["target"] == "field:rough-road"
+    assert field["target_source"] == "stand-in service record field:rough-road seed 0"
+    assert "target" not in records["shock-absorber--arx--d0--s0"]["key"]
+    board = (out / "leaderboard.md").read_text()
+    assert board.index("## Pseudo-field targets") < board.index("## Field targets")
+    field_part = board[board.index("## Field targets") :]
+    assert "### shock-absorber:rough-road" in field_part and "shaker" not in field_part
+    assert "stand-in service record field:rough-road seed 0" in field_part
+    assert "### shock-absorber\n" in board[: board.index("## Field targets")]
+    csv_rows = (out / "records.csv").read_text().splitlines()
+    assert csv_rows[0].split(",")[6] == "target"
+    assert sorted(row.split(",")[6] for row in csv_rows[1:]) == [
+        "field:rough-road", "pseudo-field", "pseudo-field",
+    ]  # fmt: skip
+    info = json.loads((out / "run.json").read_text())
+    assert info["targets"] == {
+        "shock-absorber": ["pseudo-field", "field:rough-road"],
+        "shaker": ["pseudo-field"],
+    }
+
+
+def test_field_alone_is_each_rigs_first_scenario_and_a_target_no_rig_has_is_an_error(
+    tmp_path, capsys
+):
+    from benchmarks.runner.cli import _rig_targets, main
+
+    targets = _rig_targets(["shock-absorber", "radiator", "shaker"], ["field"], "fast")
+    assert targets == {
+        "shock-absorber": ["field:rough-road"],
+        "radiator": ["field:truck-front"],
+        "shaker": [],
+    }
+    assert "skipped on shaker (no scenario)" in capsys.readouterr().out
+    common = ["--methods", "arx", "--seconds", "4", "--fidelity", "fast", "--no-thesis"]
+    out = tmp_path / "never"
+    args = ["run", "--rigs", "shock-absorber", "shaker", *common, "--out", str(out)]
+    assert main([*args, "--targets", "field:slow-ditch"]) == 2
+    err = capsys.readouterr().err
+    assert "--targets field:slow-ditch: no rig of this run has it" in err
+    assert "shock-absorber (rough-road)" in err
+    assert main([*args, "--targets", "road"]) == 2
+    assert "unknown target 'road'" in capsys.readouterr().err
+    assert not out.exists()  # refused before anything ran
+
+
+@pytest.mark.skipif(not HAVE_ROADS, reason="vrig.roads is not on this branch yet")
+def test_a_field_record_reconstructs_a_real_service_record():
+    """The real field path: the radiator in its truck front end on a class road (4 s, fast)."""
+    import vrig
+    from benchmarks.runner.record import _desired
+    from vrig.service import field_record
+
+    key = RecordKey("radiator", "arx", 0, 0, target="field:truck-front")
+    rec = compute_record(key, SETTINGS)
+    assert rec["status"] == "ok", rec["error"]
+    assert rec["key"]["target"] == "field:truck-front"
+    assert "service record 'truck-front' (4 s)" in rec["target_source"]
+    assert len(rec["eta0_per_iteration"]) == 2
+
+    _band, desired = _desired("radiator", "fast", 4.0, 0, None, "field:truck-front")
+    truth = field_record(vrig.load_rig("radiator", fidelity="fast"), "truck-front", 4.0, seed=0)
+    np.testing.assert_array_equal(desired.data, truth.data)  # the record's target, bit for bit

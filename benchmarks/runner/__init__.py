@@ -1,8 +1,8 @@
 """The reconstruction benchmark runner (``python -m benchmarks run``, ``vrig bench``).
 
-Records (rig × method × desired response × seed) are pure functions of their key; they run in
-parallel (processes by default, or Ray) and are written one file each, atomically, so a run
-resumes after an interrupt. See ``benchmarks/README.md`` (section Runner).
+Records (rig × method × desired response × seed, × severity and target when asked) are pure
+functions of their key; they run in parallel (processes by default, or Ray) and are written one
+file each, atomically, so a run resumes after an interrupt. See ``benchmarks/README.md`` (section Runner).
 """
 
 from .execute import BACKENDS, Store, execute

@@ -4,7 +4,8 @@
 
     python -m benchmarks run --quick                       # ~8 min on 2 shared cores
     python -m benchmarks run [--rigs R ...] [--methods M ...] [--desired D ...] [--seeds S ...]
-                             [--severity S ...] [--out DIR] [--backend process|serial|ray] [--workers N]
+                             [--severity S ...] [--targets T ...] [--out DIR]
+                             [--backend process|serial|ray] [--workers N]
                              [--address RAY_ADDRESS] [--plugin MODULE_OR_FILE.py ...]
     python -m benchmarks report --out DIR                  # rebuild leaderboard/plots
     python -m benchmarks list                              # rigs and registered methods
@@ -30,7 +31,14 @@ from pathlib import Path
 
 from .execute import BACKENDS, SettingsMismatchError, Store, execute, write_atomic
 from .lifetime import LockHeldError, PidLock, die_with_parent
-from .record import SEVERITY_RANGE, RecordKey, Settings, check_severity, format_severity
+from .record import (
+    PSEUDO_FIELD,
+    SEVERITY_RANGE,
+    RecordKey,
+    Settings,
+    check_severity,
+    format_severity,
+)
 from .registry import (
     PluginError,
     default_plugin_specs,
@@ -87,6 +95,15 @@ def _parser() -> argparse.ArgumentParser:
         help="non-linearity severities in [0, 2] (vrig.load_rig(rig, severity=S); 0 linearised, "
         "1 as loaded, 2 twice as non-linear); rigs without a severity axis run once as loaded. "
         "Default: the rigs as loaded, no severity axis",
+    )
+    run.add_argument(
+        "--targets",
+        nargs="+",
+        metavar="T",
+        default=[PSEUDO_FIELD],
+        help="kinds of desired response (vrig.field.desired_response): 'pseudo-field' "
+        "(default), 'field:<scenario>' (a rig's service scenario; a rig without it is skipped, "
+        "with a note), 'field' (each rig's first scenario); a record-key axis",
     )
     run.add_argument("--seconds", type=float, help="desired record length [s]")
     run.add_argument("--iterations", type=int, help="iterations after IT00")
@@ -284,13 +301,15 @@ def cmd_run(args) -> int:
     seeds = args.seeds or (0,)
     out = args.out or Path("results") / ("benchmarks-quick" if args.quick else "benchmarks")
     severities = _rig_severities(rigs, args.severity)
+    targets = _rig_targets(rigs, args.targets, settings.fidelity)
     keys = [
-        RecordKey(r, m, d, s, sev)
+        RecordKey(r, m, d, s, sev, t)
         for r in rigs
         for m in methods
         for d in desired
         for s in seeds
         for sev in severities[r]
+        for t in targets[r]
     ]
     store = Store(out)
     try:
@@ -309,6 +328,7 @@ def cmd_run(args) -> int:
             if args.severity
             else ""
         )
+        + ("" if args.targets == [PSEUDO_FIELD] else f" × targets {', '.join(args.targets)}")
         + f" -> {out}/"
     )
     flat = [r for r in rigs if severities[r] == [None]]
@@ -371,6 +391,7 @@ def cmd_run(args) -> int:
         "desired": list(desired),
         "seeds": list(seeds),
         "severity": args.severity,
+        "targets": {r: targets[r] for r in rigs},
         "backend": args.backend,
         "workers": args.workers,
         "computed": len(summary["computed"]),
@@ -439,6 +460,56 @@ def _rig_severities(rigs: list[str], severity: list[float] | None) -> dict[str, 
 
 class _BadInput(Exception):
     """Bad input found before the run: one line, exit status 2."""
+
+
+def _rig_targets(rigs: list[str], targets: list[str], fidelity: str) -> dict[str, list[str]]:
+    """The targets each rig runs on, resolved (``"field"`` alone: the rig's first scenario).
+
+    A field target a rig does not have is skipped on it, one note per target on stdout naming
+    the rigs; a target that no rig has (or that is not a target name) is a :class:`_BadInput`.
+    Without a field target no rig is loaded.
+    """
+    from vrig.field import parse_target
+
+    if targets == [PSEUDO_FIELD]:
+        return {r: [PSEUDO_FIELD] for r in rigs}
+    import vrig
+    from vrig.service import field_scenarios
+
+    loaded = {r: vrig.load_rig(r, fidelity=fidelity) for r in rigs}
+    out: dict[str, list[str]] = {r: [] for r in rigs}
+    for target in dict.fromkeys(targets):
+        skipped, why = [], ""
+        for r, rig in loaded.items():
+            try:
+                kind, scenario = parse_target(rig, target)
+            except ValueError as exc:
+                names = field_scenarios(rig)
+                skipped.append(f"{r} ({', '.join(names) if names else 'no scenario'})")
+                why = str(exc)
+                continue
+            resolved = kind if scenario is None else f"{kind}:{scenario}"
+            if resolved not in out[r]:
+                out[r].append(resolved)
+        _note_skipped(target, skipped, why, len(rigs))
+    return out
+
+
+def _note_skipped(target: str, skipped: list[str], why: str, n_rigs: int) -> None:
+    """The one line of a target skipped on some rigs; a :class:`_BadInput` when on all."""
+    if not skipped:
+        return
+    if target.partition(":")[0] != "field":  # not a target name: every rig refuses it
+        raise _BadInput(f"--targets: {why}")
+    if len(skipped) == n_rigs:
+        raise _BadInput(
+            f"--targets {target}: no rig of this run has it; their service scenarios: "
+            + "; ".join(skipped)
+        )
+    print(
+        f"note: target {target} skipped on {', '.join(skipped)}: not a service scenario of "
+        + ("that rig" if len(skipped) == 1 else "those rigs")
+    )
 
 
 def _check_run_args(args) -> None:

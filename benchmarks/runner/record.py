@@ -1,14 +1,18 @@
 """One benchmark record: a reconstruction of one desired response on one rig by one method.
 
-A record is a pure function of its key (rig, method, desired, seed, severity) and the run's
-settings:
+A record is a pure function of its key (rig, method, desired, seed, severity, target) and the
+run's settings:
 
 * the rig is ``vrig.load_rig(rig, seed=..., fidelity=..., severity=severity)``; severity None
   (the default, and every record written before the severity axis existed) is the rig as loaded,
   without ``severity=``;
-* the desired response is the pseudo-field response :func:`vrig.field.pseudo_field` of rig
-  ``rig`` (loaded with seed 0, at the record's severity) over its default simulation band, with
-  seed ``desired``;
+* the desired response is :func:`vrig.field.desired_response` of rig ``rig`` (loaded with seed
+  0, at the record's severity) for ``target`` with seed ``desired``: for ``"pseudo-field"`` (the
+  default, and every record written before the target axis existed: their keys have no
+  ``target``) the pseudo-field response (:func:`vrig.field.pseudo_field`) over the rig's default
+  simulation band; for ``"field:<scenario>"`` the service record of the rig's specimen in its
+  vehicle (:func:`vrig.service.field_record`) on the road of seed ``desired``, at the
+  scenario's speed and road class (the record's ``target_source`` says which);
 * the reconstruction runs on the rig loaded with seed ``seed`` at the same severity:
   ``vrig.reconstruct(rig, desired, settings.iteration(<plugin's object>, band, seed))`` (one
   :class:`vrig.IterationSettings`; ``seed`` is both the identification and the run seed).
@@ -72,6 +76,7 @@ __all__ = [
     "Settings",
     "check_record",
     "check_severity",
+    "check_target",
     "compute_record",
     "format_severity",
     "key_dict",
@@ -133,6 +138,22 @@ def check_severity(severity) -> float | None:
     return float(severity)
 
 
+PSEUDO_FIELD = "pseudo-field"
+"""The default target of a record (the only one before the target axis existed)."""
+
+
+def check_target(target) -> str:
+    """``target`` as the record key holds it: ``"pseudo-field"`` or ``"field:<scenario>"``
+    (resolved: ``"field"`` alone, the rig's first scenario, is named by the caller, see
+    :func:`vrig.field.parse_target`); raises ValueError otherwise."""
+    if target == PSEUDO_FIELD:
+        return target
+    kind, _, scenario = target.partition(":") if isinstance(target, str) else ("", "", "")
+    if kind != "field" or not scenario.strip() or ":" in scenario:
+        raise ValueError(f"target must be 'pseudo-field' or 'field:<scenario>', got {target!r}")
+    return target
+
+
 @functools.total_ordering
 @dataclass(frozen=True)
 class RecordKey:
@@ -140,20 +161,26 @@ class RecordKey:
 
     ``severity`` is the rig's non-linearity severity (``vrig.load_rig(rig, severity=s)``, s in
     [0, 2]); None (default) is the rig as loaded without one, which is what every record made
-    before the severity axis existed is (their files have no ``severity`` in their key)."""
+    before the severity axis existed is (their files have no ``severity`` in their key).
+    ``target`` is the kind of desired response: ``"pseudo-field"`` (default; every record made
+    before the target axis existed, whose files have no ``target`` in their key) or
+    ``"field:<scenario>"`` (a service record of the rig; ``desired`` is then the road's seed)."""
 
     rig: str
     method: str
     desired: int
     seed: int
     severity: float | None = None
+    target: str = PSEUDO_FIELD
 
     def __post_init__(self):
         object.__setattr__(self, "severity", check_severity(self.severity))
+        check_target(self.target)
 
     def _order(self):
         sev = -1.0 if self.severity is None else self.severity  # None sorts first
-        return (self.rig, self.method, self.desired, self.seed, sev)
+        field = self.target != PSEUDO_FIELD  # pseudo-field sorts first
+        return (self.rig, self.method, self.desired, self.seed, sev, field, self.target)
 
     def __lt__(self, other):
         if not isinstance(other, RecordKey):
@@ -163,11 +190,14 @@ class RecordKey:
 
 def key_dict(key: RecordKey) -> dict:
     """The ``key`` field of ``key``'s record: ``{rig, method, desired, seed}``, plus
-    ``severity`` when it is not None (so a record at the rig as loaded is written exactly as
-    before the severity axis existed)."""
+    ``severity`` when it is not None and ``target`` when it is not ``"pseudo-field"`` (so a
+    record at the rig as loaded on a pseudo-field target is written exactly as before the
+    severity and target axes existed)."""
     d = asdict(key)
     if d["severity"] is None:
         del d["severity"]
+    if d["target"] == PSEUDO_FIELD:
+        del d["target"]
     return d
 
 
@@ -179,14 +209,20 @@ def format_severity(severity: float | None) -> str:
     return short if float(short) == severity else repr(float(severity))
 
 
+def _safe(text: str) -> str:
+    return "".join(c if c.isalnum() or c in "-_." else "_" for c in text)
+
+
 def record_id(key: RecordKey) -> str:
     """File-name-safe id: ``rig--method--dDESIRED--sSEED``, with ``--sevSEVERITY`` appended
-    when the key has a severity (``...--s0--sev0.5``); a key without one keeps the id it had
-    before the severity axis existed, so older results folders resume."""
-    safe = "".join(c if c.isalnum() or c in "-_." else "_" for c in key.rig)
-    rid = f"{safe}--{key.method}--d{key.desired}--s{key.seed}"
+    when the key has a severity (``...--s0--sev0.5``) and ``--field-SCENARIO`` for a field
+    target (``...--s0--field-rough-road``); a pseudo-field key without a severity keeps the id
+    it had before these axes existed, so older results folders resume."""
+    rid = f"{_safe(key.rig)}--{key.method}--d{key.desired}--s{key.seed}"
     if key.severity is not None:
         rid += f"--sev{format_severity(key.severity)}"
+    if key.target != PSEUDO_FIELD:
+        rid += "--field-" + _safe(key.target.partition(":")[2])
     return rid
 
 
@@ -219,6 +255,19 @@ def _check_ok(rec: dict) -> str | None:
     return None
 
 
+def _check_key_target(k: dict) -> str | None:
+    """Why a record key's ``target`` is malformed (written only for a field target)."""
+    if "target" not in k:
+        return None
+    if k["target"] == PSEUDO_FIELD:
+        return "key target is 'pseudo-field' (a pseudo-field record has no target in its key)"
+    try:
+        check_target(k["target"])
+    except ValueError as exc:
+        return f"key {exc}"
+    return None
+
+
 def check_record(rec, key: RecordKey | None = None, settings: Settings | None = None) -> str | None:
     """Why ``rec`` is not a finished, well-formed record (of ``key`` and ``settings`` when
     given); None when it is.
@@ -231,9 +280,9 @@ def check_record(rec, key: RecordKey | None = None, settings: Settings | None = 
     if rec.get("schema") != SCHEMA:
         return f"schema {rec.get('schema')!r}, not {SCHEMA}"
     k = rec.get("key")
-    fields = {"rig", "method", "desired", "seed"}
-    if not (isinstance(k, dict) and set(k) in (fields, fields | {"severity"})):
-        return "key is not {rig, method, desired, seed[, severity]}"
+    fields, optional = {"rig", "method", "desired", "seed"}, {"severity", "target"}
+    if not (isinstance(k, dict) and fields <= set(k) <= fields | optional):
+        return "key is not {rig, method, desired, seed[, severity][, target]}"
     if not (isinstance(k["rig"], str) and isinstance(k["method"], str)):
         return "key rig/method are not strings"
     if not (_is_int(k["desired"]) and _is_int(k["seed"])):
@@ -245,6 +294,9 @@ def check_record(rec, key: RecordKey | None = None, settings: Settings | None = 
             check_severity(k["severity"])
         except ValueError as exc:
             return f"key {exc}"
+    why = _check_key_target(k)
+    if why is not None:
+        return why
     have = RecordKey(**k)
     if rec.get("id") != record_id(have):
         return f"id {rec.get('id')!r} does not match its key {k}"
@@ -329,20 +381,31 @@ def _load_rig(rig_name: str, seed: int, fidelity: str, severity: float | None):
     return vrig.load_rig(rig_name, seed=seed, fidelity=fidelity, **extra)
 
 
-@functools.lru_cache(maxsize=8)
-def _desired(rig_name: str, fidelity: str, seconds: float, desired: int, severity=None):
-    """The pseudo-field desired response (pure function of its arguments; cached per process).
+def _desired(rig_name: str, fidelity: str, seconds: float, desired: int, severity=None,
+             target: str = PSEUDO_FIELD):  # fmt: skip
+    """``(band, record)`` of :func:`_target` (the desired response without its source)."""
+    return _target(rig_name, fidelity, seconds, desired, severity, target)[:2]
 
-    It is the response of the rig *at the record's severity* (seed 0) to the pseudo-field
-    drive: the field record a real rig with that non-linearity would have given, so every
-    severity has a desired response its rig can reproduce (the pseudo-field drive does), and
-    the error measures the method, not an unreachable target (benchmarks/README.md, Runner)."""
-    from vrig.field import default_band, pseudo_field
+
+@functools.lru_cache(maxsize=8)
+def _target(rig_name: str, fidelity: str, seconds: float, desired: int, severity, target: str):
+    """The desired response of ``target`` (pure function of its arguments; cached per process):
+    ``(band, record, source)``.
+
+    A pseudo-field record is the response of the rig *at the record's severity* (seed 0) to the
+    pseudo-field drive: the field record a real rig with that non-linearity would have given,
+    so every severity has a desired response its rig can reproduce (the pseudo-field drive
+    does), and the error measures the method, not an unreachable target (benchmarks/README.md,
+    Runner). A field record is the service record of that rig's specimen in its vehicle on the
+    road of seed ``desired``; it need not be reachable. Both are made by
+    :func:`vrig.field.desired_response` (the one place a target is made); ``band`` is the
+    rig's default simulation band for either."""
+    from vrig.field import default_band, desired_response
 
     rig = _load_rig(rig_name, 0, fidelity, severity)
     band = default_band(rig)
-    _drive, response = pseudo_field(rig, band, seconds, seed=desired)
-    return band, response
+    record, source, _extra = desired_response(rig, target, seconds, seed=desired, band=band)
+    return band, record, source
 
 
 def _error(stage: str, exc: BaseException) -> dict:
@@ -432,10 +495,13 @@ def compute_record(key: RecordKey, settings: Settings, plugin_specs=()) -> dict:
         if plugin.linear is not None:
             rec["method_linear"] = plugin.linear
         stage = "desired response"
-        band, desired = _desired(
-            key.rig, settings.fidelity, float(settings.seconds), key.desired, key.severity
-        )
+        band, desired, source = _target(
+            key.rig, settings.fidelity, float(settings.seconds), key.desired, key.severity,
+            key.target,
+        )  # fmt: skip
         rec["band"] = list(band)
+        if key.target != PSEUDO_FIELD:  # a pseudo-field record is written as before the axis
+            rec["target_source"] = source
         stage = "rig"
         rig = _load_rig(key.rig, key.seed, settings.fidelity, key.severity)
         rec["n_drives"], rec["n_responses"] = len(rig.inputs), len(rig.outputs)

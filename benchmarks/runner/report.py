@@ -3,8 +3,10 @@
 * ``records.json`` — the list of records (sorted by id), exactly as in ``records/``;
 * ``records.csv`` — one row per record, scalar fields (per-iteration η0 as ``a;b;c``);
 * ``leaderboard.md`` — the overall ranking and one table per rig (see :func:`leaderboard`);
-  a rig run at a non-linearity severity s is its own "rig" ``rig@s`` there; when a rig has
-  records at more than one severity, a section "Severity" follows (:func:`severity_section`);
+  a rig run at a non-linearity severity s is its own "rig" ``rig@s`` there; records on field
+  targets (``--targets field:<scenario>``) are ranked apart, in a section "Field targets"
+  (:func:`field_section`), each rig on a scenario its own "rig" ``rig:scenario``; when a rig
+  has records at more than one severity, a section "Severity" follows (:func:`severity_section`);
   given the learned-iteration results (``policies=``, the runner's ``--policies``, default
   ``results/learned_iteration.json``), a section "Policies" ends it (:func:`policies_section`);
 * ``plots/bars_<rig>.png`` — mean η0 at IT00 and at the best iteration per method
@@ -28,10 +30,11 @@ from pathlib import Path
 import numpy as np
 
 from .execute import write_atomic
-from .record import format_severity
+from .record import PSEUDO_FIELD, format_severity
 
 __all__ = [
     "aggregate",
+    "field_section",
     "leaderboard",
     "method_linearity",
     "plot_severity",
@@ -51,6 +54,7 @@ _CSV_FIELDS = [
     "desired",
     "seed",
     "severity",
+    "target",
     "status",
     "eta0_it00",
     "eta0_final",
@@ -86,16 +90,30 @@ def severity_of(record: dict) -> float | None:
     return record["key"].get("severity")
 
 
-def rig_label(record: dict) -> str:
-    """``rig``, or ``rig@s`` for a record at severity s (a rig at two severities is two rigs
-    in the leaderboard's tables: their errors are not averaged together)."""
-    sev = severity_of(record)
+def target_of(record: dict) -> str:
+    """The record's target: ``"field:<scenario>"``, or ``"pseudo-field"`` (also every record
+    older than the target axis: their keys have no ``target``)."""
+    return record["key"].get("target", PSEUDO_FIELD)
+
+
+def _base_label(record: dict) -> str:
+    """``rig``, or ``rig:scenario`` for a record on a field target."""
+    target = target_of(record)
     rig = record["key"]["rig"]
-    return rig if sev is None else f"{rig}@{format_severity(sev)}"
+    return rig if target == PSEUDO_FIELD else f"{rig}:{target.partition(':')[2]}"
+
+
+def rig_label(record: dict) -> str:
+    """``rig``, ``rig@s`` for a record at severity s, ``rig:scenario`` (``rig:scenario@s``)
+    for a record on a field target (a rig at two severities or on two targets is two rigs in
+    the leaderboard's tables: their errors are not averaged together)."""
+    sev = severity_of(record)
+    label = _base_label(record)
+    return label if sev is None else f"{label}@{format_severity(sev)}"
 
 
 def _file_label(label: str) -> str:
-    return label.replace("@", "--sev")
+    return label.replace("@", "--sev").replace(":", "--field-")
 
 
 def aggregate(records: list[dict]) -> dict:
@@ -153,10 +171,12 @@ def leaderboard(records: list[dict], settings: dict | None = None, *, title: str
 
     Overall ranking: mean over all of a method's records of the best mean η0, a failed record
     counting as 100 %; then one table per rig ranked by the mean best η0 (methods with failed
-    records after those without), and the failure reasons."""
-    agg = aggregate(records)
-    rigs = sorted({rig for rig, _ in agg})
-    methods = sorted({m for _, m in agg})
+    records after those without), and the failure reasons. Records on pseudo-field targets
+    come first (the layout of a run without field targets; in a section "Pseudo-field targets"
+    when there are field targets too); records on field targets follow in their own section
+    (:func:`field_section`), ranked apart."""
+    pseudo = [r for r in records if target_of(r) == PSEUDO_FIELD]
+    field = [r for r in records if target_of(r) != PSEUDO_FIELD]
     lines = [f"# {title or 'vrig reconstruction benchmark: leaderboard'}", ""]
     if settings:
         s = settings
@@ -167,7 +187,8 @@ def leaderboard(records: list[dict], settings: dict | None = None, *, title: str
             f"`{s['fidelity']}`; tolerance {s['tolerance']:g} % mean η0; modelling errors on "
             f"the last {100 * s['holdout']:.0f} % of the identification records. η0 is the "
             "DC-corrected QanTiM fit value (eq. 5-28), mean over response channels, lower is "
-            "better; values are means over desired responses × seeds.",
+            "better; values are means over desired responses × seeds."
+            + (" Service records (field targets): section *Field targets*." if field else ""),
             "",
         ]
     if any(severity_of(r) is not None for r in records):
@@ -178,6 +199,25 @@ def leaderboard(records: list[dict], settings: dict | None = None, *, title: str
             "as loaded.",
             "",
         ]
+    if not field:
+        lines += _ranking(pseudo, "##")
+    elif pseudo:
+        lines += ["## Pseudo-field targets", "", _PSEUDO_FIELD_TEXT, ""]
+        lines += _ranking(pseudo, "###")
+    lines += field_section(field)
+    lines += severity_section(records)
+    lines += _methods_lines(records)
+    return "\n".join(lines)
+
+
+_PSEUDO_FIELD_TEXT = (
+    "Desired responses: pseudo-field records (`vrig.field.pseudo_field`: the rig's own response "
+    "to a seeded road-like drive over its simulation band): reachable by construction."
+)
+
+
+def _per_rig_rows(agg: dict, rigs: list[str], methods: list[str]):
+    """``({rig: [(method, aggregate), ...] best first}, {method: rigs won})``."""
     wins: dict[str, int] = defaultdict(int)
     per_rig_rows = {}
     for rig in rigs:
@@ -192,9 +232,12 @@ def leaderboard(records: list[dict], settings: dict | None = None, *, title: str
         per_rig_rows[rig] = entries
         if entries and entries[0][1]["ok"] == entries[0][1]["n"]:
             wins[entries[0][0]] += 1
+    return per_rig_rows, wins
 
-    lines += [
-        "## Overall",
+
+def _overall_lines(agg, rigs, methods, wins, h: str) -> list[str]:
+    lines = [
+        f"{h} Overall",
         "",
         f"Score: mean best η0 over all records, a failed record counting as {FAILED_SCORE:g} %.",
         "",
@@ -225,43 +268,97 @@ def leaderboard(records: list[dict], settings: dict | None = None, *, title: str
             + " |"
         )
     lines.append("")
+    return lines
+
+
+def _rig_lines(rig: str, rows: list, h: str) -> list[str]:
+    lines = [
+        f"{h} {rig}",
+        "",
+        "| rank | method | ok | IT00 η0 % | final η0 % | best η0 % | its to tol | RMS err % "
+        "| damage ratio | normal model err % | inverse model err % | fit s | model size |",
+        "|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|",
+    ]
+    for rank, (m, a) in enumerate(rows, 1):
+        tol = (
+            "—"
+            if a["reached"] == 0
+            else f"{a['iterations_to_tolerance']:.1f}"
+            + ("" if a["reached"] == a["ok"] else f" ({a['reached']}/{a['ok']})")
+        )
+        lines.append(
+            f"| {rank} | {m} | {a['ok']}/{a['n']} | {_f(a['eta0_it00'])} | "
+            f"{_f(a['eta0_final'])} | {_f(a['eta0_best'])} | {tol} | {_f(a['rms_error'])} | "
+            f"{_f(a['damage_ratio'], '{:.2f}')} | {_f(a['normal_model_error'])} | "
+            f"{_f(a['inverse_model_error'])} | {_f(a['fit_s'], '{:.2f}')} | "
+            f"{_f(a['model_size'], '{:.0f}')} |"
+        )
+    fails = [(m, f) for m, a in rows for f in a["failures"]]
+    if fails:
+        lines += ["", "Failures:", ""]
+        lines += [f"* {m}: {f}" for m, f in fails]
+    lines.append("")
+    return lines
+
+
+def _ranking(records: list[dict], h: str) -> list[str]:
+    """The overall ranking (heading ``h`` Overall) and one table per rig label of ``records``."""
+    agg = aggregate(records)
+    rigs = sorted({rig for rig, _ in agg})
+    methods = sorted({m for _, m in agg})
+    per_rig_rows, wins = _per_rig_rows(agg, rigs, methods)
+    lines = _overall_lines(agg, rigs, methods, wins, h)
     for rig in rigs:
-        lines += [
-            f"## {rig}",
-            "",
-            "| rank | method | ok | IT00 η0 % | final η0 % | best η0 % | its to tol | RMS err % "
-            "| damage ratio | normal model err % | inverse model err % | fit s | model size |",
-            "|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|",
-        ]
-        for rank, (m, a) in enumerate(per_rig_rows[rig], 1):
-            tol = (
-                "—"
-                if a["reached"] == 0
-                else f"{a['iterations_to_tolerance']:.1f}"
-                + ("" if a["reached"] == a["ok"] else f" ({a['reached']}/{a['ok']})")
-            )
-            lines.append(
-                f"| {rank} | {m} | {a['ok']}/{a['n']} | {_f(a['eta0_it00'])} | "
-                f"{_f(a['eta0_final'])} | {_f(a['eta0_best'])} | {tol} | {_f(a['rms_error'])} | "
-                f"{_f(a['damage_ratio'], '{:.2f}')} | {_f(a['normal_model_error'])} | "
-                f"{_f(a['inverse_model_error'])} | {_f(a['fit_s'], '{:.2f}')} | "
-                f"{_f(a['model_size'], '{:.0f}')} |"
-            )
-        fails = [(m, f) for m, a in per_rig_rows[rig] for f in a["failures"]]
-        if fails:
-            lines += ["", "Failures:", ""]
-            lines += [f"* {m}: {f}" for m, f in fails]
-        lines.append("")
-    lines += severity_section(records)
+        lines += _rig_lines(rig, per_rig_rows[rig], h)
+    return lines
+
+
+def field_section(records: list[dict]) -> list[str]:
+    """The leaderboard's "Field targets" section (empty without field-target records): what
+    the targets are, then the ranking of the field-target records (its own overall table and
+    one table per ``rig:scenario``), apart from the pseudo-field one.
+
+    Parameters
+    ----------
+    records : list of dict
+        The records on field targets (``key["target"]`` ``"field:<scenario>"``).
+    """
+    if not records:
+        return []
+    lines = [
+        "## Field targets",
+        "",
+        "Desired responses: service records "
+        '(`vrig.field.desired_response(rig, "field:<scenario>")`): the rig\'s specimen in its '
+        "vehicle (`vrig.service`) driven over a seeded ISO 8608 road at the scenario's speed; "
+        "the road's seed is the record's desired-response seed. Unlike a pseudo-field record, a "
+        "service record need not be reachable (the rig lacks the vehicle's boundary conditions "
+        "and degrees of freedom), so these errors are ranked apart from the pseudo-field ones. "
+        "`rig:scenario` is the rig on that scenario's records; the targets (as made for the "
+        "lowest seed):",
+        "",
+    ]
+    first: dict[str, dict] = {}
+    for r in sorted(records, key=lambda r: r["key"]["desired"]):
+        first.setdefault(_base_label(r), r)
+    for label, r in sorted(first.items()):
+        lines.append(f"* `{label}`: {r.get('target_source') or '(not recorded: failed before)'}")
+    lines.append("")
+    return lines + _ranking(records, "###")
+
+
+def _methods_lines(records: list[dict]) -> list[str]:
+    agg = aggregate(records)
+    methods = sorted({m for _, m in agg})
     descs = {}
     for (_rig, m), a in agg.items():
         descs.setdefault(m, a["description"])
     linear = method_linearity(records)
     kind = {True: " (linear)", False: " (non-linear)", None: ""}
-    lines += ["## Methods", ""]
+    lines = ["## Methods", ""]
     lines += [f"* **{m}**{kind[linear.get(m)]}: {descs.get(m) or '—'}" for m in methods]
     lines.append("")
-    return "\n".join(lines)
+    return lines
 
 
 # ---------------------------------------------------------------------------------------------
@@ -290,15 +387,15 @@ def method_linearity(records: list[dict]) -> dict[str, bool | None]:
 
 
 def severity_tables(records: list[dict]) -> dict[str, dict]:
-    """Per rig with records at two or more severities (None, the rig as loaded, is not a
-    point of the axis): ``{"severities": [s, ...], "methods": [m, ...], "cells": {(m, s):
+    """Per rig (``rig:scenario`` on a field target) with records at two or more severities
+    (None, the rig as loaded, is not a point of the axis): ``{"severities": [s, ...], "methods": [m, ...], "cells": {(m, s):
     {"n", "ok", "eta0_it00", "eta0_best"}}}``; the η0 values [%] are means over the ok records
     (desired responses × seeds) of the mean over channels."""
     by_rig: dict[str, dict] = defaultdict(lambda: defaultdict(list))
     for r in records:
         sev = severity_of(r)
         if sev is not None:
-            by_rig[r["key"]["rig"]][(r["key"]["method"], sev)].append(r)
+            by_rig[_base_label(r)][(r["key"]["method"], sev)].append(r)
     out = {}
     for rig, groups in sorted(by_rig.items()):
         sevs = sorted({s for _m, s in groups})
@@ -492,7 +589,7 @@ def plot_severity(rig: str, table: dict, linear: dict, path: Path) -> Path:
 
 
 def _csv_row(r: dict) -> dict:
-    row = {**r["key"], "id": r["id"], "status": r["status"]}
+    row = {**r["key"], "id": r["id"], "status": r["status"], "target": target_of(r)}
     for k in _CSV_FIELDS:
         if k in r and k not in row:
             v = r[k]
@@ -707,5 +804,6 @@ def write_outputs(
             written.append(plot_iterations(m, recs, pdir / f"error_vs_iteration_{m}.png"))
         linear = method_linearity(records)
         for rig, table in severity_tables(records).items():
-            written.append(plot_severity(rig, table, linear, pdir / f"severity-{rig}.png"))
+            path = pdir / f"severity-{_file_label(rig)}.png"
+            written.append(plot_severity(rig, table, linear, path))
     return written

@@ -34,8 +34,8 @@ FALLBACK_TOLERANCE = 2.0
 the rule by which those are measured: :mod:`vrig.envs`)."""
 
 FIELD_REDRAWS = 4
-"""How often ``reset`` redraws a pseudo-field target whose IT00 drive trips the rig or exceeds
-its full scale (a drawn target only; an explicit ``desired``/``field_seed`` or a desired set
+"""How often ``reset`` redraws a target (pseudo-field or field) whose IT00 drive trips the rig
+or exceeds its full scale (a drawn target only; an explicit ``desired``/``field_seed`` or a desired set
 raises the :class:`vrig.RigLimitError`)."""
 
 FAST_SECONDS = 4.0
@@ -203,7 +203,7 @@ def _tolerance(rig, tolerance) -> float:
 
 PHYSICS_OPTIONS = frozenset(
     {"settings", "method", "method_options", "fast", "fidelity", "seconds", "bandwidth",
-     "model_seed", "id_duration", "id_rms", "decimation", "rig_seed", "rig_options"}
+     "model_seed", "id_duration", "id_rms", "decimation", "rig_seed", "rig_options", "target"}
 )  # fmt: skip
 """The :class:`DriveIterationEnv` arguments that build its :class:`IterationPhysics` (the rest are
 the task's and the action's): left unset when the env is given an ``IterationPhysics``."""
@@ -211,7 +211,7 @@ the task's and the action's): left unset when the env is given an ``IterationPhy
 
 def _check_shared_physics(given: dict, **options) -> None:
     """No physics-building argument next to a given :class:`IterationPhysics` (they are its own)."""
-    defaults = {"fast": False, "rig_seed": 0}
+    defaults = {"fast": False, "rig_seed": 0, "target": "pseudo-field"}
     named = [k.replace("id_seed", "model_seed") for k, v in given.items() if v is not None]
     named += [k for k, v in options.items() if v is not None and v != defaults.get(k, None)]
     if named:
@@ -220,13 +220,14 @@ def _check_shared_physics(given: dict, **options) -> None:
         )
 
 
-def _physics(rig, given: dict, settings, *, fast, fidelity, seconds, rig_seed, rig_options):
+def _physics(rig, given: dict, settings, *, fast, fidelity, seconds, rig_seed, rig_options,
+             target):  # fmt: skip
     """The env's :class:`IterationPhysics`: ``rig`` itself when it is one (shared, see
     :func:`_check_shared_physics`), else built from the rig and the settings."""
     if isinstance(rig, IterationPhysics):  # shared (a batched vector env's sub-envs)
         _check_shared_physics(
             given, settings=settings, fast=fast, fidelity=fidelity, seconds=seconds,
-            rig_seed=rig_seed, rig_options=rig_options,
+            rig_seed=rig_seed, rig_options=rig_options, target=target,
         )  # fmt: skip
         return rig
     settings = IterationSettings.build(settings, **{k: v for k, v in given.items() if v is not None})
@@ -239,15 +240,17 @@ def _physics(rig, given: dict, settings, *, fast, fidelity, seconds, rig_seed, r
         fidelity=fidelity or ("fast" if fast else "full"),
         rig_seed=rig_seed,
         rig_options=rig_options,
+        target=target,
     )
 
 
 class DriveIterationEnv(gym.Env):
     """Drive iteration (response reconstruction) on a virtual rig as a gymnasium environment.
 
-    **Episode.** ``reset(seed)`` draws a desired response - a pseudo-field record (the rig's
-    response to a seeded road-like drive), one of the supplied ``desired`` records, or
-    ``options["desired"]`` - builds the engine with the inverse model (identified once with
+    **Episode.** ``reset(seed)`` draws a desired response - a record of the env's ``target``
+    (default a pseudo-field record: the rig's response to a seeded road-like drive; or a service
+    record of the rig's specimen in its vehicle on a seeded road), one of the supplied
+    ``desired`` records, or ``options["desired"]`` - builds the engine with the inverse model (identified once with
     ``model_seed`` and cached), computes IT00DRV = inverse(DESRES) and plays it. Each ``step``
     is one iteration: ``ITn+1DRV = ITnDRV + gains x (inverse(DESRES) - inverse(ITnRES))`` with
     the action's gains (per drive channel and frequency band; complex per band in ``"complex"``
@@ -310,10 +313,20 @@ class DriveIterationEnv(gym.Env):
     ``damage_ratio``, ``mean_eta0``), the ``iteration``, ``success``, ``reason``, ``field_seed``,
     ``run_seed`` and any ``trip`` message.
 
-    **Randomness**: only ``reset(seed=...)`` / ``self.np_random``: each reset draws the
-    pseudo-field seed (or the index into ``desired``) and the run seed (rig noise of the
-    iteration runs: ``run_seed + 1 + n``); a drawn pseudo-field target whose IT00 drive trips
-    the rig or exceeds its full scale (the linear inverse overshoots a hardening rig: on the
+    **Targets** (``target``, :func:`vrig.field.desired_response`): ``"pseudo-field"``
+    (default), ``"field:<scenario>"`` (one of the rig's service scenarios,
+    :func:`vrig.service.field_scenarios`) or ``"field"`` (its first). A field target's reset draws a new road: the field seed is the
+    seed of the road profile (:func:`vrig.service.field_record`); the vehicle speed and the ISO
+    8608 road class stay the scenario's defaults (its side-car ``"service"`` block), so episodes
+    differ by their road, not by how it is driven. A service record is not reachable by
+    construction (the rig lacks the vehicle's boundary conditions), so the tolerance may not be
+    met. The env's target is ``self.physics.target`` (resolved: ``"field"`` alone names its
+    scenario).
+
+    **Randomness**: only ``reset(seed=...)`` / ``self.np_random``: each reset draws the field
+    seed (of the pseudo-field drive or of the road, or the index into ``desired``) and the run
+    seed (rig noise of the iteration runs: ``run_seed + 1 + n``); a drawn target whose IT00
+    drive trips the rig or exceeds its full scale (the linear inverse overshoots a hardening rig: on the
     calibrated elastomeric damper about 1 target in 24) is redrawn from ``self.np_random`` up to
     :data:`FIELD_REDRAWS` times (``info["field_seed"]`` is the one played). ``options`` may fix
     ``"desired"`` (a TimeHistory or file), ``"field_seed"``, ``"run_seed"``: with
@@ -378,11 +391,12 @@ class DriveIterationEnv(gym.Env):
     fidelity : {"full", "fast"}, optional
         Rig fidelity of a named rig (default: ``"fast"`` with ``fast=True``, else ``"full"``).
     seconds : float, optional
-        Length of the pseudo-field desired responses [s] and, unless ``id_duration`` (or
+        Length of the drawn desired responses [s] (pseudo-field or field) and, unless ``id_duration`` (or
         ``fast``) sets it, of the identification drive (default 20 s, 4 s with ``fast``).
     desired : sequence of TimeHistory or paths, optional
-        Desired responses to draw from instead of pseudo-field records (RPC III, CSV, MAT, NPZ
-        files are read with :func:`vrig.io.read`).
+        Desired responses to draw from instead of ``target``'s records (RPC III, CSV, MAT, NPZ
+        files are read with :func:`vrig.io.read`); not with a ``target`` other than
+        ``"pseudo-field"`` (a ``ValueError``).
     n_bands : int
         Number of observation / gain bands (default 4), log-spaced over the simulation band.
     action_mode : {"bands", "channels", "scalar", "complex"}
@@ -419,6 +433,11 @@ class DriveIterationEnv(gym.Env):
     rig_options : dict, optional
         Further ``load_rig`` options of a named rig (``variant``, ``severity``, documented
         parameters).
+    target : str
+        What each reset draws (see **Targets**): ``"pseudo-field"`` (default),
+        ``"field:<scenario>"`` or ``"field"``; checked when the env is made
+        (:func:`vrig.field.parse_target`: an unknown scenario is a ``ValueError`` listing the
+        rig's scenarios, a rig without any is one too).
     render_mode : None
         Must be ``None``: the environment does not render (``metadata["render_modes"]`` is
         empty).
@@ -454,6 +473,7 @@ class DriveIterationEnv(gym.Env):
         decimation: int | None = None,
         rig_seed: int = 0,
         rig_options: dict | None = None,
+        target: str = "pseudo-field",
         render_mode: str | None = None,
     ):
         lo, hi = _check_env_options(
@@ -469,9 +489,11 @@ class DriveIterationEnv(gym.Env):
             "decimation": decimation,
             "id_seed": model_seed,
         }
+        if desired is not None and target != "pseudo-field":
+            raise ValueError(f"give desired or target={target!r}, not both (desired wins over it)")
         self.physics = _physics(
             rig, given, settings, fast=fast, fidelity=fidelity, seconds=seconds,
-            rig_seed=rig_seed, rig_options=rig_options,
+            rig_seed=rig_seed, rig_options=rig_options, target=target,
         )  # fmt: skip
         ph = self.physics
         self.edges = band_edges(ph.band, n_bands)
@@ -601,11 +623,12 @@ class DriveIterationEnv(gym.Env):
         ----------
         seed : int, optional
             Seeds ``self.np_random`` (Gymnasium's rule: once, then leave it ``None``); the
-            pseudo-field seed (or the index into ``desired``) and the run seed are drawn from it.
+            field seed (of the target's record, or the index into ``desired``) and the run seed
+            are drawn from it.
         options : dict, optional
             ``"desired"``: the desired response of this episode (a TimeHistory or a file, one
-            column per rig output at the rig's fs); ``"field_seed"``: the pseudo-field seed (or
-            the index, modulo its length, into the env's ``desired`` set); ``"run_seed"``: the
+            column per rig output at the rig's fs); ``"field_seed"``: the seed of the target's
+            record (pseudo-field drive or road; or the index, modulo its length, into the env's ``desired`` set); ``"run_seed"``: the
             run seed (rig noise of the iteration runs: ``run_seed + 1 + n``). Any other key is a
             ``ValueError``.
 
@@ -678,7 +701,7 @@ class DriveIterationEnv(gym.Env):
         elif self.desired_set is not None:
             desired = self.desired_set[self.field_seed % len(self.desired_set)]
         else:
-            desired = ph.pseudo_field(self.field_seed)
+            desired = ph.target_record(self.field_seed)
         self.desired = desired
         self.engine = ph.start(desired, self.run_seed)
         self.iteration = 0

@@ -6,6 +6,8 @@ rig and identification settings (:meth:`~vrig.reconstruction.IterationSettings.i
 and keeps it in a small process-wide cache, and starts one
 :class:`~vrig.reconstruction.DriveIteration` engine per episode around a desired response with
 a private copy of that model (re-identification during an episode never leaks into the next one).
+It makes the desired responses too, of its ``target`` (pseudo-field or a service scenario's field
+record, :func:`vrig.field.desired_response`), one per seed (:meth:`IterationPhysics.target_record`).
 """
 
 from __future__ import annotations
@@ -18,7 +20,7 @@ import numpy as np
 from identification.errors import SimulationDivergedError
 
 from ..errors import RigLimitError, SimulationInstabilityError
-from ..field import default_band, pseudo_field
+from ..field import default_band, desired_response, parse_target
 from ..reconstruction import DriveIteration, InverseArx, InverseNarx, IterationSettings
 from ..reconstruction.settings import cache_key
 from ..rigs import load_rig
@@ -27,7 +29,7 @@ from ..timehistory import TimeHistory
 __all__ = ["IterationPhysics", "clear_model_cache", "rig_settings"]
 
 _CACHE_SIZE = 16
-_FIELD_CACHE_SIZE = 256  # pseudo-field records per physics (a 20 s SISO record is 80 kB)
+_FIELD_CACHE_SIZE = 256  # desired records per physics (a 20 s SISO record is 80 kB)
 _MODELS: OrderedDict = OrderedDict()
 
 
@@ -119,13 +121,21 @@ class IterationPhysics:
         the settings leave unset (:func:`rig_settings`); a method the side-car marks
         ``unsupported`` is a ``ValueError``.
     seconds : float
-        Length of the pseudo-field desired responses [s].
+        Length of the desired responses [s].
     fidelity : {"full", "fast"}
         Rig fidelity of a named rig.
     rig_seed : int
         Seed of a named rig (its noise realisation).
     rig_options : dict, optional
         Further ``load_rig`` options of a named rig (``variant``, ``severity``, parameters).
+    target : str
+        What the desired responses are (:func:`vrig.field.desired_response`, checked here with
+        :func:`vrig.field.parse_target`): ``"pseudo-field"`` (default: the rig's response to a
+        seeded road-like drive over the band), ``"field:<scenario>"`` (a service record of the
+        rig's specimen in its vehicle, :func:`vrig.service.field_record`: each seed a new road
+        profile, at the scenario's own speed and road class) or ``"field"`` (the rig's first
+        scenario). Kept resolved in :attr:`target` (``"pseudo-field"`` or
+        ``"field:<scenario>"``).
     **options
         Settings by name on top of ``settings`` (:meth:`IterationSettings.build`);
         ``model_seed`` is the identification seed (``id_seed``).
@@ -140,6 +150,7 @@ class IterationPhysics:
         fidelity: str = "full",
         rig_seed: int = 0,
         rig_options: dict | None = None,
+        target: str = "pseudo-field",
         **options,
     ):
         if not (np.isfinite(seconds) and seconds >= 2.0):
@@ -160,6 +171,8 @@ class IterationPhysics:
         self.settings = settings.replace(bandwidth=band, id_duration=float(duration))
         self.band = band
         self.seconds = float(seconds)
+        kind, scenario = parse_target(self.rig, target)
+        self.target = kind if scenario is None else f"{kind}:{scenario}"
         self._fields: OrderedDict = OrderedDict()
         self.inputs = list(self.rig.inputs)
         self.outputs = list(self.rig.outputs)
@@ -177,21 +190,42 @@ class IterationPhysics:
         """Number of response channels."""
         return len(self.outputs)
 
+    def target_record(self, seed: int) -> TimeHistory:
+        """The desired response of seed ``seed`` for this physics' :attr:`target`.
+
+        A pseudo-field record (:func:`vrig.field.pseudo_field` over ``self.band``, the drive's
+        seed ``seed``) or a service record (:func:`vrig.service.field_record`: the road's seed
+        ``seed``; the scenario's speed and road class), ``self.seconds`` long, made by
+        :func:`vrig.field.desired_response`; the last 256 records are kept (a seed always gives
+        the same record, bit for bit).
+
+        Parameters
+        ----------
+        seed : int
+            Seed of the record (of the pseudo-field drive or of the road profile).
+        """
+        return self._record(self.target, seed)
+
     def pseudo_field(self, seed: int) -> TimeHistory:
-        """A pseudo-field desired response (the rig's response to a seeded road-like drive);
-        the last few are kept (a seed always gives the same record, bit for bit).
+        """A pseudo-field desired response (the rig's response to a seeded road-like drive),
+        whatever :attr:`target` is; with the default target it is :meth:`target_record`'s.
 
         Parameters
         ----------
         seed : int
             Seed of :func:`vrig.field.pseudo_field` (over ``self.band``, ``self.seconds`` long);
-            the last 256 records are kept by seed.
+            the last 256 records are kept.
         """
-        seed = int(seed)
-        record = self._fields.get(seed)
+        return self._record("pseudo-field", seed)
+
+    def _record(self, target: str, seed: int) -> TimeHistory:
+        """:func:`vrig.field.desired_response`'s record of ``target`` and ``seed`` (cached)."""
+        key = (target, int(seed))
+        record = self._fields.get(key)
         if record is None:
-            record = pseudo_field(self.rig, self.band, self.seconds, seed=seed)[1]
-            self._fields[seed] = record
+            made = desired_response(self.rig, target, self.seconds, seed=key[1], band=self.band)
+            record = made[0]
+            self._fields[key] = record
             while len(self._fields) > _FIELD_CACHE_SIZE:
                 self._fields.popitem(last=False)
         return record

@@ -108,7 +108,10 @@ class DriveIterationVectorEnv(SyncVectorEnv):
         As :class:`gymnasium.vector.SyncVectorEnv`'s (default ``NEXT_STEP``).
     **env_kwargs
         Keyword arguments of every :class:`DriveIterationEnv` (``fast``, ``action_mode``,
-        ``n_bands``, ``tolerance``, ...).
+        ``n_bands``, ``tolerance``, ``target``, ...); the physics' own
+        (:data:`~vrig.envs.drive_iteration.PHYSICS_OPTIONS`: ``target``, ``seconds``, the
+        method, ...) build the one shared :class:`~vrig.envs.IterationPhysics`, so every sub-env draws its records from the
+        same ``target`` (each reset its own seed).
     """
 
     def __init__(
