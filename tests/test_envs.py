@@ -269,8 +269,8 @@ def test_a_drawn_target_whose_it00_trips_is_redrawn_an_explicit_one_raises(monke
     first = info["field_seed"]
     tripping, seen = _trip_on(monkeypatch, {first})
     monkeypatch.setattr(DriveIteration, "play", tripping)
-    pseudo = u.physics.pseudo_field
-    monkeypatch.setattr(u.physics, "pseudo_field", lambda s: (seen.append(s), pseudo(s))[1])
+    record = u.physics.target_record  # each reset's target (pseudo-field by default)
+    monkeypatch.setattr(u.physics, "target_record", lambda s: (seen.append(s), record(s))[1])
     _o, info = e.reset(seed=5)
     assert seen[0] == first and info["field_seed"] == seen[-1] != first
     assert info["iteration"] == 0 and np.all(np.isfinite(info["eta0"]))
