@@ -208,3 +208,16 @@ def test_the_env_physics_identifies_a_matched_model_per_target():
     assert level[1] > 2.5 * level[0]  # each target got its own identification level
     assert again.id_drive is a.id_drive  # the same target: the cached model
     clear_model_cache()
+
+
+def test_the_cli_identifies_matched_to_the_target(tmp_path, capsys):
+    from vrig.cli import main
+
+    out = tmp_path / "r"
+    code = main(["reconstruct", "--rig", "elastomeric-damper", "--iterations", "0",
+                 "--seconds", "10", "--id-match", "--out", str(out)])  # fmt: skip
+    assert code == 0
+    assert "identification matched: " in capsys.readouterr().out
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["identification"]["mode"] == "matched"
+    assert summary["identification"]["probe"]["seconds"] > 0
