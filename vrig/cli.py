@@ -322,6 +322,15 @@ def _add_model_arguments(rec) -> None:
         help="stop as soon as every channel's η0 [%%] is at or below PCT (default: play all "
         "--iterations)",
     )
+    rec.add_argument(
+        "--id-match",
+        action="store_true",
+        help="identify matched to the desired response (§3.3-3.4): a short probe measures the "
+        "rig's FRF, the identification drive's PSD is shaped from the desired response and its "
+        "level raised until the identification responses reach the desired RMS and peaks "
+        "(within the drives' full scale); default: a triangular random drive at 5 %% of full "
+        "scale (or the rig side-car's level), which a large, slow, non-Gaussian target outgrows",
+    )
 
 
 def _add_bench_parser(sub) -> None:
@@ -531,7 +540,7 @@ def _defaults(args, rig) -> dict:
     """Fill the ``reconstruct`` options the user did not give from the rig's side-car
     (``rig.defaults``: ``reconstruction.methods.METHOD`` first, then ``reconstruction``), else
     the global defaults; returns the further :class:`~vrig.IterationSettings` options
-    (``strategy``, ``tolerance``, ``id_rms`` in drive units).
+    (``strategy``, ``tolerance``, ``id_rms`` in drive units, ``id_match`` when asked for).
 
     A method the side-car marks ``unsupported`` (the reference text reports it failing on the
     rig) is refused here, before anything runs: one line, the failure exit code."""
@@ -555,6 +564,8 @@ def _defaults(args, rig) -> dict:
         elif not hasattr(args, name):
             setattr(args, name, None)
     extra = {"strategy": args.strategy, "tolerance": args.tolerance}
+    if getattr(args, "id_match", False):
+        extra["id_match"] = True
     level = m.id_rms if m.id_rms is not None else d.id_rms
     if level is not None:  # a fraction of each drive's full scale
         extra["id_rms"] = tuple(level * c.full_scale for c in rig.inputs)
@@ -818,6 +829,10 @@ def _print_result(result, args) -> None:
         + ", ".join(f"{d:.3g}" for d in result.damage_ratio[best])
     )
     print(f"stopped   {result.stopped or f'after all {args.iterations} iterations'}")
+    ident = result.identification
+    if ident:
+        level = ", ".join(f"{v:.3g}" for v in ident["rms_percent"])
+        print(f"identification {ident['mode']}: {level} % of full scale rms; {ident['reason']}")
 
 
 def _save(result, out: Path, rig, args, save: dict) -> list[Path]:

@@ -262,6 +262,7 @@ def _summary(result, rig, fmt: str, files: dict, models: dict, model_note: str, 
         "models": models,
         "model_note": model_note,
         "settings": _plain(dict(settings or {})),
+        "identification": _plain(getattr(result, "identification", None)),
     }
 
 

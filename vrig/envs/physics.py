@@ -13,6 +13,7 @@ record, :func:`vrig.field.desired_response`), one per seed (:meth:`IterationPhys
 from __future__ import annotations
 
 import copy
+import hashlib
 from collections import OrderedDict
 
 import numpy as np
@@ -244,14 +245,17 @@ class IterationPhysics:
             cache).
         """
         engine = DriveIteration(self.rig, desired, self.settings.replace(run_seed=int(run_seed)))
-        cached = _MODELS.get(self._key)
+        key = self._key
+        if self.settings.id_match:  # the model depends on the target too: one per target
+            key = (*key, hashlib.sha256(np.ascontiguousarray(desired.data).tobytes()).hexdigest())
+        cached = _MODELS.get(key)
         if cached is None:
             engine.identify()
-            _MODELS[self._key] = (copy.deepcopy(engine.method), engine.id_drive, engine.id_response)
+            _MODELS[key] = (copy.deepcopy(engine.method), engine.id_drive, engine.id_response)
             while len(_MODELS) > _CACHE_SIZE:
                 _MODELS.popitem(last=False)
         else:
-            _MODELS.move_to_end(self._key)
+            _MODELS.move_to_end(key)
             method, id_drive, id_response = cached
             engine.use_identified(copy.deepcopy(method), id_drive, id_response)
         return engine

@@ -21,6 +21,7 @@ from ..progress import status
 from ..rigs.limits import check_drive_limits
 from ..signals import random_drive, triangular_psd
 from ..timehistory import TimeHistory
+from .matching import identify_matched, level_ratios
 from .methods import make_method
 from .scores import scores
 from .settings import IterationSettings
@@ -159,6 +160,8 @@ class DriveIteration:
         self.id_response: TimeHistory | None = None
         self.target: np.ndarray | None = None
         self.rejected: tuple[str, TimeHistory] | None = None
+        self.id_matching = None  # MatchedIdentification of an id_match identification
+        self.id_report: dict | None = None  # which identification level was used and why
 
     # -- resampling between the rig rate and the model rate
     def down(self, th: TimeHistory) -> TimeHistory:
@@ -192,10 +195,25 @@ class DriveIteration:
         return signal.resample_poly(x, self.decimation, 1, axis=0)[: self.n]
 
     def identify(self) -> None:
-        """IDDRV (``id_psd``, default triangular over the identification band) -> IDRES ->
-        inverse model.
+        """IDDRV -> IDRES -> inverse model.
 
-        The drive RMS is halved (up to three times) while the rig refuses or trips on it."""
+        Default: IDDRV from ``id_psd`` (triangular over the identification band) at ``id_rms``
+        (5 % of full scale), the RMS halved (up to three times) while the rig refuses or trips
+        on it. With ``id_match`` the drive is matched to DESRES's spectrum and amplitude range
+        (:func:`~vrig.reconstruction.matching.identify_matched`; what it did is kept in
+        ``id_matching``). Either way ``id_report`` says which level was used and why, and how
+        the identification response's RMS and peak compare with DESRES's."""
+        if self.settings.id_match:
+            iddrv, idres, self.id_matching = identify_matched(self)
+            self.id_report = self.id_matching.summary()
+            status(f"identification matched to the target: {self.id_report['reason']}")
+        else:
+            iddrv, idres = self._identify_default()
+        self.id_drive, self.id_response = iddrv, idres
+        self._fit(iddrv, idres)
+
+    def _identify_default(self) -> tuple[TimeHistory, TimeHistory]:
+        """The default IDDRV and IDRES (see :meth:`identify`); fills ``id_report``."""
         rig, rms = self.rig, self.id_rms
         shape = self.id_psd
         if shape is None:
@@ -217,14 +235,24 @@ class DriveIteration:
                 unit=rig.inputs[0].unit,
             )
             try:
-                _, idres = self._send(iddrv, "ID", "the identification drive", self.settings.id_seed)
+                _, idres = self._send(
+                    iddrv, "ID", "the identification drive", self.settings.id_seed
+                )
                 break
             except RigLimitError as exc:  # halve the amplitude and try again
                 rms, last_trip = rms / 2, exc
         else:
             raise last_trip  # even at 1/8 of the amplitude the identification drive trips
-        self.id_drive, self.id_response = iddrv, idres
-        self._fit(iddrv, idres)
+        given = self.settings.id_rms is not None
+        self.id_report = {
+            "mode": "default",
+            "rms_percent": (100 * rms / [c.full_scale for c in rig.inputs]).tolist(),
+            **level_ratios(self.desres, gprepro(idres, self.band)),
+            "reason": "the given id_rms" if given else "the default level (5 % of full scale rms)",
+        }
+        if attempt:
+            self.id_report["reason"] += f", halved {attempt}x after interlock trips ({last_trip})"
+        return iddrv, idres
 
     def reidentify(self, drive: TimeHistory, raw: TimeHistory) -> None:
         """Adaptive strategy: re-fit the inverse from the latest drive / raw response pair.

@@ -68,10 +68,10 @@ def reconstruct(
     **options
         Settings by name on top of ``settings``: ``method`` (``"arx"``, ``"narx"``, ``"split"``,
         ``"frf"``, ``"error-signal"`` or a method object), ``iterations``, ``gain``,
-        ``strategy``, ``bandwidth``, ``id_duration``, ``id_rms``, ``id_psd``, ``decimation``,
-        ``taper``, ``id_seed``, ``run_seed``, ``divergence``, ``min_increase``,
-        ``tolerance``; ``seed`` sets
-        both seeds; any other name is a method option (``order``, ``degree``, ``split_hz``, ...).
+        ``strategy``, ``bandwidth``, ``id_duration``, ``id_rms``, ``id_psd``, ``id_match``,
+        ``decimation``, ``taper``, ``id_seed``, ``run_seed``, ``divergence``, ``min_increase``,
+        ``tolerance``; ``seed`` sets both seeds; any other name is a method option
+        (``order``, ``degree``, ``split_hz``, ...).
         See :class:`~vrig.reconstruction.IterationSettings` for their meaning and defaults.
 
     Returns
@@ -179,11 +179,13 @@ def _first_drive(engine: DriveIteration, result: ReconstructionResult) -> np.nda
     except Exception as exc:
         stage = "identification" if engine.id_response is None else "model"
         result.id_drive, result.id_response = engine.id_drive, engine.id_response
+        result.identification = engine.id_report
         _fail(result, engine, stage, exc)
         raise ReconstructionError(
             f"no iteration played: {result.stopped}", result=result, cause=exc, stage=stage
         ) from exc
     result.id_drive, result.id_response = engine.id_drive, engine.id_response
+    result.identification = engine.id_report
     return drive
 
 

@@ -84,6 +84,12 @@ class ReconstructionResult:
         identification seed (``settings.id_seed``).
     settings : IterationSettings
         Everything the reconstruction was run with.
+    identification : dict or None
+        Which identification level was used and why (``DriveIteration.id_report``: the mode,
+        default or matched to the target, the drive level in % of full scale, the
+        identification response's RMS and peak over DESRES's per channel, and for a matched
+        identification the probe and every level played); ``None`` when the identification
+        drive could not be played.
     """
 
     desired: TimeHistory
@@ -108,6 +114,7 @@ class ReconstructionResult:
     rejected_name: str = ""
     rejected_drive: TimeHistory | None = None
     stop_kind: str = ""
+    identification: dict | None = None
 
     @property
     def final_drive(self) -> TimeHistory:

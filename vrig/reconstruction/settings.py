@@ -79,6 +79,14 @@ class IterationSettings:
         scale, halved until the rig accepts it).
     id_psd : callable or list of callables, optional
         PSD shape of the identification drive (default: triangular over the identification band).
+    id_match : bool
+        Identification matched to the target (§3.3-3.4; :mod:`~vrig.reconstruction.matching`):
+        a short broadband probe at ``id_rms`` measures the rig's FRF, the identification drive's
+        PSD is shaped from DESRES through its inverse, and its level is raised (within the drives'
+        full scale, halved on an interlock trip) until the identification responses reach the
+        target's RMS and peak, so that the model has seen the amplitudes it must reproduce (a
+        large, slow, non-Gaussian service target). Costs the probe and up to four identification
+        runs; replaces ``id_psd`` (give one of them). Default ``False``: the drive above.
     decimation : int, optional
         Models work at ``fs / decimation`` (default: at least 8 samples per period of the
         identification band's upper edge).
@@ -109,6 +117,7 @@ class IterationSettings:
     id_duration: float | None = None
     id_rms: float | tuple[float, ...] | None = None
     id_psd: Any = None
+    id_match: bool = False
     decimation: int | None = None
     taper: float = 0.25
     id_seed: int = 0
@@ -167,6 +176,13 @@ class IterationSettings:
             raise ValueError(
                 f"id_duration must be a finite number of seconds > 0 (or None: the desired "
                 f"record's length), got {dur!r}"
+            )
+        if not isinstance(self.id_match, (bool, np.bool_)):
+            raise ValueError(f"id_match must be True or False, got {self.id_match!r}")
+        if self.id_match and self.id_psd is not None:
+            raise ValueError(
+                "id_match shapes the identification drive's PSD from the desired response: "
+                "give id_psd or id_match=True, not both"
             )
         _check_seed(self.id_seed, "id_seed")
         if self.run_seed is not None:
@@ -245,7 +261,9 @@ class IterationSettings:
 
     def identification_key(self) -> tuple:
         """What the identified model depends on (not the iteration's gain, strategy, taper, run
-        seed or stopping rule): a hashable key for model caches.
+        seed or stopping rule): a hashable key for model caches. With ``id_match`` the model
+        also depends on the desired response (its identification drive is matched to it): a
+        cache must key on that too.
 
         Returns
         -------
@@ -258,6 +276,7 @@ class IterationSettings:
             self.id_duration,
             cache_key(self.id_rms),
             cache_key(self.id_psd),
+            bool(self.id_match),
             self.decimation,
             self.id_seed,
         )
