@@ -138,6 +138,19 @@ TABLES = [
                 _narx(4, 2, kind="full", focus="simulation", selection="simulation"),
                 thesis=(None,),
             ),
+            Row(
+                "vrig: QanTiM 6th order, identification matched to the target (id_match)",
+                _arx(6),
+                options={"id_match": True},
+                thesis=(None,),
+            ),
+            Row(
+                "vrig: NARX 4th order quadratic, simulation focus, identification matched to the "
+                "target (id_match)",
+                _narx(4, 2, kind="full", focus="simulation"),
+                options={"id_match": True},
+                thesis=(None,),
+            ),
         ],
         "v[1][0] < v[0][0]",
         "NARX below QanTiM",
@@ -808,6 +821,7 @@ def run_table(
                     bandwidth=table.band,
                     id_duration=id_seconds,
                     seed=0,
+                    **row.options,  # e.g. id_match: the identification matched to the target
                 )
                 log(
                     f"  {row.label}: {runs[key].method.describe()} ({time.perf_counter() - t0:.0f} s)"
