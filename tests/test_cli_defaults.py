@@ -12,6 +12,7 @@ text written in the test.
 from __future__ import annotations
 
 import json
+from pathlib import Path
 from types import SimpleNamespace
 
 import numpy as np
@@ -228,10 +229,37 @@ def test_cli_defaults_come_from_the_method_then_the_rig_then_the_global_ones():
     assert extra["strategy"] == "fixed" and extra["tolerance"] is None
 
 
-def test_an_unsupported_method_is_refused_before_anything_runs():
-    d = RigDefaults(methods={"frf": MethodDefaults("text", unsupported="Table 3.4: 46 %")})
-    with pytest.raises(cli._UsageError, match=r"not offered.*Table 3\.4"):
-        cli._defaults(_args(method="frf"), _rig(d))
+def test_an_unsupported_method_warns_in_one_line_and_takes_its_defaults(capsys):
+    text = "full-spectrum models fail here\n  (Table 3.4: 46 % / 46 %)"
+    methods = {"narx": MethodDefaults("text", order=3, degree=2, gain=0.4, unsupported=text)}
+    args = _args(method="narx")
+    cli._defaults(args, _rig(RigDefaults(methods=methods)))  # no exception: it runs
+    assert (args.gain, args.order, args.degree) == (0.4, 3, 2)  # the method's own defaults
+    err = capsys.readouterr().err.splitlines()
+    assert len(err) == 1 and err[0].startswith("warning: ")
+    assert '"full-spectrum models fail here (Table 3.4: 46 % / 46 %)"' in err[0]  # quoted
+    assert "running it anyway" in err[0]
+
+
+def test_a_supported_method_prints_no_warning(capsys):
+    methods = {"narx": MethodDefaults("text", unsupported="Table 3.4")}
+    cli._defaults(_args(method="arx"), _rig(RigDefaults(methods=methods)))
+    assert "warning" not in capsys.readouterr().err
+
+
+def test_a_method_the_shipped_side_car_marks_unsupported_runs_from_the_cli(tmp_path, capsys):
+    # the fuel tank's side-car (read as plain JSON) marks frf unsupported (reference text Table
+    # 3.4); the command warns once, quoting it, and plays its iterations
+    car = json.loads((Path(vrig.rigs.rig_path("fuel-tank-2ch"))).read_text())
+    reason = car["reconstruction"]["methods"]["frf"]["unsupported"]
+    out = tmp_path / "o"
+    argv = ["reconstruct", "--rig", "fuel-tank-2ch", "--method", "frf", "--seconds", "4"]
+    code = cli.main([*argv, "--iterations", "1", "--out", str(out)])
+    captured = capsys.readouterr()
+    warned = [x for x in captured.err.splitlines() if x.startswith("warning: ")]
+    assert len(warned) == 1 and f'"{reason}"' in warned[0]
+    assert code in (cli.ExitCode.OK, cli.ExitCode.STOPPED_INTERLOCK), captured.err
+    assert (out / "IT00RES.rsp").is_file()  # IT00 was played
 
 
 def test_reconstruct_parser_has_strategy_tolerance_and_error_signal():

@@ -173,17 +173,51 @@ def test_what_the_caller_passes_wins_over_the_side_car():
     env.close()
 
 
+IT00_BEYOND_FULL_SCALE = {("light-truck-front", "narx"), ("light-truck-front", "error-signal")}
+
+
+def _one_line_warning(record, reason: str) -> None:
+    """Exactly one ``UserWarning`` among ``record``, on one line, quoting ``reason``."""
+    mine = [w for w in record if issubclass(w.category, UserWarning) and reason in str(w.message)]
+    assert len(mine) == 1, [str(w.message) for w in record]
+    text = str(mine[0].message)
+    assert "\n" not in text and f'"{reason}"' in text and "running it anyway" in text
+
+
 @pytest.mark.parametrize("name,method,reason", _unsupported())
-def test_an_unsupported_method_is_a_value_error_quoting_the_side_car(name, method, reason):
-    with pytest.raises(ValueError, match=re.escape(reason)):
-        gym.make(_gym(name)["id"], method=method, fast=True)
-    with pytest.raises(ValueError, match=re.escape(reason)):
-        gym.make(GENERIC_ID, rig=name, method=method, fast=True)
+def test_an_unsupported_method_warns_quoting_the_side_car_and_the_env_steps(name, method, reason):
+    # a benchmark lets a user see a method do badly: the side-car's text is a one-line warning,
+    # the env is made with the method and its side-car options, and an episode is played
+    with warnings.catch_warnings(record=True) as record:
+        warnings.simplefilter("always")
+        env = gym.make(_gym(name)["id"], method=method, fast=True, seconds=2.0)
+    _one_line_warning(record, reason)
+    s = env.unwrapped.physics.settings
+    assert s.method == method
+    options, id_rms = _expected_settings(name, method)
+    for key, value in options.items():
+        assert s.method_options[key] == value, key
+    try:
+        obs, _ = env.reset(seed=0)
+    except vrig.errors.RigLimitError as exc:
+        # only a drive check may stop it: the light truck's NARX inverses ask IT00DRV for a
+        # little more than the Fy full scale (their side-car descriptions: "IT00DRV is refused")
+        assert (name, method) in IT00_BEYOND_FULL_SCALE, exc
+        assert "before the drive was sent" in str(exc)
+    else:
+        assert env.observation_space.contains(obs)
+        obs, reward, terminated, truncated, _ = env.step(env.action_space.sample())
+        assert np.isfinite(reward) and isinstance(terminated, bool) and not truncated
+    env.close()
+    with warnings.catch_warnings(record=True) as record:
+        warnings.simplefilter("always")
+        gym.make(GENERIC_ID, rig=name, method=method, fast=True, seconds=2.0).close()
+    _one_line_warning(record, reason)
 
 
 def test_the_shipped_side_cars_mark_the_reference_texts_failures():
     # the reference text's failures (Table 3.4: full-spectrum models of the fuel tank; Table 6.7:
-    # ARX of the trailer's strain): the id must not default to them
+    # ARX of the trailer's strain): they warn, and the id must not default to them
     assert {("fuel-tank-2ch", m) for m in ("arx", "narx", "frf")} <= {
         (n, m) for n, m, _ in _unsupported()
     }

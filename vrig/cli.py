@@ -15,7 +15,10 @@
 §6.5): the rig's response to a road-like random drive (triangular PSD over the simulation band,
 10 % of each drive's full scale RMS, halved until the rig runs it with its responses within two
 thirds of their transducer ranges; 1 s fade-in and fade-out). It writes the QanTiM test folder
-(:class:`vrig.testfolder.TestFolder`) and the plots (:mod:`vrig.plots`) into ``--out``.
+(:class:`vrig.testfolder.TestFolder`) and the plots (:mod:`vrig.plots`) into ``--out``. A
+``--method`` the rig's side-car marks ``unsupported`` (the reference text reports it failing on
+the rig) runs all the same, after one ``warning:`` line on stderr quoting the text: only the drive
+checks and the interlocks stop a run.
 
 Progress of the long phases (desired-response generation, identification, long rig runs, the
 iterations) goes to stderr when stderr is a terminal; ``VRIG_PROGRESS=1`` shows it anyway,
@@ -33,8 +36,7 @@ kinds ``summary.json``'s ``stop_kind``):
        simulation or model); ``vrig reconstruct``: an error of another kind after IT00 (stop
        kind failed); results that could not be written
 2      bad input: arguments, ``--desired`` files, rig descriptions, results folders that cannot
-       be written, plugins that do not load, ``vrig bench`` without a source checkout, a
-       ``--method`` the rig's side-car marks unsupported (the reference text reports it failing)
+       be written, plugins that do not load, ``vrig bench`` without a source checkout
 3      an unexpected error (a bug: ``VRIG_DEBUG=1`` shows the traceback)
 4      ``vrig reconstruct`` stopped after IT00 on an interlock trip or a refused drive (stop
        kind interlock, refused); the best iteration is kept
@@ -287,8 +289,8 @@ def _add_model_arguments(rec) -> None:
         default="arx",
         help="inverse model: arx (QanTiM), narx, split (split spectra), frf (H1, RPC-style), "
         "error-signal (ARX + NARX of its drive error, §5.5.4); default arx. A method the "
-        "reference text reports as failing on the rig is refused (the rig's side-car: "
-        "reconstruction.methods.METHOD.unsupported, models/README.md)",
+        "reference text reports as failing on the rig runs after a one-line warning quoting "
+        "it (the rig's side-car: reconstruction.methods.METHOD.unsupported, models/README.md)",
     )
     rec.add_argument(
         "--order",
@@ -543,14 +545,12 @@ def _defaults(args, rig) -> dict:
     (``strategy``, ``tolerance``, ``id_rms`` in drive units, ``id_match`` when asked for).
 
     A method the side-car marks ``unsupported`` (the reference text reports it failing on the
-    rig) is refused here, before anything runs: one line, the failure exit code."""
+    rig) runs anyway with its defaults, after one ``warning:`` line on stderr quoting the
+    side-car (:func:`_unsupported_warning`): a benchmark lets a user see a method do badly."""
     d = rig.defaults
     m = d.method(args.method)
     if m.unsupported:
-        raise _UsageError(
-            f"--method {args.method} is not offered on rig {rig.name!r}: {m.unsupported} "
-            "(models/<rig>/<rig>.rig.json reconstruction.methods)"
-        )
+        print(_unsupported_warning(args.method, rig.name, m.unsupported), file=sys.stderr)
     if args.tolerance is not None and not (np.isfinite(args.tolerance) and args.tolerance > 0):
         raise _UsageError(f"--tolerance must be an η0 > 0 [%], got {args.tolerance:g}")
     taken = []  # what the side-car set, for the note below
@@ -576,6 +576,17 @@ def _defaults(args, rig) -> dict:
             "side-car's reconstruction block, models/README.md)"
         )
     return extra
+
+
+def _unsupported_warning(method: str, rig_name: str, text: str) -> str:
+    """The one-line warning of a ``--method`` the rig's side-car marks ``unsupported``: its
+    ``reconstruction.methods.METHOD.unsupported`` text, quoted, and that the run goes ahead."""
+    quoted = " ".join(str(text).split())
+    return (
+        f"warning: --method {method} on rig {rig_name!r}: the reference text reports it failing "
+        f'here ("{quoted}"); running it anyway (models/<rig>/<rig>.rig.json '
+        "reconstruction.methods)"
+    )
 
 
 def _method(args, band):

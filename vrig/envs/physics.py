@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import copy
 import hashlib
+import warnings
 from collections import OrderedDict
 
 import numpy as np
@@ -81,10 +82,12 @@ def rig_settings(rig, settings: IterationSettings, band) -> IterationSettings:
     band : (float, float)
         The simulation band [Hz] (the default split frequency of ``split`` derives from it).
 
-    Raises
-    ------
-    ValueError
-        The side-car marks the method ``unsupported`` on this rig (the message quotes why).
+    Warns
+    -----
+    UserWarning
+        The side-car marks the method ``unsupported`` on this rig (the reference text reports
+        it failing there): one line quoting the side-car; the method runs all the same, with
+        its defaults.
     """
     defaults = getattr(rig, "defaults", None)
     name = settings.method
@@ -92,10 +95,14 @@ def rig_settings(rig, settings: IterationSettings, band) -> IterationSettings:
         return settings
     m = defaults.method(name)
     if m.unsupported:
-        raise ValueError(
-            f"method {name!r} is not supported on rig {getattr(rig, 'name', rig)!r}: "
-            f"{m.unsupported} (its side-car's reconstruction.methods.{name}; the env's default "
-            f"method on this rig: {defaults.gym_method or 'arx'!r})"
+        quoted = " ".join(str(m.unsupported).split())
+        warnings.warn(
+            f"method {name!r} on rig {getattr(rig, 'name', rig)!r}: the reference text reports "
+            f'it failing here ("{quoted}"; its side-car\'s reconstruction.methods.{name}); '
+            f"running it anyway (the env's default method on this rig: "
+            f"{defaults.gym_method or 'arx'!r})",
+            UserWarning,
+            stacklevel=2,
         )
     options = {**_method_options(name, m, band), **settings.method_options}
     changes = {"method_options": options}
@@ -120,7 +127,7 @@ class IterationPhysics:
         episode reuses the same identified model; the run seed is per episode (:meth:`start`).
         The rig's side-car defaults for the method (options, identification level) fill what
         the settings leave unset (:func:`rig_settings`); a method the side-car marks
-        ``unsupported`` is a ``ValueError``.
+        ``unsupported`` runs after a one-line ``UserWarning`` quoting the side-car.
     seconds : float
         Length of the desired responses [s].
     fidelity : {"full", "fast"}

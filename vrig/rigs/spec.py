@@ -259,8 +259,11 @@ class MethodDefaults:
         Identification drive RMS as a fraction of each drive's full scale, in (0, 0.5] (wins
         over the rig's ``id_rms``).
     unsupported : str or None
-        The method does not work on this rig by the reference text (the sentence that says so):
-        ``vrig reconstruct`` refuses it in one line instead of running it into a trip.
+        The method fails on this rig by the reference text (the sentence that says so, citing
+        where): a warning, not a refusal. ``vrig reconstruct`` and the gymnasium envs quote it
+        in one warning line and run the method all the same, with its defaults (a benchmark
+        lets a user see a method do badly; only the drive checks and the interlocks stop a
+        run). The env's default method (``gym.method``) is never one marked so.
     """
 
     description: str = ""
