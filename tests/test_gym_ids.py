@@ -197,6 +197,8 @@ def test_an_unsupported_method_warns_quoting_the_side_car_and_the_env_steps(name
     options, id_rms = _expected_settings(name, method)
     for key, value in options.items():
         assert s.method_options[key] == value, key
+    if id_rms is not None:
+        np.testing.assert_allclose(s.id_rms, id_rms, rtol=1e-12)
     try:
         obs, _ = env.reset(seed=0)
     except vrig.errors.RigLimitError as exc:
