@@ -10,9 +10,13 @@ run:
 * ``exit``: the command's exit code (``vrig.cli``'s module doc);
 * ``IT00`` and ``best``: mean η0 [%] of IT00 and of the iteration the command calls best;
 * ``worse``: the channels whose η0 at the best iteration exceeds their IT00 value (``-``: none);
-* ``stop``: why the loop stopped (``done``: all iterations played; ``refused``: the method is
-  documented as failing on the rig and the command refused before playing anything), and
-  ``trip`` = ``yes`` when any interlock tripped or a drive was refused for its limits;
+* ``stop``: why the loop stopped (``done``: all iterations played; ``ITxx: drive limit``: the
+  drive check stopped a drive beyond full scale before it was sent; ``ITxx: trip``: an interlock
+  tripped; ``not run``: the command stopped before the reconstruction, e.g. on bad input), and
+  ``trip`` = ``yes`` when any interlock tripped or a drive was stopped for its limits;
+* a method marked ``*`` is one the rig's side-car marks ``unsupported`` (the reference text
+  reports it failing there): the command ran it after its one-line ``warning:`` (kept under
+  ``stderr:`` below the table), so the table shows how it does;
 * ``time`` [s]: wall time of the command.
 
     python -m benchmarks.cli_matrix [--rigs RIG ...] [--methods arx narx split frf]
@@ -37,18 +41,19 @@ COLUMNS = ("rig", "method", "exit", "IT00", "best", "best_mean", "worse", "trip"
 
 
 def _stop_text(result) -> tuple[str, bool]:
-    """(short stop reason, an interlock trip or a refused drive?) of a result (None: no run)."""
+    """(short stop reason, an interlock trip or a drive beyond its limits?) of a result (None:
+    the command stopped before the reconstruction)."""
     from vrig.errors import RigLimitError
 
     if result is None:
-        return "refused", False
+        return "not run", False
     err = result.error
     trip = isinstance(err, RigLimitError) or bool(result.rejected_name)
     if not result.stopped:
         return "done", trip
     text = result.stopped
     if isinstance(err, RigLimitError):
-        text = text.split(":")[0] + (": refused" if err.time != err.time else ": trip")
+        text = text.split(":")[0] + (": drive limit" if err.time != err.time else ": trip")
     elif "diverging" in text:
         text = text.split(":")[0] + ": diverging"
     elif "converged" in text:
@@ -96,7 +101,8 @@ def run_one(rig: str, method: str, fidelity: str, seconds: float, extra=()) -> d
     stop, trip = _stop_text(result)
     row = {"rig": rig, "method": method, "exit": code, "trip": trip, "stop": stop, "time": wall}
     lines = err.getvalue().replace("\r", "\n").splitlines()  # not the progress bars
-    row["message"] = " ".join(x.strip() for x in lines if x.startswith("vrig "))
+    row["message"] = " ".join(x.strip() for x in lines if x.startswith(("vrig ", "warning: ")))
+    row["warned"] = any(x.startswith("warning: --method") for x in lines)
     row["traceback"] = "Traceback" in err.getvalue() or code == 3
     if result is not None and len(result.errors):
         e = np.asarray(result.errors)
@@ -123,7 +129,7 @@ def table(rows: list[dict]) -> str:
     lines = [head, "|" + "---|" * 10]
     for r in rows:
         lines.append(
-            f"| {r['rig']} | {r['method']} | {r['exit']} | {r['IT00']:.2f} | {r['best']} | "
+            f"| {r['rig']} | {r['method']}{'*' if r.get('warned') else ''} | {r['exit']} | {r['IT00']:.2f} | {r['best']} | "
             f"{r['best_mean']:.2f} | {r['worse']} | {'yes' if r['trip'] else 'no'} | "
             f"{r['stop']} | {r['time']:.0f} |"
         )
@@ -182,6 +188,11 @@ def main(argv=None) -> int:
         f"\n{len(rows)} runs, fidelity {args.fidelity}, {args.seconds:g} s pseudo-field, "
         f"{time.perf_counter() - t0:.0f} s wall ({args.jobs} job(s))"
     )
+    if any(r["warned"] for r in rows):
+        footer += (
+            "\n* the side-car marks the method unsupported (the reference text reports it "
+            "failing on the rig): run after a one-line warning"
+        )
     out = "\n".join([text, footer, *(["\nstderr:", *notes] if notes else [])])
     print(out)
     if args.out:
