@@ -136,8 +136,10 @@ def test_a_rig_without_scenarios_has_none():
         ({"s": {"wheels": [{"drive": "nope"}]}}, "unknown drive"),
         ({"s": {"wheels": []}}, "at least one wheel or load"),
         ({"s": {"wheels": [{"drive": "d", "tyre": {"stiffness": -1}}]}}, "stiffness"),
-        ({"s": {"wheels": [{"drive": "d", "tyre": None, "axle": {"mass": 1, "stiffness": 1}}]}},
-         "axle needs a tyre"),  # fmt: skip
+        (
+            {"s": {"wheels": [{"drive": "d", "tyre": None, "axle": {"mass": 1, "stiffness": 1}}]}},
+            "axle needs a tyre",
+        ),
         ({"s": {"wheels": [{"drive": "d"}, {"drive": "d"}]}}, "more than one"),
     ],
 )
