@@ -31,7 +31,7 @@ from mujoco import rollout
 from ..errors import RigLimitError, RigModelError, RigParameterError, SimulationInstabilityError
 from ..progress import RUN_BAR_DELAY_S, bar
 from ..timehistory import TimeHistory
-from . import gas_spring, hydraulics, stability
+from . import damper, gas_spring, hydraulics, stability
 from ._callbacks import MAX_LIVE, foreign_callbacks_suspended
 from .daq import Acquisition
 from .limits import check_drive_limits
@@ -175,8 +175,10 @@ class MujocoRig:
             raise RigModelError(f"{desc.mjcf}: MuJoCo could not read the model: {exc}") from exc
         self._inputs, self._outputs = list(desc.inputs), list(desc.outputs)
         self._air = list(desc.air_springs)  # gas springs (vrig.rigs.gas_spring), parameter rules may change them
+        self._dampers = list(desc.dampers)  # hydraulic dampers (vrig.rigs.damper), likewise
         for name, value in self.parameters.items():
             self._apply(spec, desc.parameters[name], value)
+        self._realise_dampers(spec)
         if spec_edit is not None:
             spec_edit(spec)
         n_hyd = sum(1 for c in self._inputs if c.hydraulic is not None)
@@ -259,11 +261,15 @@ class MujocoRig:
         if "input" in rule or "output" in rule:
             self._apply_channel(rule, v, param.name)
             return
-        if "air_spring" in rule:
-            i = next((k for k, a in enumerate(self._air) if a.name == rule["air_spring"]), None)
+        if "air_spring" in rule or "damper" in rule:
+            key, what, elements = (
+                ("air_spring", "air spring", self._air) if "air_spring" in rule
+                else ("damper", "damper", self._dampers)
+            )  # fmt: skip
+            i = next((k for k, a in enumerate(elements) if a.name == rule[key]), None)
             if i is None:
-                raise RigModelError(f"parameter {param.name!r}: no air spring {rule['air_spring']!r}")
-            self._air[i] = self._air[i].replace(**{rule["field"]: float(v)})
+                raise RigModelError(f"parameter {param.name!r}: no {what} {rule[key]!r}")
+            elements[i] = elements[i].replace(**{rule["field"]: float(v)})
             return
         kind = next((k for k in _ELEMENTS if k in rule), None)
         if kind is None:
@@ -280,6 +286,15 @@ class MujocoRig:
             arr[rule["index"]] = v
             v = arr
         setattr(element, attr, v)
+
+    def _realise_dampers(self, spec: mujoco.MjSpec) -> None:
+        """Write the hydraulic dampers (as the parameters left them) into ``spec``
+        (:func:`vrig.rigs.damper.realise`)."""
+        for d in self._dampers:
+            try:
+                damper.realise(spec, d)
+            except ValueError as exc:
+                raise RigModelError(f"rig {self._desc.name!r}: {exc}") from None
 
     def _apply_channel(self, rule, value, pname) -> None:
         if "input" in rule:
