@@ -20,7 +20,7 @@ import pytest
 
 import vrig
 from vrig.errors import RigModelError, RigParameterError
-from vrig.rigs import rig_path
+from vrig.rigs import damper, rig_path
 from vrig.rigs.damper import Damper, realise
 
 PEAKS = [0.05, 0.1, 0.3, 0.6, 1.0]  # documented test velocities [m/s], both directions
@@ -258,3 +258,104 @@ def test_a_side_car_with_an_unknown_damper_joint_is_a_model_error(tmp_path):
     path.write_text(json.dumps(raw))
     with pytest.raises(RigModelError, match="no joint 'nope'"):
         vrig.load_rig(path)
+
+
+# --- series compliance (a spring k_s in series with the valves: a Maxwell element) ------------
+_HEAVY = """<mujoco><option timestep="0.0002" integrator="implicitfast" gravity="0 0 0"/>
+<worldbody><body><joint name="j" type="slide" axis="0 0 1" stiffness="{k}"/>
+<geom size="0.05" mass="{m}"/></body></worldbody></mujoco>"""
+
+
+def _heavy_run(dmp, *, hz, velocity, seconds):
+    """A 1e9 kg body oscillating on its own spring at ``hz`` with peak ``velocity`` [m/s] (the
+    damper's force cannot slow it): (damper force on the joint [N], joint position [m]) per step,
+    the force computed from that position (before the step)."""
+    mass = 1e9
+    w = 2 * np.pi * hz
+    spec = mujoco.MjSpec.from_string(_HEAVY.format(k=mass * w * w if hz else 0.0, m=mass))
+    realise(spec, dmp)
+    m = spec.compile()
+    records = damper.bind(m, [dmp])
+    d = mujoco.MjData(m)
+    d.qvel[0] = velocity
+    n = round(seconds / m.opt.timestep)
+    f, v = np.empty(n), np.empty(n)
+    damper.install(m, d, records)
+    try:
+        assert damper.ACT_DYN.installed
+        for k in range(n):
+            v[k] = d.qpos[0]  # the state the step's force is computed from
+            mujoco.mj_step(m, d)
+            f[k] = d.actuator_force[0]
+    finally:
+        damper.uninstall(d)
+    assert not damper.ACT_DYN.installed
+    return f, v
+
+
+def test_the_inverse_law_is_the_documented_one():
+    law = _digressive()
+    d = Damper("d", joint="j", damping=law["c_comp"], rebound_ratio=law["c_reb"] / law["c_comp"],
+               blowoff_ratio_compression=law["beta_comp"], blowoff_ratio_rebound=law["beta_reb"],
+               knee_velocity_compression=law["knee_comp"], knee_velocity_rebound=law["knee_reb"])  # fmt: skip
+    u = np.array([-1.0, -0.3, -0.15, -0.05, 0.0, 0.05, 0.15, 0.3, 1.0])
+    forces = np.array([_analytic(x, **law) for x in u])
+    np.testing.assert_allclose(d.velocity_at(forces), u, rtol=1e-12, atol=1e-15)
+
+
+@pytest.mark.parametrize("hz", [2.0, 10.0])
+@pytest.mark.parametrize("c", [6000.0, 18000.0])
+def test_series_compliance_is_a_maxwell_element(hz, c):
+    """A linear law with k_s in series: after the transient the force amplitude is
+    c V / sqrt(1 + (w tau)^2), tau = c / k_s, and it lags (a loop: force at zero velocity)."""
+    k_s, v_peak = 6e6, 0.1
+    dmp = Damper("d", joint="j", damping=c, series_stiffness=k_s)
+    f, q = _heavy_run(dmp, hz=hz, velocity=v_peak, seconds=1.0)
+    half = len(f) // 2
+    wt = 2 * np.pi * hz * c / k_s
+    amplitude = c * v_peak / np.sqrt(1 + wt**2)
+    assert np.abs(f[half:]).max() == pytest.approx(amplitude, rel=0.02)
+    # the loop: the force's component in phase with the displacement (the part at zero
+    # velocity) is amplitude * sin(lag), lag = atan(w tau), by least squares at w
+    t = np.arange(len(f))[half:] * 0.0002
+    basis = np.column_stack([np.sin(2 * np.pi * hz * t), np.cos(2 * np.pi * hz * t)])
+    (qs, qc), (fs, fc) = (np.linalg.lstsq(basis, y[half:], rcond=None)[0] for y in (q, f))
+    in_phase = (fs * qs + fc * qc) / np.hypot(qs, qc)
+    assert -in_phase == pytest.approx(amplitude * np.sin(np.arctan(wt)), rel=0.02)
+
+
+@pytest.mark.parametrize("velocity", [0.1, -0.1, 0.6, -0.6])
+def test_series_compliance_settles_on_the_law_at_constant_velocity(velocity):
+    law = _digressive()
+    k_s = 6e6
+    d = Damper("d", joint="j", damping=law["c_comp"], rebound_ratio=law["c_reb"] / law["c_comp"],
+               blowoff_ratio_compression=law["beta_comp"], blowoff_ratio_rebound=law["beta_reb"],
+               knee_velocity_compression=law["knee_comp"], knee_velocity_rebound=law["knee_reb"],
+               series_stiffness=k_s)  # fmt: skip
+    f, _ = _heavy_run(d, hz=0.0, velocity=velocity, seconds=0.05)  # tau <= 18000 / 6e6 = 3 ms
+    assert f[-1] == pytest.approx(-_analytic(velocity, **law), rel=0.02)
+    if abs(velocity) < law["knee_comp"]:  # inside the bleed: a first-order rise, tau = c / k_s
+        c = law["c_reb"] if velocity > 0 else law["c_comp"]
+        tau = c / k_s
+        at_tau = f[round(tau / 0.0002)]  # f[k]: the force at t = k dt (before step k)
+        assert at_tau == pytest.approx(-_analytic(velocity, **law) * (1 - np.exp(-1)), rel=0.03)
+
+
+def test_series_compliance_in_the_rig():
+    rig = vrig.load_rig("shock-absorber", variant="digressive", series_stiffness=6e6)
+    m = rig.model
+    assert m.actuator("damper_compliance").id == m.nu - 1 and m.na == 1
+    assert not any(m.actuator(i).name.endswith("_bleed") for i in range(m.nu))
+    x = np.zeros((500, 1))
+    x[:, 0] = 0.004 * np.sin(2 * np.pi * 3.0 * np.arange(500) / rig.fs)
+    y = rig.run(x, seed=0)
+    assert np.all(np.isfinite(y.data)) and np.abs(y.data).max() > 100.0
+    assert not damper.ACT_DYN.installed  # registered for the run only
+    # a stiffer series spring brings the rig closer to the memoryless law (k_s -> infinity)
+    stiff = vrig.load_rig("shock-absorber", variant="digressive", series_stiffness=2e7)
+    rigid = vrig.load_rig("shock-absorber", variant="digressive").run(x, seed=0).data
+    gap_soft = np.sqrt(np.mean((y.data - rigid) ** 2))
+    gap_stiff = np.sqrt(np.mean((stiff.run(x, seed=0).data - rigid) ** 2))
+    assert 0 < gap_stiff < gap_soft
+    with pytest.raises(ValueError, match="every slope"):
+        Damper("d", joint="j", damping=0.0, series_stiffness=1e6)

@@ -200,7 +200,9 @@ class MujocoRig:
         every foreign MuJoCo callback suspended (:func:`~vrig.rigs._callbacks.
         foreign_callbacks_suspended`); returns the documented timestep [s] and fs x timestep."""
         desc = self._desc
-        with foreign_callbacks_suspended(hydraulics.CONTROL, gas_spring.PASSIVE, gas_spring.SENSOR):
+        with foreign_callbacks_suspended(
+            hydraulics.CONTROL, gas_spring.PASSIVE, gas_spring.SENSOR, damper.ACT_DYN
+        ):
             try:
                 self.model = spec.compile()
             except ValueError as exc:
@@ -376,6 +378,10 @@ class MujocoRig:
                     )
                 adr = int(m.sensor_adr[s])
             self._air_bound.append((a, t, adr))
+        try:
+            self._damper_bound = damper.bind(m, self._dampers)  # series compliance (act_dyn)
+        except ValueError as exc:
+            raise RigModelError(f"rig {self._desc.name!r}: {exc}") from None
         self._sensor_cols = []
         for o in self._outputs:
             s = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_SENSOR, o.sensor)
@@ -459,6 +465,12 @@ class MujocoRig:
             )
         return 1.0 / rate
 
+    def _install_elements(self, d: mujoco.MjData) -> None:
+        """Register ``d`` with the compiled element callbacks: the air springs (passive force,
+        pressure sensors) and the dampers' series compliance (activation dynamics)."""
+        gas_spring.install(self.model, d, self._air_bound)
+        damper.install(self.model, d, self._damper_bound)
+
     def _presettle(self) -> None:
         """Start every run from static equilibrium: play ``settle_time`` of zero drive once
         (no noise) and keep the final mechanical state and servo-loop states, so no run begins
@@ -471,12 +483,12 @@ class MujocoRig:
         for w in d.warning:
             w.number = 0
         hydraulics.install(m, d, self._hyd, self.timestep)
-        gas_spring.install(m, d, self._air_bound)
+        self._install_elements(d)
         try:
             state, _ = rollout.rollout(m, d, self._state0[None, :], np.zeros((1, steps, m.nu)))
         finally:
             hydraulics.uninstall(d)
-            gas_spring.uninstall(d)
+            _uninstall_elements(d)
         if hydraulics.trip_record(d) is not None or any(w.number for w in d.warning):
             raise RigModelError(f"{self.name}: the rig does not settle under gravity at rest")
         self._state0 = state[0, -1].copy()
@@ -869,7 +881,7 @@ class MujocoRig:
         state, warm = self._state0, None
         over = {}  # channel -> (first sample beyond the transducer range, value)
         hydraulics.install(m, d, self._hyd, self.timestep, states=self._hyd_states)
-        gas_spring.install(m, d, self._air_bound)
+        self._install_elements(d)
         shown = bar(total, desc=f"{self.name}: run {n / self.fs:g} s", unit="sample",
                     delay=RUN_BAR_DELAY_S)  # fmt: skip
         try:
@@ -908,7 +920,7 @@ class MujocoRig:
         finally:
             shown.close()
             hydraulics.uninstall(d)
-            gas_spring.uninstall(d)
+            _uninstall_elements(d)
         if trip is not None:
             raise self._trip_error(trip, settle * dec)
         if over:  # the transducer-range interlock: the first channel, at its first sample
@@ -992,6 +1004,12 @@ class MujocoRig:
 
 class _Cancelled(Exception):
     """A batch run stopped between chunks because the batch was interrupted."""
+
+
+def _uninstall_elements(d: mujoco.MjData) -> None:
+    """Undo :meth:`MujocoRig._install_elements` for ``d``."""
+    gas_spring.uninstall(d)
+    damper.uninstall(d)
 
 
 def _batch_seeds(seeds, n: int) -> list:
