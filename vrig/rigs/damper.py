@@ -101,7 +101,8 @@ class Damper:
     ----------
     name : str
         The damper's name; its actuators are ``NAME_compression``, ``NAME_rebound`` (slopes)
-        and ``NAME_compression_bleed``, ``NAME_rebound_bleed`` (bleed above the blow-off).
+        and ``NAME_compression_bleed``, ``NAME_rebound_bleed`` (bleed above the blow-off), or
+        ``NAME_compliance`` with series compliance.
     joint : str or None
         The MJCF slide joint whose velocity is the damper's (exactly one of joint, tendon).
     tendon : str or None
