@@ -1,14 +1,16 @@
 """MuJoCo's global callback slots shared per simulation context (issue 14, item 3).
 
 MuJoCo has one process-wide function pointer per callback (``mjcb_control``, ``mjcb_passive``,
-``mjcb_sensor``). A :class:`Hook` owns one slot for vrig: its compiled callback looks the
+``mjcb_sensor``, ``mjcb_act_dyn``). A :class:`Hook` owns one slot for vrig: its compiled callback looks the
 ``mjData`` it is called with up in a small table of (data address, context address) pairs — one
 entry per live rig run — and calls the element code with that rig's context; for any other
 ``mjData`` it chains to the callback that was installed before vrig's (a C callback: called
 from compiled code; a Python callable: suspended while a vrig context is live). The slot is
 taken when the first context is added and the earlier callback restored when the last one is
 removed. The raw-pointer intrinsics the compiled callbacks need live here too. Users:
-:mod:`vrig.rigs.hydraulics` (control) and :mod:`vrig.rigs.gas_spring` (passive, sensor).
+:mod:`vrig.rigs.hydraulics` (control), :mod:`vrig.rigs.gas_spring` (passive, sensor) and
+:mod:`vrig.rigs.damper` (act_dyn: the series compliance of a damper; it chains the previous
+callback with its own ``mjtNum f(m, d, id)`` call).
 """
 
 from __future__ import annotations

@@ -31,7 +31,7 @@ from mujoco import rollout
 from ..errors import RigLimitError, RigModelError, RigParameterError, SimulationInstabilityError
 from ..progress import RUN_BAR_DELAY_S, bar
 from ..timehistory import TimeHistory
-from . import gas_spring, hydraulics, stability
+from . import damper, gas_spring, hydraulics, stability
 from ._callbacks import MAX_LIVE, foreign_callbacks_suspended
 from .daq import Acquisition
 from .limits import check_drive_limits
@@ -175,8 +175,10 @@ class MujocoRig:
             raise RigModelError(f"{desc.mjcf}: MuJoCo could not read the model: {exc}") from exc
         self._inputs, self._outputs = list(desc.inputs), list(desc.outputs)
         self._air = list(desc.air_springs)  # gas springs (vrig.rigs.gas_spring), parameter rules may change them
+        self._dampers = list(desc.dampers)  # hydraulic dampers (vrig.rigs.damper), likewise
         for name, value in self.parameters.items():
             self._apply(spec, desc.parameters[name], value)
+        self._realise_dampers(spec)
         if spec_edit is not None:
             spec_edit(spec)
         n_hyd = sum(1 for c in self._inputs if c.hydraulic is not None)
@@ -198,7 +200,9 @@ class MujocoRig:
         every foreign MuJoCo callback suspended (:func:`~vrig.rigs._callbacks.
         foreign_callbacks_suspended`); returns the documented timestep [s] and fs x timestep."""
         desc = self._desc
-        with foreign_callbacks_suspended(hydraulics.CONTROL, gas_spring.PASSIVE, gas_spring.SENSOR):
+        with foreign_callbacks_suspended(
+            hydraulics.CONTROL, gas_spring.PASSIVE, gas_spring.SENSOR, damper.ACT_DYN
+        ):
             try:
                 self.model = spec.compile()
             except ValueError as exc:
@@ -259,11 +263,15 @@ class MujocoRig:
         if "input" in rule or "output" in rule:
             self._apply_channel(rule, v, param.name)
             return
-        if "air_spring" in rule:
-            i = next((k for k, a in enumerate(self._air) if a.name == rule["air_spring"]), None)
+        if "air_spring" in rule or "damper" in rule:
+            key, what, elements = (
+                ("air_spring", "air spring", self._air) if "air_spring" in rule
+                else ("damper", "damper", self._dampers)
+            )  # fmt: skip
+            i = next((k for k, a in enumerate(elements) if a.name == rule[key]), None)
             if i is None:
-                raise RigModelError(f"parameter {param.name!r}: no air spring {rule['air_spring']!r}")
-            self._air[i] = self._air[i].replace(**{rule["field"]: float(v)})
+                raise RigModelError(f"parameter {param.name!r}: no {what} {rule[key]!r}")
+            elements[i] = elements[i].replace(**{rule["field"]: float(v)})
             return
         kind = next((k for k in _ELEMENTS if k in rule), None)
         if kind is None:
@@ -280,6 +288,15 @@ class MujocoRig:
             arr[rule["index"]] = v
             v = arr
         setattr(element, attr, v)
+
+    def _realise_dampers(self, spec: mujoco.MjSpec) -> None:
+        """Write the hydraulic dampers (as the parameters left them) into ``spec``
+        (:func:`vrig.rigs.damper.realise`)."""
+        for d in self._dampers:
+            try:
+                damper.realise(spec, d)
+            except ValueError as exc:
+                raise RigModelError(f"rig {self._desc.name!r}: {exc}") from None
 
     def _apply_channel(self, rule, value, pname) -> None:
         if "input" in rule:
@@ -361,6 +378,10 @@ class MujocoRig:
                     )
                 adr = int(m.sensor_adr[s])
             self._air_bound.append((a, t, adr))
+        try:
+            self._damper_bound = damper.bind(m, self._dampers)  # series compliance (act_dyn)
+        except ValueError as exc:
+            raise RigModelError(f"rig {self._desc.name!r}: {exc}") from None
         self._sensor_cols = []
         for o in self._outputs:
             s = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_SENSOR, o.sensor)
@@ -444,6 +465,12 @@ class MujocoRig:
             )
         return 1.0 / rate
 
+    def _install_elements(self, d: mujoco.MjData) -> None:
+        """Register ``d`` with the compiled element callbacks: the air springs (passive force,
+        pressure sensors) and the dampers' series compliance (activation dynamics)."""
+        gas_spring.install(self.model, d, self._air_bound)
+        damper.install(self.model, d, self._damper_bound)
+
     def _presettle(self) -> None:
         """Start every run from static equilibrium: play ``settle_time`` of zero drive once
         (no noise) and keep the final mechanical state and servo-loop states, so no run begins
@@ -456,12 +483,12 @@ class MujocoRig:
         for w in d.warning:
             w.number = 0
         hydraulics.install(m, d, self._hyd, self.timestep)
-        gas_spring.install(m, d, self._air_bound)
+        self._install_elements(d)
         try:
             state, _ = rollout.rollout(m, d, self._state0[None, :], np.zeros((1, steps, m.nu)))
         finally:
             hydraulics.uninstall(d)
-            gas_spring.uninstall(d)
+            _uninstall_elements(d)
         if hydraulics.trip_record(d) is not None or any(w.number for w in d.warning):
             raise RigModelError(f"{self.name}: the rig does not settle under gravity at rest")
         self._state0 = state[0, -1].copy()
@@ -854,7 +881,7 @@ class MujocoRig:
         state, warm = self._state0, None
         over = {}  # channel -> (first sample beyond the transducer range, value)
         hydraulics.install(m, d, self._hyd, self.timestep, states=self._hyd_states)
-        gas_spring.install(m, d, self._air_bound)
+        self._install_elements(d)
         shown = bar(total, desc=f"{self.name}: run {n / self.fs:g} s", unit="sample",
                     delay=RUN_BAR_DELAY_S)  # fmt: skip
         try:
@@ -893,7 +920,7 @@ class MujocoRig:
         finally:
             shown.close()
             hydraulics.uninstall(d)
-            gas_spring.uninstall(d)
+            _uninstall_elements(d)
         if trip is not None:
             raise self._trip_error(trip, settle * dec)
         if over:  # the transducer-range interlock: the first channel, at its first sample
@@ -977,6 +1004,12 @@ class MujocoRig:
 
 class _Cancelled(Exception):
     """A batch run stopped between chunks because the batch was interrupted."""
+
+
+def _uninstall_elements(d: mujoco.MjData) -> None:
+    """Undo :meth:`MujocoRig._install_elements` for ``d``."""
+    gas_spring.uninstall(d)
+    damper.uninstall(d)
 
 
 def _batch_seeds(seeds, n: int) -> list:

@@ -21,6 +21,7 @@ import jsonschema
 
 from ..errors import RigModelError, RigParameterError
 from ._checks import check_number, describe_range
+from .damper import Damper
 from .daq import AntiAliasFilter, Transducer
 from .gas_spring import AirSpring
 from .hydraulics import HydraulicActuator
@@ -382,6 +383,8 @@ class RigDescription:
         The non-linearity severity axis; ``None``: a rig linear in its operating range.
     air_springs : tuple of AirSpring
         The gas-spring elements (side-car ``"air_springs"``; :mod:`vrig.rigs.gas_spring`).
+    dampers : tuple of Damper
+        The hydraulic dampers (side-car ``"dampers"``; :mod:`vrig.rigs.damper`).
     defaults : RigDefaults
         The rig's own defaults (side-car ``"reconstruction"``: band, gain, gym id, tolerance).
     service : dict
@@ -407,6 +410,7 @@ class RigDescription:
     default_variant: str = "mild"  # the variant load_rig(name) gives (variant=None)
     severity: Severity | None = None  # the non-linearity severity axis; None: a linear rig
     air_springs: tuple = ()  # AirSpring elements (vrig.rigs.gas_spring), side-car "air_springs"
+    dampers: tuple = ()  # Damper elements (vrig.rigs.damper), side-car "dampers"
     defaults: RigDefaults = RigDefaults()  # side-car "reconstruction": band, gain, gym, tolerance
     service: dict = field(default_factory=dict)  # side-car "service": scenarios (vrig.service)
 
@@ -706,6 +710,19 @@ def _read_air_springs(raw: list, w: str) -> tuple:
     return tuple(out)
 
 
+def _read_dampers(raw: list, w: str) -> tuple:
+    """The side-car's ``"dampers"`` as :class:`~vrig.rigs.damper.Damper` elements (each number
+    checked; names unique)."""
+    out = []
+    for i, item in enumerate(raw):
+        with _located(f"{w} dampers[{i}]"):
+            out.append(Damper(**{k: v for k, v in item.items() if k != "description"}))
+    names = [d.name for d in out]
+    if len(set(names)) != len(names):
+        raise RigModelError(f"{w}: damper names must be unique, got {names}")
+    return tuple(out)
+
+
 def _read_parameter(name: str, p: dict, w: str) -> Parameter:
     param = Parameter(
         name=name,
@@ -974,6 +991,7 @@ def read_description(path) -> RigDescription:
         default_variant=default_variant,
         severity=_read_severity(raw.get("severity"), params, where),
         air_springs=_read_air_springs(raw.get("air_springs", []), where),
+        dampers=_read_dampers(raw.get("dampers", []), where),
         defaults=_read_defaults(raw, fs, where),
         service=dict(raw.get("service", {})),
     )

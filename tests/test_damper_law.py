@@ -1,0 +1,361 @@
+"""Hydraulic damper element (vrig.rigs.damper): the bleed / knee / blow-off force-velocity law.
+
+Truth: the law as documented in the module and the side-cars (per stroke direction
+``|F| = c |u|`` up to the knee ``v_k``, then ``c v_k + β c (|u| - v_k)``), written out here
+independently, and the coefficients the hand-written MJCF files had before the dampers moved to
+the side-cars (shock absorber 12 kN s/m both ways, motorcycle 4000 / 10400 N s/m, trailer 4750
+/ 14250 N s/m, light truck 6500 N s/m). The specimen is isolated in the rig's own model: only
+the damper's joint moves, kinematically, along a sine; the force is what MuJoCo applies to it
+(the damper's actuators plus the joint's own damping; the seal friction is a constraint force,
+not part of the law)."""
+
+from __future__ import annotations
+
+import copy
+import json
+
+import mujoco
+import numpy as np
+import pytest
+
+import vrig
+from vrig.errors import RigModelError, RigParameterError
+from vrig.rigs import damper, rig_path
+from vrig.rigs.damper import Damper, realise
+
+PEAKS = [0.05, 0.1, 0.3, 0.6, 1.0]  # documented test velocities [m/s], both directions
+SPEC = json.loads(rig_path("shock-absorber").read_text())
+
+
+def _analytic(u, c_comp, c_reb, beta_comp, beta_reb, knee_comp, knee_reb):
+    """The documented law, damper force [N] (positive in rebound) at extension velocity u."""
+    if u >= 0:
+        c, beta, knee, sign = c_reb, beta_reb, knee_reb, 1.0
+    else:
+        c, beta, knee, sign = c_comp, beta_comp, knee_comp, -1.0
+    s = abs(u)
+    return sign * (c * s if s <= knee else c * knee + beta * c * (s - knee))
+
+
+def _digressive():
+    """The digressive variant's documented law parameters, from the side-car."""
+    p = SPEC["variants"]["digressive"]["parameters"]
+    c = p["damping"]
+    return dict(
+        c_comp=c, c_reb=c * p["rebound_ratio"],
+        beta_comp=p["blowoff_ratio_compression"], beta_reb=p["blowoff_ratio_rebound"],
+        knee_comp=p["knee_velocity_compression"], knee_reb=p["knee_velocity_rebound"],
+    )  # fmt: skip
+
+
+def _damper_forces(model, dof, actuators, velocities):
+    """Generalised force on ``dof`` from the damper (``actuators`` plus the dof's own
+    damping) while only that dof moves with each of ``velocities`` [m/s]. The tendons' damping
+    (e.g. the load cell's, which spans the damper joint) is switched off on a copy."""
+    model = copy.copy(model)
+    model.tendon_damping[:] = 0.0
+    data = mujoco.MjData(model)
+    out = []
+    for v in velocities:
+        data.qvel[:] = 0.0
+        data.qvel[dof] = v
+        mujoco.mj_forward(model, data)
+        f = data.qfrc_damper[dof] + sum(
+            data.actuator_force[a] * _moment(data, a, dof) for a in actuators
+        )
+        out.append(f)
+    return np.array(out)
+
+
+def _moment(data, a, dof):
+    """d(actuator length)/d(qpos of dof) for actuator ``a`` (sparse moment storage)."""
+    start, n = data.moment_rowadr[a], data.moment_rownnz[a]
+    cols = data.moment_colind[start : start + n]
+    vals = data.actuator_moment[start : start + n]
+    hit = np.flatnonzero(cols == dof)
+    return float(vals[hit[0]]) if hit.size else 0.0
+
+
+def _sine_peaks(model, dof, actuators, peak, *, cycles=2, samples=200):
+    """Kinematic sine run of the damper joint at ``peak`` velocity [m/s] (1 Hz): the largest
+    rebound and compression forces the damper applies (extension = positive joint velocity)."""
+    t = np.arange(cycles * samples) / samples
+    v = peak * np.cos(2 * np.pi * t)
+    f = _damper_forces(model, dof, actuators, v)
+    return f.min(), f.max()  # rebound resisted by a negative force, compression by a positive
+
+
+def _specimen(rig):
+    """(model, damper dof, damper actuator ids) of the shock-absorber rig."""
+    m = rig.model
+    dof = int(m.jnt_dofadr[m.joint("damper").id])
+    acts = [i for i in range(m.nu) if m.actuator(i).name.startswith("damper_")]
+    return m, dof, acts
+
+
+@pytest.fixture(scope="module")
+def digressive():
+    """The shock-absorber rig, digressive variant."""
+    return vrig.load_rig("shock-absorber", variant="digressive")
+
+
+def test_the_element_law_is_the_documented_one():
+    law = _digressive()
+    d = Damper("d", joint="j", damping=law["c_comp"], rebound_ratio=law["c_reb"] / law["c_comp"],
+               blowoff_ratio_compression=law["beta_comp"], blowoff_ratio_rebound=law["beta_reb"],
+               knee_velocity_compression=law["knee_comp"], knee_velocity_rebound=law["knee_reb"])  # fmt: skip
+    u = np.array([-1.0, -0.6, -0.3, -0.15, -0.1, -0.05, 0.0, 0.05, 0.1, 0.15, 0.3, 0.6, 1.0])
+    expected = [_analytic(x, **law) for x in u]
+    np.testing.assert_allclose(d.force_at(u), expected, rtol=1e-12, atol=1e-9)
+    # the variant's documented figures at 0.52 m/s: 1.7 kN compression, 5.0 kN rebound
+    assert d.force_at(-0.52) == pytest.approx(-1677.0, abs=1.0)
+    assert d.force_at(0.52) == pytest.approx(5031.0, abs=1.0)
+    # on the joint: opposing the velocity, mirrored by extension = -1
+    assert d.generalised_force_at(0.3) == pytest.approx(-_analytic(0.3, **law))
+    mirrored = Damper("d", tendon="t", extension=-1, damping=d.damping, rebound_ratio=d.rebound_ratio,
+                      blowoff_ratio_compression=d.blowoff_ratio_compression,
+                      blowoff_ratio_rebound=d.blowoff_ratio_rebound,
+                      knee_velocity_compression=d.knee_velocity_compression,
+                      knee_velocity_rebound=d.knee_velocity_rebound)  # fmt: skip
+    assert mirrored.generalised_force_at(0.3) == pytest.approx(
+        _analytic(-0.3, **law)
+    )  # compression
+    assert mirrored.generalised_force_at(-0.3) == pytest.approx(_analytic(0.3, **law))  # rebound
+
+
+@pytest.mark.parametrize("peak", PEAKS)
+def test_digressive_sine_runs_match_the_law_within_2_percent(digressive, peak):
+    m, dof, acts = _specimen(digressive)
+    assert len(acts) == 4  # slope + bleed actuator per stroke direction
+    rebound, compression = _sine_peaks(m, dof, acts, peak)
+    law = _digressive()
+    assert -rebound == pytest.approx(_analytic(peak, **law), rel=0.02)
+    assert compression == pytest.approx(-_analytic(-peak, **law), rel=0.02)
+
+
+def test_digressive_variant_is_asymmetric_and_has_a_knee(digressive):
+    m, dof, acts = _specimen(digressive)
+    law = _digressive()
+    v = np.array([0.05, 0.1, 0.3, 0.6, 1.0])
+    reb = -_damper_forces(m, dof, acts, v)
+    comp = _damper_forces(m, dof, acts, -v)
+    ratio = reb / comp
+    assert np.all(ratio > 2.0)  # rebound several times compression at every speed
+    assert ratio[0] == pytest.approx(law["c_reb"] / law["c_comp"], rel=0.02)
+    # digressive: the slope beyond the knee is the blow-off fraction of the bleed slope
+    for f, c, beta in (
+        (reb, law["c_reb"], law["beta_reb"]),
+        (comp, law["c_comp"], law["beta_comp"]),
+    ):
+        low = (f[1] - f[0]) / (v[1] - v[0])
+        high = (f[4] - f[3]) / (v[4] - v[3])
+        assert low == pytest.approx(c, rel=0.02)
+        assert high == pytest.approx(beta * c, rel=0.02)
+        assert high < 0.5 * low
+
+
+@pytest.mark.parametrize("variant", ["mild", "thesis"])
+def test_the_default_damper_is_the_linear_12_kNs_per_m_dashpot(variant):
+    rig = vrig.load_rig("shock-absorber", variant=variant)
+    m, dof, acts = _specimen(rig)
+    assert acts == [] and m.nu == 3  # no actuator added: the hand-written model
+    assert m.dof_damping[dof] == 12000.0
+    assert m.dof_frictionloss[dof] == 60.0  # seal friction unchanged
+    f = _damper_forces(m, dof, acts, np.array(PEAKS + [-p for p in PEAKS]))
+    np.testing.assert_allclose(f, -12000.0 * np.array(PEAKS + [-p for p in PEAKS]), rtol=1e-12)
+    assert rig.variant == variant
+
+
+@pytest.mark.parametrize(
+    "rig_name, compression, rebound, extension",
+    [("motorcycle-rear", 4000.0, 10400.0, -1), ("pneumatic-trailer", 4750.0, 14250.0, 1)],
+)
+def test_bilinear_dampers_keep_their_hand_written_actuators(
+    rig_name, compression, rebound, extension
+):
+    m = vrig.load_rig(rig_name).model
+    comp, reb = m.actuator("damper_compression"), m.actuator("damper_rebound")
+    assert comp.id < reb.id and reb.id == m.nu - 1  # last, in the MJCF's order
+    np.testing.assert_array_equal(comp.biasprm[:3], [0.0, 0.0, -compression])
+    np.testing.assert_array_equal(reb.biasprm[:3], [0.0, 0.0, -rebound])
+    # compression = shortening: tendon velocity -extension; each force range one-sided
+    sign = -extension
+    np.testing.assert_array_equal(sorted(comp.forcerange), sorted([0.0, -sign * 1e6]))
+    np.testing.assert_array_equal(sorted(reb.forcerange), sorted([0.0, sign * 1e6]))
+    assert m.tendon_damping[m.tendon("shock").id] == 0.0
+    assert not any(m.actuator(i).name.endswith("_bleed") for i in range(m.nu))
+
+
+def test_light_truck_damper_stays_the_tendons_own_damping():
+    m = vrig.load_rig("light-truck-front").model
+    assert m.tendon_damping[m.tendon("damper").id] == 6500.0
+    assert not any(m.actuator(i).name.startswith("damper_") for i in range(m.nu))
+    m2 = vrig.load_rig("light-truck-front", damping=5000.0).model
+    assert m2.tendon_damping[m2.tendon("damper").id] == 5000.0
+
+
+def test_parameters_reach_the_law():
+    rig = vrig.load_rig("shock-absorber", variant="mild", rebound_ratio=2.0)
+    m, dof, acts = _specimen(rig)
+    assert len(acts) == 2 and m.dof_damping[dof] == 0.0  # asymmetric, no knee: two slopes
+    f = _damper_forces(m, dof, acts, np.array([0.2, -0.2]))
+    np.testing.assert_allclose(f, [-24000.0 * 0.2, 12000.0 * 0.2], rtol=1e-12)
+
+
+_STANDALONE = """<mujoco><option timestep="0.001" integrator="implicitfast"/><worldbody>
+<site name="a"/><body pos="0 0 0.5"><joint name="j" type="slide" axis="0 0 1"/>
+<geom size="0.05" mass="1"/><site name="b"/></body></worldbody>
+<tendon><spatial name="len"><site site="a"/><site site="b"/></spatial>
+<fixed name="comp"><joint joint="j" coef="-1"/></fixed></tendon></mujoco>"""
+
+
+@pytest.mark.parametrize("tendon, extension", [("len", 1), ("comp", -1)])
+def test_a_tendon_damper_in_a_test_model(tendon, extension):
+    law = _digressive()
+    d = Damper("shock", tendon=tendon, extension=extension, damping=law["c_comp"],
+               rebound_ratio=law["c_reb"] / law["c_comp"],
+               blowoff_ratio_compression=law["beta_comp"], blowoff_ratio_rebound=law["beta_reb"],
+               knee_velocity_compression=law["knee_comp"], knee_velocity_rebound=law["knee_reb"])  # fmt: skip
+    spec = mujoco.MjSpec.from_string(_STANDALONE)
+    realise(spec, d)
+    m = spec.compile()
+    acts = list(range(m.nu))
+    for peak in PEAKS:  # the body moves up = the damper lengthens (rebound) for both tendons
+        rebound, compression = _sine_peaks(m, 0, acts, peak)
+        assert -rebound == pytest.approx(_analytic(peak, **law), rel=0.02)
+        assert compression == pytest.approx(-_analytic(-peak, **law), rel=0.02)
+    with pytest.raises(ValueError, match="already has an actuator"):
+        realise(spec, d)
+
+
+def test_bad_dampers_are_refused():
+    with pytest.raises(ValueError, match="exactly one of joint and tendon"):
+        Damper("d", damping=1.0)
+    with pytest.raises(ValueError, match="exactly one of joint and tendon"):
+        Damper("d", joint="j", tendon="t", damping=1.0)
+    with pytest.raises(RigParameterError, match="damping"):
+        Damper("d", joint="j", damping=-1.0)
+    with pytest.raises(RigParameterError, match="knee_velocity_rebound"):
+        Damper("d", joint="j", damping=1.0, knee_velocity_rebound=0.0)
+    with pytest.raises(ValueError, match="extension"):
+        Damper("d", joint="j", damping=1.0, extension=2)
+    with pytest.raises(ValueError, match="realisation"):
+        Damper("d", joint="j", damping=1.0, realisation="callback")
+    with pytest.raises(RigParameterError):
+        Damper("d", joint="j", damping=1.0).replace(stiffness=3.0)
+    spec = mujoco.MjSpec.from_string(_STANDALONE)
+    with pytest.raises(ValueError, match="no joint 'nope'"):
+        realise(spec, Damper("d", joint="nope", damping=1.0))
+    with pytest.raises(RigParameterError, match="rebound_ratio"):
+        vrig.load_rig("shock-absorber", variant="mild", rebound_ratio=0.5)
+
+
+def test_a_side_car_with_an_unknown_damper_joint_is_a_model_error(tmp_path):
+    raw = json.loads(rig_path("shock-absorber").read_text())
+    raw["dampers"][0]["joint"] = "nope"
+    raw["mjcf"] = str(rig_path("shock-absorber").parent / raw["mjcf"])
+    path = tmp_path / "shock-absorber.rig.json"
+    path.write_text(json.dumps(raw))
+    with pytest.raises(RigModelError, match="no joint 'nope'"):
+        vrig.load_rig(path)
+
+
+# --- series compliance (a spring k_s in series with the valves: a Maxwell element) ------------
+_HEAVY = """<mujoco><option timestep="0.0002" integrator="implicitfast" gravity="0 0 0"/>
+<worldbody><body><joint name="j" type="slide" axis="0 0 1" stiffness="{k}"/>
+<geom size="0.05" mass="{m}"/></body></worldbody></mujoco>"""
+
+
+def _heavy_run(dmp, *, hz, velocity, seconds):
+    """A 1e9 kg body oscillating on its own spring at ``hz`` with peak ``velocity`` [m/s] (the
+    damper's force cannot slow it): (damper force on the joint [N], joint position [m]) per step,
+    the force computed from that position (before the step)."""
+    mass = 1e9
+    w = 2 * np.pi * hz
+    spec = mujoco.MjSpec.from_string(_HEAVY.format(k=mass * w * w if hz else 0.0, m=mass))
+    realise(spec, dmp)
+    m = spec.compile()
+    records = damper.bind(m, [dmp])
+    d = mujoco.MjData(m)
+    d.qvel[0] = velocity
+    n = round(seconds / m.opt.timestep)
+    f, v = np.empty(n), np.empty(n)
+    damper.install(m, d, records)
+    try:
+        assert damper.ACT_DYN.installed
+        for k in range(n):
+            v[k] = d.qpos[0]  # the state the step's force is computed from
+            mujoco.mj_step(m, d)
+            f[k] = d.actuator_force[0]
+    finally:
+        damper.uninstall(d)
+    assert not damper.ACT_DYN.installed
+    return f, v
+
+
+def test_the_inverse_law_is_the_documented_one():
+    law = _digressive()
+    d = Damper("d", joint="j", damping=law["c_comp"], rebound_ratio=law["c_reb"] / law["c_comp"],
+               blowoff_ratio_compression=law["beta_comp"], blowoff_ratio_rebound=law["beta_reb"],
+               knee_velocity_compression=law["knee_comp"], knee_velocity_rebound=law["knee_reb"])  # fmt: skip
+    u = np.array([-1.0, -0.3, -0.15, -0.05, 0.0, 0.05, 0.15, 0.3, 1.0])
+    forces = np.array([_analytic(x, **law) for x in u])
+    np.testing.assert_allclose(d.velocity_at(forces), u, rtol=1e-12, atol=1e-15)
+
+
+@pytest.mark.parametrize("hz", [2.0, 10.0])
+@pytest.mark.parametrize("c", [6000.0, 18000.0])
+def test_series_compliance_is_a_maxwell_element(hz, c):
+    """A linear law with k_s in series: after the transient the force amplitude is
+    c V / sqrt(1 + (w tau)^2), tau = c / k_s, and it lags (a loop: force at zero velocity)."""
+    k_s, v_peak = 6e6, 0.1
+    dmp = Damper("d", joint="j", damping=c, series_stiffness=k_s)
+    f, q = _heavy_run(dmp, hz=hz, velocity=v_peak, seconds=1.0)
+    half = len(f) // 2
+    wt = 2 * np.pi * hz * c / k_s
+    amplitude = c * v_peak / np.sqrt(1 + wt**2)
+    assert np.abs(f[half:]).max() == pytest.approx(amplitude, rel=0.02)
+    # the loop: the force's component in phase with the displacement (the part at zero
+    # velocity) is amplitude * sin(lag), lag = atan(w tau), by least squares at w
+    t = np.arange(len(f))[half:] * 0.0002
+    basis = np.column_stack([np.sin(2 * np.pi * hz * t), np.cos(2 * np.pi * hz * t)])
+    (qs, qc), (fs, fc) = (np.linalg.lstsq(basis, y[half:], rcond=None)[0] for y in (q, f))
+    in_phase = (fs * qs + fc * qc) / np.hypot(qs, qc)
+    assert -in_phase == pytest.approx(amplitude * np.sin(np.arctan(wt)), rel=0.02)
+
+
+@pytest.mark.parametrize("velocity", [0.1, -0.1, 0.6, -0.6])
+def test_series_compliance_settles_on_the_law_at_constant_velocity(velocity):
+    law = _digressive()
+    k_s = 6e6
+    d = Damper("d", joint="j", damping=law["c_comp"], rebound_ratio=law["c_reb"] / law["c_comp"],
+               blowoff_ratio_compression=law["beta_comp"], blowoff_ratio_rebound=law["beta_reb"],
+               knee_velocity_compression=law["knee_comp"], knee_velocity_rebound=law["knee_reb"],
+               series_stiffness=k_s)  # fmt: skip
+    f, _ = _heavy_run(d, hz=0.0, velocity=velocity, seconds=0.05)  # tau <= 18000 / 6e6 = 3 ms
+    assert f[-1] == pytest.approx(-_analytic(velocity, **law), rel=0.02)
+    if abs(velocity) < law["knee_comp"]:  # inside the bleed: a first-order rise, tau = c / k_s
+        c = law["c_reb"] if velocity > 0 else law["c_comp"]
+        tau = c / k_s
+        at_tau = f[round(tau / 0.0002)]  # f[k]: the force at t = k dt (before step k)
+        assert at_tau == pytest.approx(-_analytic(velocity, **law) * (1 - np.exp(-1)), rel=0.03)
+
+
+def test_series_compliance_in_the_rig():
+    rig = vrig.load_rig("shock-absorber", variant="digressive", series_stiffness=6e6)
+    m = rig.model
+    assert m.actuator("damper_compliance").id == m.nu - 1 and m.na == 1
+    assert not any(m.actuator(i).name.endswith("_bleed") for i in range(m.nu))
+    x = np.zeros((500, 1))
+    x[:, 0] = 0.004 * np.sin(2 * np.pi * 3.0 * np.arange(500) / rig.fs)
+    y = rig.run(x, seed=0)
+    assert np.all(np.isfinite(y.data)) and np.abs(y.data).max() > 100.0
+    assert not damper.ACT_DYN.installed  # registered for the run only
+    # a stiffer series spring brings the rig closer to the memoryless law (k_s -> infinity)
+    stiff = vrig.load_rig("shock-absorber", variant="digressive", series_stiffness=2e7)
+    rigid = vrig.load_rig("shock-absorber", variant="digressive").run(x, seed=0).data
+    gap_soft = np.sqrt(np.mean((y.data - rigid) ** 2))
+    gap_stiff = np.sqrt(np.mean((stiff.run(x, seed=0).data - rigid) ** 2))
+    assert 0 < gap_stiff < gap_soft
+    with pytest.raises(ValueError, match="every slope"):
+        Damper("d", joint="j", damping=0.0, series_stiffness=1e6)
