@@ -254,6 +254,8 @@ def test_repeatability_prints_numbers_and_writes_the_plot(tmp_path, monkeypatch,
     (line,) = [ln for ln in out.splitlines() if ln.startswith("damper_load")]
     assert "%" in line and "dB" in line
     assert float(line.split()[1].rstrip("%")) > 95.0
+    # the first column is the text's number (Tables 3.1-3.3), and the output says which
+    assert "Tables 3.1-3.3" in out and "drive band 0-10 Hz" in out
     png = tmp_path / "results" / "shock-absorber-repeatability" / "repeatability.png"
     assert png.read_bytes()[:4] == b"\x89PNG"
 

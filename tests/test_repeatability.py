@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from scipy import signal
 
 import vrig
 from identification import band_limited_noise
@@ -29,6 +30,27 @@ def test_number_falls_with_noise_and_snr_tracks_it_per_band():
     # in band: signal PSD ~ 1/(0.1 * ... ) vs white noise 1e-4 per unit band: tens of dB
     assert np.median(in_band) > 20.0
     assert np.median(out_band) < -10.0  # noise only: no repeatable content
+
+
+def test_number_in_the_simulation_bandwidth_ignores_out_of_band_noise():
+    # a repeatable signal below 25 Hz plus run-to-run noise only above 100 Hz (rattle, hiss): in
+    # the 0-25 Hz simulation bandwidth the runs are identical, in the full band they are not
+    fs = 1000.0
+    rng = np.random.default_rng(5)
+    s = band_limited_noise(2**14, 1, cutoff=25 / (fs / 2), seed=6)[:, 0]
+    hp = signal.butter(8, 100.0, btype="highpass", fs=fs, output="sos")
+    hiss = signal.sosfiltfilt(hp, rng.standard_normal((2**14, 5)), axis=0)
+    runs = [s + 0.3 * s.std() * h / h.std() for h in hiss.T]
+    full = repeatability_number(runs)[0]
+    in_band = repeatability_number(runs, fs=fs, band=(0.0, 25.0))[0]
+    assert full < 90.0  # 30 % rms noise: the full-band number falls far below 100
+    assert in_band > 99.9  # the filter's stop band leaves < 0.1 % of it
+    # run-to-run noise inside the band counts: 1 % rms white noise on every run
+    noisy = [s + 0.01 * s.std() * rng.standard_normal(s.size) for _ in range(5)]
+    r = repeatability_number(noisy, fs=fs, band=(0.0, 25.0))[0]
+    # white noise keeps 25/500 of its power in 0-25 Hz: eta0 (mean |e| / mean |y|) of a run
+    # against the mean of 5 ~ sqrt(4/5) * 0.01 * sqrt(25/500) = 0.2 % of the signal
+    assert 99.7 < r < 99.9
 
 
 def _five_runs(rig, seconds, band, rms):
@@ -61,3 +83,7 @@ def test_bad_input():
         repeatability_number([np.ones(10)])
     with pytest.raises(ValueError, match="same shape"):
         repeatability_number([np.ones(10), np.ones(11)])
+    with pytest.raises(ValueError, match="sample rate"):
+        repeatability_number([np.ones(100), np.ones(100)], band=(0.0, 10.0))
+    with pytest.raises(ValueError, match="fs/2"):
+        repeatability_number([np.ones(100), np.ones(100)], fs=100.0, band=(0.0, 60.0))

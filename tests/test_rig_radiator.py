@@ -148,17 +148,18 @@ def wide_band_frfs():
 
 
 def test_wide_band_frf_peaks_sit_at_the_documented_modes(wide_band_frfs):
-    f, h_base, h_top, transmissibility, coh = wide_band_frfs
+    f, h_base, h_top, _transmissibility, coh = wide_band_frfs
     band = (f > 40) & (f < 200)
     assert np.median(coh[band]) > 0.9
     w2 = (2 * np.pi * np.maximum(f, 1.0)) ** 2
     # bounce: the dominant peak of the top-tank displacement FRF (acceleration / omega^2)
     bounce = _peaks(f, np.abs(h_top) / w2, 40, 120)
-    # pitch: the radiator's own mode, a peak of the top-tank/base transmissibility
-    pitch = _peaks(f, np.abs(transmissibility), 120, 200)
     # oil column: the frame resonance, a peak of the base acceleration per drive displacement
     oil = _peaks(f, np.abs(h_base), 120, 200)
-    for name, found in [("bounce", bounce), ("pitch", pitch), ("oil_column", oil)]:
+    # pitch (151 Hz) is no peak of the vertical channels: the doughnuts' radial contact damping
+    # (loss factor 0.25, issue 23) damps it by 19 %; its frequency is checked by the eigen-analysis
+    # and its contribution by the FRF against the linear model (the tests next to this one)
+    for name, found in [("bounce", bounce), ("oil_column", oil)]:
         f_doc = README_MODES[name]
         assert found.size, name
         err = np.min(np.abs(found - f_doc)) / f_doc

@@ -224,3 +224,34 @@ def test_calibrate_check_prints_the_baseline_beside_the_text_and_fails_outside(m
     monkeypatch.setitem(calibrate.CALIBRATIONS, "elastomeric-damper", moved)
     lines.clear()
     assert calibrate.main(["elastomeric-damper", "--check"]) == 1
+
+
+def test_calibrate_check_prints_the_repeatability_number_beside_the_text():
+    """An entry with a second observable (issue 23: the radiator, Table 3.3): ``--check`` prints
+    the repeatability number per channel against the text's, with its ±1.0 point verdict."""
+    from benchmarks import calibrate
+
+    lines = []
+    calibrate.check("radiator", log=lines.append)
+    text = "\n".join(lines)
+    assert "vs text 35 %" in text  # the first observable, the linear baseline
+    for channel, figure in [("base_acc", "97.76"), ("toptank_acc", "96.95")]:
+        line = next(x for x in lines if "repeatability number" in x and channel in x)
+        assert f"vs text {figure} %" in line and "±1 point" in line
+
+
+def test_calibrate_writes_the_variants_block_in_place_keeping_the_keys_after_it():
+    """The side-car's hand layout is kept and a key after ``"variants"`` (the radiator's
+    ``"service"``) survives the write."""
+    import json
+
+    from benchmarks.calibrate import _with_variants
+
+    original = '{\n  "name": "x",\n  "variants": {"a": {"b": 1}},\n  "service": {"c": [1, 2]}\n}\n'
+    raw = json.loads(original)
+    raw["variants"] = {"thesis": {"parameters": {"p": 2.0}}}
+    text = _with_variants(original, raw)
+    assert json.loads(text) == raw
+    assert text.startswith('{\n  "name": "x",\n  "variants": ')
+    appended = _with_variants('{\n  "name": "x"\n}\n', {"name": "x", "variants": {}})
+    assert json.loads(appended) == {"name": "x", "variants": {}}

@@ -45,8 +45,8 @@ vrig/ShockAbsorber-v1       1 x 1  arx, 0-10, 0.8                1.7    1.61 % (
 vrig/ElastomericDamper-v1   1 x 1  arx, 0-25, 0.5                0.91   0.91 %; at 0.8 the force
                                                                         interlock trips (thesis)
 vrig/Shaker-v1              1 x 1  arx, 10-60, 0.8               0.5    0.20 % (set at 0.5)
-vrig/Radiator-v1            1 x 2  arx, 2-30, 0.8                3.0    stall: top tank 10-14 %
-                                                                        (3 % measured on mild)
+vrig/Radiator-v1            1 x 2  arx, 2-30, 0.8                3.0    1.68 % (thesis, issue 23;
+                                                                        3 % measured on mild)
 vrig/LightTruckFront-v1     6 x 10 arx, 0-25, 0.8                4.1    4.04 %
 vrig/MotorcycleRear-v1      1 x 2  frf, 0-30, 0.5                6.4    6.36 % (spring strain);
                                                                         arx diverges, narx stalls
