@@ -1110,68 +1110,45 @@ def belgian_road_example(
     *,
     seconds: float,
     iterations: int = 3,
-    level: float = 0.25,
     variant: str | None = None,
     log=print,
 ) -> str:
     """The Belgian-block road record (real wheel accelerations, 256 Hz) as the desired response
-    of the seven-channel fuel-tank rig.
+    of the seven-channel fuel-tank rig: Table 3.7's rig on the text's kind of target (a road
+    simulation).
 
-    F2D: the four outer wheels (LF, RF, LR, RR; the middle axle has no counterpart) map to the
-    rig's four vertical accelerations; resampled 256 -> 250 Hz (polyphase, scipy); band 1-40 Hz;
-    scaled to ``level`` times the RMS of the rig's own pseudo-field vertical response (wheel
-    accelerations are an unsprung-mass load with far more high-frequency content than the
-    rig's own response: at the pseudo-field level the first drive trips the following-error
-    interlock); 5 s skipped at the start. The
-    inverse is built on the four vertical responses (7 drives from 4 responses: the
-    under-determined least-squares inverse); the lateral and longitudinal responses are not
-    controlled and not scored.
+    F2D by :func:`vrig.records.belgian_block_desired` (the one place it is done: the four outer
+    wheels to the four vertical accelerations, 256 -> 250 Hz, band 1-40 Hz, 5 s skipped, one
+    common scale so the best linear drive needs at most half of every actuator limit); the
+    inverse is built on the four vertical responses (:func:`vrig.records.belgian_block_rig`: 7
+    drives from 4 responses); the lateral and longitudinal responses are not controlled and not
+    scored.
     """
-    from scipy import signal
-
     import vrig
-    from benchmarks.public_data import external_data_root
-    from vrig.field import pseudo_field
-    from vrig.processing import f2d, gprepro
-    from vrig.rigs import OutputSubset
-    from vrig.timehistory import TimeHistory
+    from vrig.records import belgian_block_desired, belgian_block_path, belgian_block_rig
 
-    path = external_data_root() / "rpc3-samples" / "acc_Belgium_road(half)_20Kph_Pass02_DATA7.rsp"
-    if not path.exists():
-        return f"Belgian road example skipped: {path} not found\n"
-    field_rec = vrig.io.read_rpc3(path)
-    full = vrig.load_rig("fuel-tank-7ch", seed=0, variant=variant)
-    verticals = ["LF_vertical_acc", "RF_vertical_acc", "LR_vertical_acc", "RR_vertical_acc"]
-    rig = OutputSubset(full, verticals)
-    band = (1.0, 40.0)
-    wheels = [
-        "WFT1@LF_Z_Acceler.RN_1",
-        "WFT1@RF_Z_Acceler.RN_1",
-        "WFT2@LR_Z_Acceler.RN_1",
-        "WFT2@RR_Z_Acceler.RN_1",
-    ]
-    own = pseudo_field(rig, band, 20.0, seed=0)[1]
-    target_rms = level * gprepro(own, band).data.std(axis=0)
-
-    def transform(th):
-        x = th[wheels].data[round(5 * th.fs) :] * 9.80665  # g -> m/s^2
-        x = signal.resample_poly(x, 125, 128, axis=0)[: round(seconds * rig.fs)]
-        out = gprepro(TimeHistory(x, rig.fs, verticals, ["m/s^2"] * 4), band)
-        return out.with_data(out.data * target_rms / out.data.std(axis=0))
-
-    desired = f2d(field_rec, transform)
     try:
+        path = belgian_block_path()
+    except FileNotFoundError as exc:
+        return f"Belgian road example skipped: {exc}\n"
+    full = vrig.load_rig("fuel-tank-7ch", seed=0, variant=variant)
+    rig = belgian_block_rig(full)
+    band = (1.0, 40.0)
+    try:
+        desired = belgian_block_desired(rig, path, seconds=seconds)
         res = vrig.reconstruct(
             rig, desired, method="arx", iterations=iterations, bandwidth=band, seed=0
         )
     except Exception as exc:
         return f"Belgian road example failed: {type(exc).__name__}: {exc}\n"
     log(res.table())
+    rms = np.sqrt(np.mean(np.asarray(desired.data) ** 2, axis=0))
     return (
         "### Belgian-block road record on the seven-channel fuel tank (ARX, 1-40 Hz)\n\n"
         f"rig `fuel-tank-7ch`, variant {full.variant!r}; "
-        f"{seconds:g} s of the four outer wheel accelerations, resampled to 250 Hz, scaled to "
-        f"{level:g} x the rig's pseudo-field level ({', '.join(f'{v:.1f}' for v in target_rms)} m/s² RMS)\n\n"
+        f"{seconds:g} s of the four outer wheel accelerations (vrig.records.belgian_block_desired: "
+        f"scaled so the best linear drive needs at most half of every actuator limit; "
+        f"{', '.join(f'{v:.2f}' for v in rms)} m/s² RMS)\n\n"
         "```\n" + res.table() + f"\n```\n{('stopped: ' + res.stopped) if res.stopped else ''}\n"
     )
 
