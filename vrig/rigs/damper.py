@@ -84,10 +84,13 @@ from numba.extending import intrinsic
 from ._callbacks import Hook, _as_pointer, _lookup, _record_pointer
 from ._checks import check_number, replace_fields
 
-__all__ = ["ACT_DYN", "MAX_DAMPERS", "Damper", "bind", "install", "realise", "uninstall"]
+__all__ = [
+    "ACT_DYN", "MAX_DAMPERS", "Damper", "add_compliance", "bind", "install", "realise", "uninstall",
+]  # fmt: skip
 
 MAX_DAMPERS = 8
-"""Most dampers with series compliance per rig."""
+"""Most internal-state elements per rig: dampers with series compliance plus Maxwell branches
+(:mod:`vrig.rigs.maxwell`)."""
 
 UNCLAMPED_N = 1e6
 """The open side of a one-directional actuator's force range [N] (never reached)."""
@@ -316,7 +319,7 @@ def realise(spec: mujoco.MjSpec, damper: Damper) -> None:
     coefficients[0] = damper.damping if memoryless and not damper.actuators() else 0.0
     element.damping = coefficients
     if not memoryless:
-        _add_compliance(spec, damper, kind, target)
+        add_compliance(spec, damper, kind, target)
     for name, c, force_range in damper.actuators():
         if spec.actuator(name) is not None:
             raise ValueError(f"damper {damper.name!r}: the model already has an actuator {name!r}")
@@ -330,9 +333,27 @@ def realise(spec: mujoco.MjSpec, damper: Damper) -> None:
         act.forcerange = force_range
 
 
-def _add_compliance(spec: mujoco.MjSpec, damper: Damper, kind: str, target: str) -> None:
-    """The series-compliance actuator ``NAME_compliance``: activation ``x_d`` (``dyntype``
-    user), force ``k_s (x_d - q)``; :func:`bind` adds ``k_s q_0`` once the model is compiled."""
+def add_compliance(spec: mujoco.MjSpec, damper: Damper, kind: str, target: str) -> None:
+    """Add the series-compliance actuator ``NAME_compliance``: activation ``x_d``
+    (``dyntype`` user), force ``k_s (x_d - q)``; :func:`bind` adds ``k_s q_0`` once the model
+    is compiled. Shared with the Maxwell branches of :mod:`vrig.rigs.maxwell`.
+
+    Parameters
+    ----------
+    spec : mujoco.MjSpec
+        The rig's model specification (edited in place).
+    damper : Damper
+        The element (``series_stiffness`` > 0).
+    kind : str
+        ``"joint"`` or ``"tendon"``: what ``target`` names.
+    target : str
+        The joint or tendon the actuator acts on.
+
+    Raises
+    ------
+    ValueError
+        If the actuator name is already taken.
+    """
     name = f"{damper.name}_compliance"
     if spec.actuator(name) is not None:
         raise ValueError(f"damper {damper.name!r}: the model already has an actuator {name!r}")

@@ -31,7 +31,7 @@ from mujoco import rollout
 from ..errors import RigLimitError, RigModelError, RigParameterError, SimulationInstabilityError
 from ..progress import RUN_BAR_DELAY_S, bar
 from ..timehistory import TimeHistory
-from . import damper, gas_spring, hydraulics, stability
+from . import damper, gas_spring, hydraulics, maxwell, stability
 from ._callbacks import MAX_LIVE, foreign_callbacks_suspended
 from .daq import Acquisition
 from .limits import check_drive_limits
@@ -176,6 +176,7 @@ class MujocoRig:
         self._inputs, self._outputs = list(desc.inputs), list(desc.outputs)
         self._air = list(desc.air_springs)  # gas springs (vrig.rigs.gas_spring), parameter rules may change them
         self._dampers = list(desc.dampers)  # hydraulic dampers (vrig.rigs.damper), likewise
+        self._maxwell = list(desc.maxwell)  # rubber Maxwell chains (vrig.rigs.maxwell), likewise
         for name, value in self.parameters.items():
             self._apply(spec, desc.parameters[name], value)
         self._realise_dampers(spec)
@@ -263,6 +264,12 @@ class MujocoRig:
         if "input" in rule or "output" in rule:
             self._apply_channel(rule, v, param.name)
             return
+        if "maxwell" in rule:
+            i = next((k for k, c in enumerate(self._maxwell) if c.name == rule["maxwell"]), None)
+            if i is None:
+                raise RigModelError(f"parameter {param.name!r}: no maxwell chain {rule['maxwell']!r}")
+            self._maxwell[i] = self._maxwell[i].with_branch(rule["field"], rule["index"], float(v))
+            return
         if "air_spring" in rule or "damper" in rule:
             key, what, elements = (
                 ("air_spring", "air spring", self._air) if "air_spring" in rule
@@ -290,13 +297,20 @@ class MujocoRig:
         setattr(element, attr, v)
 
     def _realise_dampers(self, spec: mujoco.MjSpec) -> None:
-        """Write the hydraulic dampers (as the parameters left them) into ``spec``
-        (:func:`vrig.rigs.damper.realise`)."""
-        for d in self._dampers:
-            try:
+        """Write the hydraulic dampers and the rubber's Maxwell chains (as the parameters left
+        them) into ``spec`` (:func:`vrig.rigs.damper.realise`, :func:`vrig.rigs.maxwell.realise`)."""
+        try:
+            for d in self._dampers:
                 damper.realise(spec, d)
-            except ValueError as exc:
-                raise RigModelError(f"rig {self._desc.name!r}: {exc}") from None
+            for chain in self._maxwell:
+                maxwell.realise(spec, chain)
+        except ValueError as exc:
+            raise RigModelError(f"rig {self._desc.name!r}: {exc}") from None
+
+    def _internal_state_elements(self) -> list:
+        """The dampers and Maxwell branches whose internal node is advanced by the damper
+        module's act_dyn hook (those without series compliance are skipped by its bind)."""
+        return [*self._dampers, *(b for chain in self._maxwell for b in chain.branches())]
 
     def _apply_channel(self, rule, value, pname) -> None:
         if "input" in rule:
@@ -379,7 +393,8 @@ class MujocoRig:
                 adr = int(m.sensor_adr[s])
             self._air_bound.append((a, t, adr))
         try:
-            self._damper_bound = damper.bind(m, self._dampers)  # series compliance (act_dyn)
+            # series compliance and Maxwell branches (act_dyn)
+            self._damper_bound = damper.bind(m, self._internal_state_elements())
         except ValueError as exc:
             raise RigModelError(f"rig {self._desc.name!r}: {exc}") from None
         self._sensor_cols = []

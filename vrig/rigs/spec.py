@@ -26,6 +26,7 @@ from .daq import AntiAliasFilter, Transducer
 from .gas_spring import AirSpring
 from .hydraulics import HydraulicActuator
 from .limits import check_drive_limits  # re-exported: its public path before rigs.limits
+from .maxwell import MaxwellChain
 
 __all__ = [
     "MILD",
@@ -385,6 +386,8 @@ class RigDescription:
         The gas-spring elements (side-car ``"air_springs"``; :mod:`vrig.rigs.gas_spring`).
     dampers : tuple of Damper
         The hydraulic dampers (side-car ``"dampers"``; :mod:`vrig.rigs.damper`).
+    maxwell : tuple of MaxwellChain
+        The rate-dependent rubber chains (side-car ``"maxwell"``; :mod:`vrig.rigs.maxwell`).
     defaults : RigDefaults
         The rig's own defaults (side-car ``"reconstruction"``: band, gain, gym id, tolerance).
     service : dict
@@ -411,6 +414,7 @@ class RigDescription:
     severity: Severity | None = None  # the non-linearity severity axis; None: a linear rig
     air_springs: tuple = ()  # AirSpring elements (vrig.rigs.gas_spring), side-car "air_springs"
     dampers: tuple = ()  # Damper elements (vrig.rigs.damper), side-car "dampers"
+    maxwell: tuple = ()  # MaxwellChain elements (vrig.rigs.maxwell), side-car "maxwell"
     defaults: RigDefaults = RigDefaults()  # side-car "reconstruction": band, gain, gym, tolerance
     service: dict = field(default_factory=dict)  # side-car "service": scenarios (vrig.service)
 
@@ -723,6 +727,20 @@ def _read_dampers(raw: list, w: str) -> tuple:
     return tuple(out)
 
 
+def _read_maxwell(raw: list, w: str) -> tuple:
+    """The side-car's ``"maxwell"`` chains as :class:`~vrig.rigs.maxwell.MaxwellChain`
+    elements (each number checked; names unique; a clash of a branch's actuator name with the
+    model's is refused when the rig realises it)."""
+    out = []
+    for i, item in enumerate(raw):
+        with _located(f"{w} maxwell[{i}]"):
+            out.append(MaxwellChain(**{k: v for k, v in item.items() if k != "description"}))
+    names = [c.name for c in out]
+    if len(set(names)) != len(names):
+        raise RigModelError(f"{w}: maxwell chain names must be unique, got {names}")
+    return tuple(out)
+
+
 def _read_parameter(name: str, p: dict, w: str) -> Parameter:
     param = Parameter(
         name=name,
@@ -992,6 +1010,7 @@ def read_description(path) -> RigDescription:
         severity=_read_severity(raw.get("severity"), params, where),
         air_springs=_read_air_springs(raw.get("air_springs", []), where),
         dampers=_read_dampers(raw.get("dampers", []), where),
+        maxwell=_read_maxwell(raw.get("maxwell", []), where),
         defaults=_read_defaults(raw, fs, where),
         service=dict(raw.get("service", {})),
     )
