@@ -222,3 +222,14 @@ def test_dynamic_stiffness_rises_with_frequency_as_documented(tmp_path):
     assert np.all(np.diff(ratio) > 0.05)  # rises with frequency
     assert np.all((ratio[1:] >= 1.2) & (ratio[1:] <= 1.6))  # 5 and 20 Hz: documented range
     assert measured["thesis"][-1] / measured["thesis"][0] < 1.03  # no rate dependence before
+
+
+def test_a_chain_on_a_missing_joint_is_refused_once_it_has_a_branch(tmp_path):
+    d = json.loads(SIDE_CAR.read_text())
+    d["mjcf"] = str((SIDE_CAR.parent / d["mjcf"]).resolve())
+    d["maxwell"][0]["joint"] = "nope"
+    path = tmp_path / "elastomeric-damper.rig.json"
+    path.write_text(json.dumps(d))
+    assert vrig.load_rig(path, variant="thesis").model.na == 0  # no branch: nothing to place
+    with pytest.raises(vrig.RigModelError, match="no joint 'nope'"):
+        vrig.load_rig(path, variant="rate-dependent")
