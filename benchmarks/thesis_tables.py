@@ -728,7 +728,7 @@ def calibrated_row(table: Table) -> int | None:
     from vrig.reconstruction import InverseArx
 
     cal = CALIBRATIONS.get(table.rig)
-    if cal is None:
+    if cal is None or cal["target"] is None:  # no calibration, or none on a linear baseline
         return None
     if tuple(table.band) != tuple(cal["band"]):
         raise ValueError(
@@ -860,7 +860,7 @@ def calibrated_verdict(table: Table, values, variant: str | None = CALIBRATED_VA
     i = calibrated_row(table)
     if i is None:
         return (
-            f"no row calibrated on: {table.rig!r} has no calibration "
+            f"no row calibrated on: {table.rig!r} has no linear-baseline calibration "
             "(benchmarks/calibrate.py); every row is a prediction"
         )
     cal, row, v = CALIBRATIONS[table.rig], table.rows[i], values[i]

@@ -81,6 +81,40 @@ def test_stability_limit_is_where_mujoco_starts_to_grow(integrator, where, impli
     assert _grows(_one_spring(integrator, where, 1.03 * closed_form))
 
 
+def _one_spring_two_dampers(dt, c_neg, c_pos, k=1e6):
+    """A 1 kg mass on a joint spring k, damped by two one-sided dashpot actuators (affine bias
+    ``-c v``, clamped to push only negative or only positive: the damper law's realisation)."""
+    xml = ONE_SPRING.format(
+        dt=dt, integrator="implicitfast", joint=f'stiffness="{k!r}"', tendon=""
+    ).replace(
+        "</mujoco>",
+        f"""<actuator>
+    <general joint="x" gainprm="0" biastype="affine" biasprm="0 0 {-c_neg!r}"
+             forcelimited="true" forcerange="-1e6 0"/>
+    <general joint="x" gainprm="0" biastype="affine" biasprm="0 0 {-c_pos!r}"
+             forcelimited="true" forcerange="0 1e6"/>
+  </actuator>
+</mujoco>""",
+    )
+    return mujoco.MjModel.from_xml_string(xml)
+
+
+@pytest.mark.parametrize("c_neg, c_pos", [(200.0, 200.0), (200.0, 600.0)])
+def test_velocity_biased_actuators_count_as_implicit_damping(c_neg, c_pos):
+    """implicitfast takes an actuator's velocity bias implicitly, like joint damping; one-sided
+    actuators damp one half-cycle each, so the estimate takes the smaller coefficient."""
+    k, m = 1e6, 1.0
+    c = min(c_neg, c_pos)
+    closed_form = (c / m + math.sqrt((c / m) ** 2 + 4 * k / m)) / (k / m)
+    model = _one_spring_two_dampers(1e-3, c_neg, c_pos)
+    data = mujoco.MjData(model)
+    limit = stability.max_stable_timestep(model, data, stability.stiff_elements(model, data))
+    assert limit == pytest.approx(closed_form, rel=1e-3)
+    assert not _grows(_one_spring_two_dampers(0.97 * closed_form, c_neg, c_pos))
+    if c_neg == c_pos:  # a dashpot both ways: exactly the joint-damping limit
+        assert _grows(_one_spring_two_dampers(1.03 * closed_form, c_neg, c_pos))
+
+
 def _sliding_damper_radius(rig, dt):
     """Growth per step of MuJoCo's own linearisation of the shock absorber at ``dt``, the damper
     sliding at 0.3 m/s (seal friction on)."""
@@ -101,7 +135,8 @@ def _sliding_damper_radius(rig, dt):
 def test_fast_shock_absorber_timestep_is_inside_mujocos_stability_limit():
     fast = vrig.load_rig("shock-absorber", fidelity="fast")
     assert fast.timestep > 0.2e-3  # still faster than the full rig
-    assert _sliding_damper_radius(fast, fast.timestep) < 1.0
+    # < 1 up to round-off: one mode is neutral (radius 1: the sliding damper's position)
+    assert _sliding_damper_radius(fast, fast.timestep) < 1.0 + 1e-12
     # the test itself: twice the documented 0.2 ms is beyond the limit
     assert _sliding_damper_radius(fast, 0.4e-3) > 1.1
     assert fast.timestep <= vrig.rigs.FAST_MARGIN * fast.stability_limit
@@ -125,7 +160,8 @@ def shock_absorbers():
 @pytest.mark.parametrize("band_hz", [10.0, 6.0])
 def test_fast_shock_absorber_plays_or_trips_where_the_full_rig_does(shock_absorbers, band_hz):
     """25 band-limited 2 s drives at 20 % of full scale RMS: never an instability; a trip only
-    where the full rig trips too (0-10 Hz: the full rig trips on all; 0-6 Hz: on about half)."""
+    where the full rig trips too (0-10 Hz: the full rig trips on nearly all — 24 of 25 with the
+    thesis twin's digressive damper of issue 23, all 25 with the old dashpot; 0-6 Hz: on some)."""
     full, fast = shock_absorbers
     played = 0
     for seed in range(25):
@@ -136,7 +172,7 @@ def test_fast_shock_absorber_plays_or_trips_where_the_full_rig_does(shock_absorb
         if isinstance(b, str):
             assert isinstance(a, str), f"seed {seed}: fast rig tripped ({b}), full rig played"
         played += not isinstance(a, str)
-    assert played == 0 if band_hz == 10.0 else played >= 5
+    assert played < 5 if band_hz == 10.0 else played >= 5  # both paths are exercised
 
 
 def test_fast_and_full_shock_absorber_agree_within_the_documented_tolerance():

@@ -133,7 +133,9 @@ def test_documented_modes_follow_from_the_documented_parameters(variant):
 @pytest.fixture(scope="module")
 def wide_band_frfs():
     """H1 FRFs from a 0-225 Hz random drive (50 um rms), mount play taken up (linear mounts)."""
-    rig = vrig.load_rig("radiator", seed=0, **NO_PLAY)
+    # the modes are measured here: without the controller's 1/f noise (57 um rms on `thesis`,
+    # issue 23), which a 50 um rms drive would not stand out of below 40 Hz
+    rig = vrig.load_rig("radiator", seed=0, control_noise=0.0, **NO_PLAY)
     fs = rig.fs
     u = 5e-5 * band_limited_noise(int(20 * fs), 1, cutoff=225 / (fs / 2), seed=1)[:, 0]
     y = rig.run(u, seed=2).data
@@ -195,8 +197,13 @@ def _rattle_ratio(g_level, variant):
     w = 2 * np.pi * 20.0
     drive = g_level * 9.81 / w**2 * np.sin(w * t)
     hf = []
-    for kw in ({}, NO_PLAY):
-        y = vrig.load_rig("radiator", variant=variant, **kw).run(drive, seed=1).channel("toptank_acc")[fs:]
+    for kw in ({}, NO_PLAY):  # the threshold's physics: without the controller's 1/f noise,
+        # whose own acceleration would lift the pins off now and then near 1 g (issue 23)
+        y = (
+            vrig.load_rig("radiator", variant=variant, control_noise=0.0, **kw)
+            .run(drive, seed=1)
+            .channel("toptank_acc")[fs:]
+        )
         f, p = signal.welch(y, fs=fs, nperseg=625)
         hf.append(p[f > 100].sum())
     return hf[0] / hf[1]

@@ -6,7 +6,9 @@ Truth used: the text's repeatability numbers (Table 3.3, 0-25 Hz simulation band
 (``100 - mean_i η0`` of each of five runs against their mean, in the simulation bandwidth), and
 the statistics of independent noise: a run deviates from the mean of n runs by ``sqrt((n-1)/n)``
 of its own noise, from another run by ``sqrt(2)``; two runs therefore differ by
-``sqrt(2 n / (n - 1)) = sqrt(5/2)`` times the text's ``100 - R`` at most.
+``sqrt(2 n / (n - 1)) = sqrt(5/2)`` times ``100 - R``, with R the text's number less the
+calibration's tolerance (the twin's number is calibrated to the text within ±1.0 point,
+``benchmarks.calibrate.REPEATABILITY_TOLERANCE``; the chaotic twin of old differed by 36-43 %).
 """
 
 from __future__ import annotations
@@ -21,6 +23,7 @@ from vrig.processing import gprepro
 
 TEXT_BAND = (0.0, 25.0)  # Table 3.3's simulation bandwidth [Hz]
 TEXT_NUMBER = {"base_acc": 97.76, "toptank_acc": 96.95}  # Table 3.3 [%]
+CALIBRATION_TOLERANCE = 1.0  # [points] the issue's acceptance band for the calibrated number
 
 
 @pytest.fixture(scope="module")
@@ -51,6 +54,6 @@ def test_two_noise_seeds_differ_no_more_than_the_real_rig_implies(thesis_runs):
     a, b = (gprepro(r, TEXT_BAND, detrend=False) for r in (ref, other))
     eta = metrics.qantim_fit_dc(a.data, b.data)  # [%] per channel, one run against the other
     for k, name in enumerate(ref.names):
-        allowed = np.sqrt(5 / 2) * (100.0 - TEXT_NUMBER[name])
+        allowed = np.sqrt(5 / 2) * (100.0 - (TEXT_NUMBER[name] - CALIBRATION_TOLERANCE))
         assert eta[k] <= allowed, (name, eta[k], allowed)
     assert rig.variant == "thesis"

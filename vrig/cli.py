@@ -22,9 +22,10 @@ checks and the interlocks stop a run.
 
 ``vrig repeatability`` plays one random drive five times (§3.1, Fig. 3.1); its first column is
 the text's scalar repeatability number (Tables 3.1-3.3): ``100 - mean η0`` of each run against
-the mean response, the responses processed to the drive band (the simulation bandwidth the text
-names with each table, e.g. ``--band 0 25`` for the radiator), then the same over the full
-recorded band, the mean in-band ``R_f`` and the SNR (:mod:`vrig.repeatability`).
+the mean response, the responses processed to the drive band (by default the simulation
+bandwidth the text names with the rig's table, side-car ``"repeatability"``, e.g. 0-25 Hz for the
+radiator, whose number it then prints beside; else the reconstruction band), then the same over
+the full recorded band, the mean in-band ``R_f`` and the SNR (:mod:`vrig.repeatability`).
 
 Progress of the long phases (desired-response generation, identification, long rig runs, the
 iterations) goes to stderr when stderr is a terminal; ``VRIG_PROGRESS=1`` shows it anyway,
@@ -367,7 +368,8 @@ def _add_repeatability_parser(sub) -> None:
         type=float,
         nargs=2,
         metavar=("LOW", "HIGH"),
-        help="drive band [Hz] (default as for reconstruct)",
+        help="drive band [Hz] (default: the band of the text's repeatability test of the rig "
+        "where the side-car gives one, else as for reconstruct)",
     )
     rep.add_argument("--seed", type=int, default=0, help="random seed, an integer >= 0 (default 0)")
     rep.add_argument("--out", help="folder of the plot (default ./results/<rig>-repeatability)")
@@ -400,7 +402,8 @@ def _add_linearity_parser(sub) -> None:
         type=float,
         nargs=2,
         metavar=("LOW", "HIGH"),
-        help="drive band [Hz] (default as for reconstruct)",
+        help="drive band [Hz] (default: the band of the text's repeatability test of the rig "
+        "where the side-car gives one, else as for reconstruct)",
     )
     lin.add_argument("--seed", type=int, default=0, help="random seed, an integer >= 0 (default 0)")
     lin.add_argument("--plot", action="store_true", help="write linearity.png into --out")
@@ -953,7 +956,8 @@ def _cmd_repeatability(args) -> int:
         raise _UsageError(f"--seconds must be 2..{_MAX_SECONDS:g}, got {args.seconds:g}")
     _check_seed(args.seed)
     rig = _load_rig(args.rig, seed=args.seed)
-    band = _band(rig, args.band)
+    text = getattr(getattr(rig, "description", None), "repeatability", None) or {}
+    band = _band(rig, text["band"] if args.band is None and text else args.band)
     out = Path(args.out) if args.out else Path("results") / f"{Path(rig.name).stem}-repeatability"
     if out.exists() and not out.is_dir():
         raise _UsageError(f"--out {out} is a file, not a folder")
@@ -982,15 +986,19 @@ def _cmd_repeatability(args) -> int:
         f"of each run against the mean response, responses in the drive band {band[0]:g}-"
         f"{band[1]:g} Hz; full band: the same over everything up to the anti-alias filter"
     )
+    numbers = text.get("numbers", {}) if tuple(band) == tuple(text.get("band", ())) else {}
+    if numbers:
+        print(f"text   {text['table']} in the same band: its number per channel (last column)")
     print(
         f"{'channel':<{width}}  repeatability  full band  R_f in band (mean)  "
-        "SNR in band: mean   min"
+        "SNR in band: mean   min" + ("   text" if numbers else "")
     )
     for k, name in enumerate(names):
+        quoted = f"  {numbers[name]:>6.2f}%" if name in numbers else ""
         print(
             f"{name:<{width}}  {number[k]:>12.2f}%  {full[k]:>8.2f}%  "
             f"{np.nanmean(rf[inband, k]):>17.1f}%  "
-            f"{np.mean(snr[inband, k]):>15.1f} dB {np.min(snr[inband, k]):>5.1f} dB"
+            f"{np.mean(snr[inband, k]):>15.1f} dB {np.min(snr[inband, k]):>5.1f} dB" + quoted
         )
     out.mkdir(parents=True, exist_ok=True)
     fig = repeatability_plot(

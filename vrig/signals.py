@@ -18,7 +18,9 @@ from identification.budget import check_allocation, product
 from .timehistory import TimeHistory
 
 __all__ = [
+    "control_noise_psd",
     "flat_psd",
+    "flicker_sos",
     "one_over_f_psd",
     "random_drive",
     "rig_specific_psd",
@@ -102,6 +104,79 @@ def one_over_f_psd(band: tuple[float, float], n: float = 1.0) -> Callable[[np.nd
         return np.where(_band(f, band), f_eff ** (-float(n)), 0.0)
 
     return psd
+
+
+def control_noise_psd(corner_hz: float, *, low_hz: float = 0.1) -> Callable[[np.ndarray], np.ndarray]:
+    """Flicker PSD of a controller's low-frequency noise: ``1/f`` above ``low_hz``, rolled off
+    as a second-order low-pass above ``corner_hz``: ``S(f) = f^-1 / (1 + (f/f_c)^4)`` (0 below
+    ``low_hz``).
+
+    Parameters
+    ----------
+    corner_hz : float
+        Corner frequency f_c of the roll-off [Hz], > 0.
+    low_hz : float, optional
+        Lowest frequency of the noise [Hz], > 0 (below it the record is too short to hold it).
+    """
+    if not (np.isfinite(corner_hz) and corner_hz > 0 and np.isfinite(low_hz) and low_hz > 0):
+        raise ValueError(f"corner_hz and low_hz must be > 0 Hz, got {corner_hz!r}, {low_hz!r}")
+
+    def psd(f):
+        f = np.asarray(f, dtype=float)
+        return np.where(
+            f >= low_hz, 1.0 / (np.maximum(f, low_hz) * (1.0 + (f / corner_hz) ** 4)), 0.0
+        )
+
+    return psd
+
+
+def flicker_sos(corner_hz: float, fs: float, *, low_hz: float = 0.1) -> tuple[np.ndarray, float]:
+    """A causal filter whose output, for white noise of unit variance per sample, has the
+    spectrum of :func:`control_noise_psd`: 1/f from ``low_hz`` (flat below) to ``corner_hz``,
+    a second-order low-pass beyond.
+
+    The 1/f slope (-10 dB per decade) comes from real poles and zeros alternating every quarter
+    decade up to ten times the corner (or fs/4) (each pole-zero pair averages half a pole's -20 dB per decade; ripple about 0.3 dB),
+    mapped to discrete time by the bilinear transform, then a second-order Butterworth low-pass
+    at ``corner_hz``. Causal and with state, so a record filtered in chunks (``sosfilt`` with
+    ``zi``) is the record filtered in one piece.
+
+    Parameters
+    ----------
+    corner_hz : float
+        Corner frequency of the roll-off [Hz], ``low_hz < corner_hz < fs / 2``.
+    fs : float
+        Sample rate of the filter [Hz].
+    low_hz : float, optional
+        Lowest frequency of the 1/f band [Hz], > 0.
+
+    Returns
+    -------
+    (sos, rms) : ndarray, float
+        Second-order sections, and the RMS of the output per unit-variance white input.
+    """
+    if not (np.isfinite(fs) and fs > 0 and 0 < low_hz < corner_hz < fs / 2):
+        raise ValueError(
+            f"need 0 < low_hz < corner_hz < fs/2, got low_hz={low_hz!r}, "
+            f"corner_hz={corner_hz!r}, fs={fs!r}"
+        )
+    from scipy import signal
+
+    top = min(10.0 * corner_hz, fs / 4)  # the 1/f chain runs on under the roll-off
+    edges = low_hz * 10.0 ** np.arange(0.0, np.log10(top / low_hz) + 0.25, 0.25)
+    poles, zeros = edges[0::2], edges[1::2][: edges[0::2].size]
+    if zeros.size < poles.size:
+        zeros = np.append(zeros, poles[-1] * 10**0.25)
+    z, p = -2 * np.pi * zeros, -2 * np.pi * poles
+    k = np.prod(p) / np.prod(z)  # unit gain at DC
+    zd, pd, kd = signal.bilinear_zpk(z, p, k, fs)
+    sos = np.vstack(
+        [signal.zpk2sos(zd, pd, kd), signal.butter(2, corner_hz, fs=fs, output="sos")]
+    )
+    f = np.concatenate([[0.0], np.geomspace(low_hz * 1e-3, fs / 2, 20000)])
+    _, h = signal.sosfreqz(sos, worN=f, fs=fs)
+    rms = np.sqrt(2.0 / fs * np.trapezoid(np.abs(h) ** 2, f))
+    return sos, float(rms)
 
 
 def random_drive(

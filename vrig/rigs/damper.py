@@ -125,9 +125,10 @@ class Damper:
     blowoff_ratio_rebound : float
         ``β_r`` [-] (>= 0): the same in rebound.
     knee_velocity_compression : float
-        ``v_c`` [m/s] (> 0): compression speed at which the blow-off valve opens.
+        ``v_c`` [m/s] (>= 0): compression speed at which the blow-off valve opens (0: open
+        from rest, the law linear at the blow-off slope; a severity axis's linearised end).
     knee_velocity_rebound : float
-        ``v_r`` [m/s] (> 0): the same in rebound.
+        ``v_r`` [m/s] (>= 0): the same in rebound.
     series_stiffness : float
         ``k_s`` [N/m] (>= 0) of the spring in series with the valves; 0 (the default): none,
         the memoryless law.
@@ -163,8 +164,7 @@ class Damper:
         for key in self.FIELDS:
             value = getattr(self, key)
             if value is not None:
-                bound = "exclusive_minimum" if key.startswith("knee") else "minimum"
-                check_number(f"damper {self.name!r}: {key}", value, **{bound: 0})
+                check_number(f"damper {self.name!r}: {key}", value, minimum=0)
         if self.series_stiffness > 0 and self.least_slope() <= 0:
             raise ValueError(
                 f"damper {self.name!r}: series compliance needs every slope of the law > 0 "
@@ -281,7 +281,7 @@ class Damper:
         for label, sign, c, beta, knee in self.sides():
             direction = -self.extension * sign  # sign of the coordinate force in this stroke
             out.append((f"{self.name}_{label}", beta * c, _range(direction * UNCLAMPED_N)))
-            if beta != 1.0:
+            if beta != 1.0 and knee > 0:  # knee 0: the blow-off slope from rest, no bleed
                 extra = (1.0 - beta) * c
                 out.append((f"{self.name}_{label}_bleed", extra, _range(direction * extra * knee)))
         return out

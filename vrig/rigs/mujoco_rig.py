@@ -27,9 +27,11 @@ from pathlib import Path
 import mujoco
 import numpy as np
 from mujoco import rollout
+from scipy.signal import sosfilt
 
 from ..errors import RigLimitError, RigModelError, RigParameterError, SimulationInstabilityError
 from ..progress import RUN_BAR_DELAY_S, bar
+from ..signals import flicker_sos
 from ..timehistory import TimeHistory
 from . import damper, gas_spring, hydraulics, maxwell, stability
 from ._callbacks import MAX_LIVE, foreign_callbacks_suspended
@@ -895,6 +897,7 @@ class MujocoRig:
         sens_buf = np.empty((1, steps, m.nsensordata))
         state, warm = self._state0, None
         over = {}  # channel -> (first sample beyond the transducer range, value)
+        noise = (valve_rng, self._control_noise(valve_rng))  # valve, controller
         hydraulics.install(m, d, self._hyd, self.timestep, states=self._hyd_states)
         self._install_elements(d)
         shown = bar(total, desc=f"{self.name}: run {n / self.fs:g} s", unit="sample",
@@ -902,7 +905,7 @@ class MujocoRig:
         try:
             for k0 in range(0, total, chunk):
                 k1 = min(k0 + chunk, total)
-                ctrl = self._controls(x, t_drive, k0 * dec, k1 * dec, settle * dec, valve_rng)
+                ctrl = self._controls(x, t_drive, k0 * dec, k1 * dec, settle * dec, noise)
                 k = (k1 - k0) * dec
                 _, sens = rollout.rollout(
                     m,
@@ -952,17 +955,55 @@ class MujocoRig:
             )
         return out
 
-    def _controls(self, x, t_drive, g0: int, g1: int, settle_steps: int, rng) -> np.ndarray:
+    def _control_noise(self, rng):
+        """The run's command/feedback-path flicker noise source, or None where every level is
+        0 (then ``rng`` is left untouched: runs without it stay bit for bit): a child of the
+        valve-noise generator (the valve noise stream is the same with or without it), the
+        causal flicker filter of each noisy drive at the physics rate (``flicker_sos``, gains
+        to each level) and its state, warmed up over five time constants of its lowest pole so
+        the run starts in the noise's steady state. Drawn per physics step, chunk by chunk."""
+        levels = np.array([c.control_noise_rms for c in self._inputs])
+        if not np.any(levels > 0):
+            return None
+        child = rng.spawn(1)[0]
+        rate = 1.0 / self.timestep
+        state = []
+        for j in np.flatnonzero(levels > 0):  # one filter per noisy drive, not per sample
+            sos, rms = flicker_sos(self._inputs[j].control_noise_corner_hz, rate)
+            warm = child.standard_normal(round(5 / (2 * np.pi * 0.1) * rate))
+            _, zi = sosfilt(sos, warm, zi=np.zeros((sos.shape[0], 2)))
+            state.append([int(j), sos, zi, levels[j] / rms])
+        return child, state
+
+    def _flicker(self, source, steps: int) -> list:
+        """The next ``steps`` physics steps of each noisy drive's flicker noise (advances the
+        filter states of ``source``): ``(drive index, values)`` per noisy drive."""
+        child, state = source
+        out = []
+        for entry in state:
+            j, sos, zi, gain = entry
+            y, entry[2] = sosfilt(sos, child.standard_normal(steps), zi=zi)
+            out.append((j, gain * y))
+        return out
+
+    def _controls(self, x, t_drive, g0: int, g1: int, settle_steps: int, noise) -> np.ndarray:
         """Controls of physics steps ``g0:g1`` of the run: the drive linearly interpolated to the
-        physics rate after ``settle_steps`` of zero, plus valve or amplifier noise."""
+        physics rate after ``settle_steps`` of zero, plus valve or amplifier noise and the
+        controller's flicker noise; ``noise`` = (the valve-noise generator, the flicker record
+        at the DAQ rate with the settling period, or None)."""
+        rng, flicker = noise
         ctrl = np.zeros((1, g1 - g0, self.model.nu))
         s = np.arange(g0, g1) - settle_steps
         noisy = [j for j, c in enumerate(self._inputs) if c.noise_rms > 0]
         noise = rng.standard_normal((g1 - g0, len(noisy))) if noisy else None
         for j, (c, (i_cmd, i_noise)) in enumerate(zip(self._inputs, self._slots, strict=True)):
             ctrl[0, :, i_cmd] = np.where(s >= 0, np.interp(s, t_drive, x[:, j]), 0.0)
+
             if c.noise_rms > 0:  # valve-command noise (hydraulic) or amplifier noise (direct)
                 ctrl[0, :, i_noise] += c.noise_rms * noise[:, noisy.index(j)]
+        if flicker is not None:  # the controller's noise, on the command: the loop follows it
+            for j, values in self._flicker(flicker, g1 - g0):
+                ctrl[0, :, self._slots[j][0]] += values
         return ctrl
 
     def _check_stability(self, g0: int, raw, d=None) -> None:

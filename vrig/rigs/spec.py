@@ -203,6 +203,14 @@ class InputDef:
     noise_rms : float
         Command noise RMS, >= 0: of the servo-valve (fraction of full opening) on a hydraulic
         drive, of the amplifier (in the drive's unit) on a direct one.
+    control_noise_rms : float
+        Low-frequency noise of the controller's command and feedback path, >= 0, in the drive's
+        unit: RMS of a 1/f (flicker) process over 0.1 Hz to the Nyquist frequency, added to the
+        command, so the loop follows it and the piston moves by it inside the loop bandwidth —
+        the rig's in-band run-to-run variation (reference text §3.1). 0 (default): none.
+    control_noise_corner_hz : float
+        Corner of that noise [Hz], > 0: its 1/f spectrum rolls off as a second-order low-pass
+        above it (the controller electronics' flicker corner and the loop's bandwidth).
     """
 
     spec: ChannelSpec
@@ -210,9 +218,17 @@ class InputDef:
     joint: str | None
     hydraulic: HydraulicActuator | None
     noise_rms: float  # valve-command noise (hydraulic) or drive noise in drive units (direct)
+    control_noise_rms: float = 0.0  # 1/f command/feedback-path noise [drive unit rms]
+    control_noise_corner_hz: float = 30.0  # its second-order roll-off [Hz]
 
     def __post_init__(self):
         check_number(f"{self.spec.name}: noise_rms", self.noise_rms, minimum=0)
+        check_number(f"{self.spec.name}: control_noise_rms", self.control_noise_rms, minimum=0)
+        check_number(
+            f"{self.spec.name}: control_noise_corner_hz",
+            self.control_noise_corner_hz,
+            exclusive_minimum=0,
+        )
 
 
 @dataclass(frozen=True)
@@ -393,6 +409,10 @@ class RigDescription:
     service : dict
         The side-car's ``"service"`` block as validated by the schema: service scenarios by name
         (read by :mod:`vrig.service`; empty: the specimen has no field twin).
+    repeatability : dict
+        The side-car's ``"repeatability"`` block: the reference text's repeatability test of
+        this rig (``table``, its simulation ``band`` [Hz], the ``numbers`` [%] per response
+        channel); ``vrig repeatability`` runs in that band and prints them. Empty: none.
     """
 
     name: str
@@ -417,6 +437,7 @@ class RigDescription:
     maxwell: tuple = ()  # MaxwellChain elements (vrig.rigs.maxwell), side-car "maxwell"
     defaults: RigDefaults = RigDefaults()  # side-car "reconstruction": band, gain, gym, tolerance
     service: dict = field(default_factory=dict)  # side-car "service": scenarios (vrig.service)
+    repeatability: dict = field(default_factory=dict)  # side-car "repeatability": the text's test
 
 
 MILD = "mild"
@@ -683,7 +704,15 @@ def _read_input(item: dict, w: str) -> InputDef:
                 spec.full_scale,
                 f"a number in (0, {hyd.stroke:g}] (the stroke)",
             )
-        return InputDef(spec, item["actuator"], item.get("joint"), hyd, item.get("noise_rms", 0.0))
+        return InputDef(
+            spec,
+            item["actuator"],
+            item.get("joint"),
+            hyd,
+            item.get("noise_rms", 0.0),
+            item.get("control_noise_rms", 0.0),
+            item.get("control_noise_corner_hz", 30.0),
+        )
 
 
 def _read_output(item: dict, w: str) -> OutputDef:
@@ -1013,5 +1042,21 @@ def read_description(path) -> RigDescription:
         maxwell=_read_maxwell(raw.get("maxwell", []), where),
         defaults=_read_defaults(raw, fs, where),
         service=dict(raw.get("service", {})),
+        repeatability=_read_repeatability(raw.get("repeatability"), outputs, fs, where),
     )
+
+
+def _read_repeatability(block, outputs, fs: float, where: str) -> dict:
+    """The side-car's ``"repeatability"`` block (structure checked by the schema): its band
+    inside (0, fs/2) and its channels among the rig's responses."""
+    if not block:
+        return {}
+    lo, hi = (float(b) for b in block["band"])
+    if not 0 <= lo < hi < fs / 2:
+        raise RigModelError(f"{where}: repeatability band {lo:g}-{hi:g} Hz not inside 0-{fs / 2:g}")
+    names = {o.spec.name for o in outputs}
+    unknown = sorted(set(block["numbers"]) - names)
+    if unknown:
+        raise RigModelError(f"{where}: repeatability numbers for unknown responses {unknown}")
+    return {"table": block["table"], "band": (lo, hi), "numbers": dict(block["numbers"])}
 

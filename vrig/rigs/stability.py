@@ -178,18 +178,51 @@ def stiff_elements(
     return out
 
 
+def _actuator_damping(model: mujoco.MjModel, jac: np.ndarray) -> np.ndarray:
+    """The small-signal damping matrix of the actuators whose force has a velocity bias
+    (``biastype`` affine, ``biasprm[2] = -c < 0``, on a joint or a tendon: e.g. the hydraulic
+    damper law of :mod:`vrig.rigs.damper`). A one-sided ``forcerange`` acts in one direction of
+    motion only, so per transmission the damping is the *smaller* of the two directions' sums
+    (the sum of the ``c`` that may push negative, of those that may push positive): the
+    damping the mode sees in its less damped half-cycle (a conservative linearisation)."""
+    sums = {}  # (trntype, trnid) -> [c pushing negative, c pushing positive, direction]
+    affine = int(mujoco.mjtBias.mjBIAS_AFFINE)
+    kinds = {int(mujoco.mjtTrn.mjTRN_JOINT): "joint", int(mujoco.mjtTrn.mjTRN_TENDON): "tendon"}
+    for i in range(model.nu):
+        c = -float(model.actuator_biasprm[i, 2]) * float(model.actuator_gear[i, 0]) ** 2
+        kind = kinds.get(int(model.actuator_trntype[i]))
+        if int(model.actuator_biastype[i]) != affine or c <= 0 or kind is None:
+            continue
+        target = int(model.actuator_trnid[i, 0])
+        if kind == "joint":
+            g = np.zeros(model.nv)
+            g[int(model.jnt_dofadr[target])] = 1.0
+        else:
+            g = jac[target]
+        lo, hi = model.actuator_forcerange[i] if model.actuator_forcelimited[i] else (-1, 1)
+        entry = sums.setdefault((kind, target), [0.0, 0.0, g])
+        entry[0] += c if lo < 0 else 0.0
+        entry[1] += c if hi > 0 else 0.0
+    out = np.zeros((model.nv, model.nv))
+    for neg, pos, g in sums.values():
+        out += min(neg, pos) * np.outer(g, g)
+    return out
+
+
 def _damping(model: mujoco.MjModel, data: mujoco.MjData) -> tuple[np.ndarray, np.ndarray]:
-    """The model's damping matrix (joints and tendons) and the part the integrator takes
-    implicitly."""
+    """The model's damping matrix (joints, tendons and velocity-biased actuators) and the part
+    the integrator takes implicitly (MuJoCo's implicit integrators take the actuators' velocity
+    derivatives like tendon damping; ``Euler`` and ``RK4`` do not)."""
     jac = _tendon_jacobian(model, data)
     tendon = jac.T @ (model.tendon_damping[:, None] * jac)
+    actuator = _actuator_damping(model, jac)
     joint = np.diag(model.dof_damping)
     implicit = np.zeros_like(joint)
     if _joint_damping_implicit(model):
         implicit += joint
     if int(model.opt.integrator) not in (_EULER, _RK4):
-        implicit += tendon
-    return joint + tendon, implicit
+        implicit += tendon + actuator
+    return joint + tendon + actuator, implicit
 
 
 def _step_matrix(mass, damping, elements, integrator: int, dt: float) -> np.ndarray:
