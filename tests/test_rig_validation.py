@@ -95,7 +95,7 @@ SIDE_CAR_CASES = {
     "misspelt drive key": (
         _set("inputs", 0, "noise_rmss", 0.5),
         "inputs[0]",
-        "allowed keys: actuator, description, full_scale",
+        "allowed keys: actuator, control_noise_corner_hz, control_noise_rms, description, full_scale",
     ),
     "NaN full scale": (
         _set("outputs", 0, "full_scale", math.nan),

@@ -880,8 +880,7 @@ class MujocoRig:
         d = self.data if data is None else data
         # the one-argument form for the rig's own data (a test hooks ``_check_stability``)
         check = self._check_stability if d is self.data else partial(self._check_stability, d=d)
-        n = x.shape[0]
-        settle = round(self._desc.settle_time * self.fs)  # whole DAQ samples, zero drive
+        n, settle = x.shape[0], round(self._desc.settle_time * self.fs)  # settle: zero drive
         total = settle + n
         full = np.array([o.spec.full_scale for o in self._outputs])
         # the transducer and anti-alias filters run through the settling period too (as on a
