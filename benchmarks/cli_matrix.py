@@ -19,7 +19,7 @@ run:
   ``stderr:`` below the table), so the table shows how it does;
 * ``time`` [s]: wall time of the command.
 
-    python -m benchmarks.cli_matrix [--rigs RIG ...] [--methods arx narx split frf]
+    python -m benchmarks.cli_matrix [--rigs RIG ...] [--methods arx narx split frf error-signal]
         [--fidelity fast] [--seconds 20] [--jobs 2] [--out results/cli_matrix.md]
 """
 
@@ -36,7 +36,7 @@ from pathlib import Path
 
 import numpy as np
 
-METHODS = ("arx", "narx", "split", "frf")
+METHODS = ("arx", "narx", "split", "frf", "error-signal")  # every method of vrig reconstruct
 COLUMNS = ("rig", "method", "exit", "IT00", "best", "best_mean", "worse", "trip", "stop", "time")
 
 
@@ -64,7 +64,10 @@ def _stop_text(result) -> tuple[str, bool]:
 
 
 def run_one(rig: str, method: str, fidelity: str, seconds: float, extra=()) -> dict:
-    """One ``vrig reconstruct`` run; returns the row of the table."""
+    """One ``vrig reconstruct`` run; returns the row of the table: the printed columns and
+    ``message`` (the command's ``vrig ...``/``warning:`` lines on stderr), ``warned`` (the
+    side-car's unsupported warning), ``traceback``, ``stop_kind`` (``result.stop_kind``;
+    ``None``: not run), ``played`` (iterations played, IT00 included) and ``worse_list``."""
     import vrig
     import vrig.reconstruction as rec
     from vrig import cli
@@ -104,6 +107,8 @@ def run_one(rig: str, method: str, fidelity: str, seconds: float, extra=()) -> d
     row["message"] = " ".join(x.strip() for x in lines if x.startswith(("vrig ", "warning: ")))
     row["warned"] = any(x.startswith("warning: --method") for x in lines)
     row["traceback"] = "Traceback" in err.getvalue() or code == 3
+    row["stop_kind"] = None if result is None else result.stop_kind
+    row["played"] = 0 if result is None else len(result.errors)  # iterations, IT00 included
     if result is not None and len(result.errors):
         e = np.asarray(result.errors)
         b = result.best_iteration
@@ -120,6 +125,11 @@ def run_one(rig: str, method: str, fidelity: str, seconds: float, extra=()) -> d
     return row
 
 
+def _pct(value: float) -> str:
+    """A mean η0 [%] of the table, ``-`` where no iteration was played."""
+    return "-" if np.isnan(value) else f"{value:.2f}"
+
+
 def table(rows: list[dict]) -> str:
     """The rows as a markdown table (η0 in %, time in s)."""
     head = (
@@ -129,9 +139,9 @@ def table(rows: list[dict]) -> str:
     lines = [head, "|" + "---|" * 10]
     for r in rows:
         lines.append(
-            f"| {r['rig']} | {r['method']}{'*' if r.get('warned') else ''} | {r['exit']} | {r['IT00']:.2f} | {r['best']} | "
-            f"{r['best_mean']:.2f} | {r['worse']} | {'yes' if r['trip'] else 'no'} | "
-            f"{r['stop']} | {r['time']:.0f} |"
+            f"| {r['rig']} | {r['method']}{'*' if r.get('warned') else ''} | {r['exit']} | "
+            f"{_pct(r['IT00'])} | {r['best']} | {_pct(r['best_mean'])} | {r['worse']} | "
+            f"{'yes' if r['trip'] else 'no'} | {r['stop']} | {r['time']:.0f} |"
         )
     return "\n".join(lines)
 
@@ -139,8 +149,8 @@ def table(rows: list[dict]) -> str:
 def _status(row: dict) -> None:
     """One line on stderr per finished run (the table comes at the end)."""
     print(
-        f"{row['rig']} {row['method']}: exit {row['exit']}, IT00 {row['IT00']:.2f} %, best "
-        f"{row['best']} {row['best_mean']:.2f} %, worse {row['worse']}, {row['stop']}, "
+        f"{row['rig']} {row['method']}: exit {row['exit']}, IT00 {_pct(row['IT00'])} %, best "
+        f"{row['best']} {_pct(row['best_mean'])} %, worse {row['worse']}, {row['stop']}, "
         f"{row['time']:.0f} s",
         file=sys.stderr,
         flush=True,

@@ -35,6 +35,30 @@ inverse ARX(6) IT00, 6.16 ARX(4) IT00, 6.12 ARX(6) top tank IT00, 3.4 full-spect
 IT00). That row is marked *calibrated on* and judged against the text within the calibration's
 tolerance (±25 % relative); every other row is a *prediction*, never tuned, judged on the
 text's ordering and on the size of its gain over the baseline row against the text's gain.
+
+Closing verdict table ("text vs vrig", :func:`closing_table`, the report's last table): one row
+per figure the text reports in Tables 6.3, 6.16 (IT00 and IT05), 6.12, 3.4, 3.5 and 3.7, per run
+(target kind and variant), with the text's figure, vrig's, its role and a verdict
+(:func:`figure_verdict`):
+
+* the **calibrated row** (and a table's uncalibrated baseline row, Table 3.7's figures, and a
+  figure whose channel has no text baseline): vrig's figure against the text's, "within ±25 %"
+  (``benchmarks.calibrate.TOLERANCE``, relative, bounds included) or "outside (×r)" with
+  ``r = vrig / text``. On a run that is not the calibration's own (another variant, or the
+  text's kind of target where the calibration used a pseudo-field record) the calibrated row is
+  marked a comparison;
+* a **predicted row** (NARX, IT05, split spectra, ...): its gain over the table's linear baseline
+  row (the calibrated row, else the table's ``baseline`` row) against the text's gain, each as a
+  fraction of its own baseline (the rule of :func:`gain_verdicts`: the calibrated baseline itself
+  only lands within ±25 % of the text's), ``r = ((b - x) / b) / ((B - X) / B)`` with ``b, x``
+  vrig's baseline and row figures and ``B, X`` the text's: "holds" when ``|r - 1| <= 0.25``
+  (:data:`GAIN_TOLERANCE`), else "misses (×r)" (a negative ``r``: the opposite sign of the
+  text's gain; where the text has no gain, "holds" only while vrig's is below 5 % of its
+  baseline);
+* the **ordering** of each table (its ``claim``): "same ordering" or "different ordering" (the
+  per-table ordering verdict); Table 3.7: rig-specific PSDs below the triangular PSD on all
+  seven channels, as in the text;
+* a procedure that failed: "not comparable".
 """
 
 from __future__ import annotations
@@ -43,6 +67,7 @@ import argparse
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import NamedTuple
 
 import numpy as np
 
@@ -51,8 +76,11 @@ from vrig.files import atomic_write
 __all__ = [
     "NORMAL_TABLES",
     "TABLES",
+    "TableRun",
     "belgian_road_example",
     "calibrated_row",
+    "closing_table",
+    "figure_verdict",
     "gain_verdicts",
     "normal_records",
     "resolve_variant",
@@ -840,11 +868,18 @@ def run_table(
     return values
 
 
-def _verdict(table: Table, values) -> str:
+def _ordering(table: Table, values) -> bool | None:
+    """Does vrig give the text's ordering (``table.verdict``)? ``None``: a procedure failed."""
     n = len(table.verdict_rows())
     if any(isinstance(v, str) for v in values[:n]):
+        return None
+    return bool(eval(table.verdict, {}, {"v": values}))  # expressions: module constants above
+
+
+def _verdict(table: Table, values) -> str:
+    ok = _ordering(table, values)
+    if ok is None:
         return "not comparable (a procedure failed)"
-    ok = eval(table.verdict, {}, {"v": values})  # expressions are module constants above
     return f"{'same ordering as' if ok else 'different ordering from'} the text ({table.claim})"
 
 
@@ -891,29 +926,38 @@ def gain_verdicts(table: Table, values, baseline: int) -> list[str]:
     only lands within ±25 % of the text's): "as the text's" within ±25 % relative of it,
     else larger or smaller; "none" where vrig's row is not below its baseline."""
     out = []
-    base_v, base_t = values[baseline], table.rows[baseline].thesis
+    for i, k, t_base, t_row in _gain_pairs(table, baseline):
+        text_gain = t_base - t_row
+        head = f"{table.rows[i].label}, {table.channels[k]}: "
+        text = f"the text's {text_gain:g} pts ({text_gain / t_base:.0%} of {t_base:g} %)"
+        if isinstance(values[i], str) or isinstance(values[baseline], str):
+            out.append(head + f"not comparable (a procedure failed) vs {text}")
+            continue
+        b, r = values[baseline][k], values[i][k]
+        gain, frac = b - r, (b - r) / b
+        out.append(
+            head
+            + f"gain {gain:.1f} pts ({frac:.0%} of {b:.1f} %) vs {text} -> "
+            + _gain_size(frac, text_gain / t_base)
+        )
+    return out
+
+
+def _text_figure(row, k: int):
+    """The text's figure of ``row`` on channel ``k`` (``None``: the text gives none)."""
+    return row.thesis[k] if k < len(row.thesis) else None
+
+
+def _gain_pairs(table, baseline: int):
+    """``(row, channel, text baseline, text figure)`` indices and figures of every text-reported
+    row other than ``baseline`` and channel the text gives a figure for in both rows."""
     for i, row in enumerate(table.verdict_rows()):
         if i == baseline:
             continue
-        for k, c in enumerate(table.channels):
-            t_base = base_t[k] if k < len(base_t) else None
-            t_row = row.thesis[k] if k < len(row.thesis) else None
-            if t_base is None or t_row is None:
-                continue
-            text_gain = t_base - t_row
-            head = f"{row.label}, {c}: "
-            text = f"the text's {text_gain:g} pts ({text_gain / t_base:.0%} of {t_base:g} %)"
-            if isinstance(values[i], str) or isinstance(base_v, str):
-                out.append(head + f"not comparable (a procedure failed) vs {text}")
-                continue
-            b, r = base_v[k], values[i][k]
-            gain, frac = b - r, (b - r) / b
-            out.append(
-                head
-                + f"gain {gain:.1f} pts ({frac:.0%} of {b:.1f} %) vs {text} -> "
-                + _gain_size(frac, text_gain / t_base)
-            )
-    return out
+        for k in range(len(table.channels)):
+            t_base, t_row = _text_figure(table.rows[baseline], k), _text_figure(row, k)
+            if t_base is not None and t_row is not None:
+                yield i, k, t_base, t_row
 
 
 def _gain_size(frac: float, text_frac: float) -> str:
@@ -924,9 +968,62 @@ def _gain_size(frac: float, text_frac: float) -> str:
     ratio = frac / text_frac
     if ratio <= 0:
         return "none (not below the baseline)" if text_frac > 0 else "opposite to the text's"
-    if abs(ratio - 1) <= GAIN_TOLERANCE:
+    if _gain_holds(ratio):
         return "as the text's"
     return f"{'larger' if ratio > 1 else 'smaller'} ({ratio:.2f} x the text's)"
+
+
+def _gain_holds(ratio: float) -> bool:
+    """A gain ``ratio`` x the text's (relative gains) is the text's within :data:`GAIN_TOLERANCE`."""
+    return abs(ratio - 1) <= GAIN_TOLERANCE
+
+
+def figure_verdict(text: float, vrig, *, text_base: float | None = None, vrig_base=None) -> str:
+    """The closing table's verdict on one figure (the rule in the module documentation).
+
+    Parameters
+    ----------
+    text : float
+        The text's figure [%] (η0 of the row on one channel).
+    vrig : float or str
+        vrig's figure [%] for the same row and channel; a string: the procedure failed (why).
+    text_base, vrig_base : float or str, optional
+        The text's and vrig's figures [%] of the table's linear baseline row on the same
+        channel. Given, the figure is a predicted row judged on its gain over that baseline
+        (each gain a fraction of its own baseline, as :func:`gain_verdicts`); omitted, the
+        figure itself is judged (the calibrated row).
+
+    Returns
+    -------
+    str
+        ``"within ±25 %"`` or ``"outside (×r)"`` (``r`` = vrig / text) for a figure;
+        ``"holds"`` or ``"misses (×r)"`` (``r`` = vrig's relative gain / the text's) for a gain;
+        ``"not comparable (failed)"`` where vrig's procedure failed.
+
+    Raises
+    ------
+    ValueError
+        If only one of ``text_base`` and ``vrig_base`` is given, or a text figure is not
+        positive.
+    """
+    from benchmarks.calibrate import TOLERANCE
+
+    if (text_base is None) != (vrig_base is None):
+        raise ValueError("give both text_base and vrig_base (a gain) or neither (a figure)")
+    if not text > 0 or (text_base is not None and not text_base > 0):
+        raise ValueError(f"the text's figures must be > 0 %, got {text!r} and {text_base!r}")
+    if isinstance(vrig, str) or isinstance(vrig_base, str):
+        return "not comparable (failed)"
+    if text_base is None:
+        within = text * (1 - TOLERANCE) <= vrig <= text * (1 + TOLERANCE)
+        return f"within ±{100 * TOLERANCE:g} %" if within else f"outside (×{vrig / text:.2f})"
+    if not vrig_base > 0:
+        return "not comparable (vrig's baseline is 0 %)"
+    frac, text_frac = (vrig_base - vrig) / vrig_base, (text_base - text) / text_base
+    if text_frac == 0:
+        return "holds" if abs(frac) < 0.05 else "misses (the text has no gain)"
+    ratio = frac / text_frac
+    return "holds" if _gain_holds(ratio) else f"misses (×{ratio:.2f})"
 
 
 def _baseline(table: Table) -> int:
@@ -940,8 +1037,18 @@ def _fmt(v, k) -> str:
     return f"{v[k]:.1f}"
 
 
+class TableRun(NamedTuple):
+    """One run of a :class:`Table`: a column of its report."""
+
+    name: str  # the column's name: "variant, target"
+    setting: str  # the variant (and severity) in words, with the target
+    values: list  # per row: per-channel η0 [%], or why the procedure failed (a string)
+    variant: str  # the calibrated verdict's variant ("thesis on field:..." on a field target)
+    target: str  # the desired response's kind (vrig.field.desired_response)
+
+
 def _markdown(table: Table, runs) -> str:
-    """``runs``: a list of (column name, setting text, values, variant), one per variant run."""
+    """``runs``: a list of :class:`TableRun`, one per variant and target."""
     chans = table.channels
     cal_i = calibrated_row(table)
     head = "| procedure | role | "
@@ -968,7 +1075,7 @@ def _markdown(table: Table, runs) -> str:
         lines.append(f"| {row.label} | {role} | " + " | ".join(cells) + " |")
     lines.append("")
     base = _baseline(table)
-    for name, _text, values, variant in runs:
+    for name, _text, values, variant, _target in runs:
         tag = f"vrig({name})"
         lines.append(f"**Calibrated, {tag}:** {calibrated_verdict(table, values, variant)}  ")
         lines.append(f"**Predicted ordering, {tag}:** {_verdict(table, values)}  ")
@@ -1089,8 +1196,7 @@ def _markdown_3_7(names, out, setting: str = "its default variant") -> str:
     for i, name in enumerate(names):
         a, b, c, d = (col[i] for col in cols)
         lines.append(f"| {name} | {a:.1f} | {b:.1f} | {THESIS_3_7[i]} | {c:.1f} | {d:.1f} |")
-    inv_better = int(np.sum(np.array(cols[1]) < np.array(cols[0])))
-    fwd_better = int(np.sum(np.array(cols[3]) < np.array(cols[2])))
+    inv_better, fwd_better = _rig_specific_better(out), _rig_specific_better(out, " normal")
     useless = np.min(cols[:2]) >= 100
     verdict = (
         f"rig-specific PSDs give the lower inverse modelling error on {inv_better} of 7 "
@@ -1104,6 +1210,18 @@ def _markdown_3_7(names, out, setting: str = "its default variant") -> str:
             "signature, so no inverse reproduces it and the comparison is not meaningful"
         )
     return "\n".join([*lines, "", f"**Verdict:** {verdict}", ""])
+
+
+_3_7_KEYS = ("triangular", "rig-specific (Alg. 3.1)")  # table_3_7's results, inverse models
+
+
+def _rig_specific_better(out: dict, suffix: str = "") -> int | None:
+    """On how many channels the rig-specific PSD gives the lower modelling error than the
+    triangular one (``suffix`` ``" normal"``: the normal models); ``None``: a model failed."""
+    tri, spec = (out.get(k + suffix) for k in _3_7_KEYS)
+    if tri is None or spec is None or isinstance(tri, str) or isinstance(spec, str):
+        return None
+    return int(np.sum(np.asarray(spec) < np.asarray(tri)))
 
 
 def belgian_road_example(
@@ -1153,6 +1271,119 @@ def belgian_road_example(
     )
 
 
+_ORDERING = {None: "not comparable", True: "same ordering", False: "different ordering"}
+
+
+def _cell(v) -> str:
+    """vrig's figure [%] in the closing table, or the failure's kind."""
+    return f"failed ({v.split(':')[0]})" if isinstance(v, str) else f"{v:.1f}"
+
+
+def _channel_value(values, i: int, k: int):
+    """Row ``i``'s figure on channel ``k`` (the failure string for a failed row)."""
+    return values[i] if isinstance(values[i], str) else values[i][k]
+
+
+def _closing_rows(table: Table, run: TableRun) -> list[tuple]:
+    """The closing table's rows of one table run: (table, row, run, text, vrig, role, verdict)
+    per figure the text reports, then the table's ordering."""
+    short = table.name.split(":")[0].removeprefix("Table ")
+    cal_i, base = calibrated_row(table), _baseline(table)
+    out = []
+    for i, row in enumerate(table.verdict_rows()):
+        for k, channel in enumerate(table.channels):
+            t, v = _text_figure(row, k), _channel_value(run.values, i, k)
+            if t is None:
+                continue
+            label = row.label if len(table.channels) == 1 else f"{row.label}, {channel}"
+            t_base = _text_figure(table.rows[base], k)
+            if i == base or t_base is None:  # the figure itself
+                if i == cal_i:
+                    role = "calibrated on" if run.variant == CALIBRATED_VARIANT else (
+                        "calibrated row (comparison)"
+                    )  # fmt: skip
+                else:
+                    role = "prediction (baseline)" if i == base else "prediction (figure)"
+                cells = (f"{t:g}", _cell(v), role, figure_verdict(t, v))
+            else:  # a predicted row: its gain over the baseline row
+                vb = _channel_value(run.values, base, k)
+                gain = "" if isinstance(v, str) or isinstance(vb, str) else (
+                    f" (gain {vb - v:.1f} of {vb:.1f})"
+                )  # fmt: skip
+                cells = (
+                    f"{t:g} (gain {t_base - t:g} of {t_base:g})",
+                    _cell(v) + gain,
+                    "prediction",
+                    figure_verdict(t, v, text_base=t_base, vrig_base=vb),
+                )
+            out.append((short, label, run.name, *cells))
+    ordering = _ORDERING[_ordering(table, run.values)]
+    out.append((short, f"ordering: {table.claim}", run.name, "-", "-", "prediction", ordering))
+    return out
+
+
+def _closing_rows_3_7(names, out: dict, variant: str) -> list[tuple]:
+    """Table 3.7's closing rows: each channel's inverse modelling error with the rig-specific
+    PSD against the text's, then the ordering (rig-specific below triangular everywhere)."""
+    if not names:
+        return []
+    run = f"{variant}, held-out identification record"
+    spec = out.get(_3_7_KEYS[1], "no result")
+    rows = [
+        ("3.7", f"inverse ARX(4), rig-specific PSD, {name}", run, f"{THESIS_3_7[i]:g}",
+         _cell(_channel_value([spec], 0, i)), "prediction (figure)",
+         figure_verdict(THESIS_3_7[i], _channel_value([spec], 0, i)))
+        for i, name in enumerate(names)
+    ]  # fmt: skip
+    better = _rig_specific_better(out)
+    ordering = _ORDERING[None if better is None else better == len(names)]
+    if better is not None and better != len(names):
+        ordering += f" ({better} of {len(names)} channels)"
+    claim = "ordering: rig-specific PSD below triangular on every channel (inverse)"
+    return [*rows, ("3.7", claim, run, "-", "-", "prediction", ordering)]
+
+
+def closing_table(table_runs, runs_3_7=()) -> str:
+    """The report's closing table "text vs vrig" (markdown): one row per figure the text
+    reports in the tables of ``table_runs`` and in Table 3.7, per run, with its verdict
+    (:func:`figure_verdict`; the rule in the module documentation), and a count per verdict.
+
+    Parameters
+    ----------
+    table_runs : sequence of (Table, list of TableRun)
+        Each table with its runs (one per variant and target kind).
+    runs_3_7 : sequence of (str, list, dict)
+        Table 3.7's runs: (variant, channel names, :func:`table_3_7`'s results).
+
+    Returns
+    -------
+    str
+        The markdown section.
+    """
+    rows = [r for table, runs in table_runs for run in runs for r in _closing_rows(table, run)]
+    rows += [r for variant, names, out in runs_3_7 for r in _closing_rows_3_7(names, out, variant)]
+    lines = [
+        "### Text vs vrig: the closing verdicts",
+        "",
+        "One row per figure the text reports (η0 [%]). Calibrated row: within ±25 % of the "
+        "text's figure or not (`r` = vrig / text). Predicted row: its gain over the table's "
+        "linear baseline row (points, of that baseline) against the text's gain, each as a "
+        "fraction of its own baseline: holds within ±25 % of the text's, else misses (`r` = "
+        "vrig's relative gain / the text's). Ordering: the table's ordering verdict.",
+        "",
+        "| table | row (method/model) | run (variant, target kind) | text [%] | vrig [%] | role "
+        "| verdict |",
+        "|---|---|---|---|---|---|---|",
+        *("| " + " | ".join(r) + " |" for r in rows),
+        "",
+    ]
+    counts: dict = {}
+    for r in rows:
+        counts[r[6].split(" (")[0]] = counts.get(r[6].split(" (")[0], 0) + 1
+    lines.append("verdicts: " + ", ".join(f"{n} {v}" for v, n in counts.items()))
+    return "\n".join([*lines, ""])
+
+
 def report_name(variants=None, severity: float | None = None) -> str:
     """The report's file name: ``thesis_reproduction.md`` on the rigs' defaults, else tagged
     with the variants and severity it ran on (so a variant run never overwrites the default's)."""
@@ -1183,7 +1414,7 @@ def _check_variants(variants) -> list:
 def _table_runs(table, requested, severity, seconds, id_seconds, cache, log) -> list:
     """The table run once per requested variant and per target: the text's kind of target
     first, then the pseudo-field record beside it (once, where the text's kind is pseudo-field);
-    a list of (column name, setting text, values, variant) for :func:`_markdown`."""
+    a list of :class:`TableRun` for :func:`_markdown`."""
     done: dict = {}  # (setting, target) -> values: a variant the rig lacks runs its default once
     runs = []
     for req in requested:
@@ -1198,7 +1429,7 @@ def _table_runs(table, requested, severity, seconds, id_seconds, cache, log) -> 
             name = f"{req or setting[0]}, {target}"
             text = f"{_setting_text(setting, req)} with a {target} desired response"
             variant = setting[0] if target == "pseudo-field" else f"{setting[0]} on {target}"
-            runs.append((name, text, done[setting, target], variant))
+            runs.append(TableRun(name, text, done[setting, target], variant, target))
     return runs
 
 
@@ -1241,9 +1472,11 @@ def thesis_report(
         "",
     ]
     cache: dict = {}
+    table_runs, runs_3_7 = [], []
     for table in TABLES:
-        parts.append(_markdown(table, _table_runs(table, requested, severity, seconds, id_seconds,
-                                                  cache, log)))  # fmt: skip
+        runs = _table_runs(table, requested, severity, seconds, id_seconds, cache, log)
+        table_runs.append((table, runs))
+        parts.append(_markdown(table, runs))
     parts += normal_report(requested, severity, seconds=id_seconds, log=log)
     settings_7 = {}
     for req in requested:
@@ -1252,9 +1485,11 @@ def thesis_report(
         text = _setting_text((variant, None), req)
         log(f"Table 3.7: seven-channel fuel tank [{text}]")
         names, out = table_3_7(seconds=id_seconds, variant=variant, log=log)
+        runs_3_7.append((variant, names, out))
         parts.append(_markdown_3_7(names, out, text))
         log(f"Belgian road on the seven-channel fuel tank [{text}]")
         parts.append(belgian_road_example(seconds=seconds, variant=variant, log=log))
+    parts.append(closing_table(table_runs, runs_3_7))
     parts.append(f"_wall time {time.perf_counter() - t0:.0f} s_\n")
     text = "\n".join(parts)
     with atomic_write(out_dir / report_name(variants, severity), "w", encoding="utf-8") as f:
