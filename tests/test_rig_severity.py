@@ -173,7 +173,7 @@ def test_motorcycle_severity_zero_bonds_the_tyre_and_symmetrises_the_damping():
     raw = json.loads(rig_path("motorcycle-rear").read_text())["parameters"]
     k = raw["tyre_stiffness"]["value"]
     cc, cr = raw["compression_damping"]["value"], raw["rebound_damping"]["value"]
-    zero = vrig.load_rig("motorcycle-rear", severity=0)
+    zero = vrig.load_rig("motorcycle-rear", variant="mild", severity=0)  # the bilinear actuators
     m = zero.model
     push, pull = m.tendon("tyre").id, m.tendon("tyre_tension").id
     assert m.tendon_stiffness[push] == m.tendon_stiffness[pull] == pytest.approx(k)
@@ -189,6 +189,27 @@ def test_motorcycle_severity_zero_bonds_the_tyre_and_symmetrises_the_damping():
         (mean - 2 * half, mean + 2 * half)
     )
     assert two["tyre_tension_stiffness"] == 0  # kept at its minimum, not negative
+
+
+def test_motorcycle_severity_scales_the_default_dampers_blow_off():
+    """The default (digressive) damper: s = 0 takes the knee away (blow-off ratios 1: one slope
+    per stroke, the mean bleed both ways), s = 2 doubles the blow-off's departure from 1, kept at
+    the documented minimum; knees and the series compliance (linear) are not scaled."""
+    raw = json.loads(rig_path("motorcycle-rear").read_text())
+    variant = raw["variants"][raw["default_variant"]]["parameters"]
+    floor = raw["parameters"]["blowoff_ratio_rebound"]["minimum"]
+    for key in ("blowoff_ratio_compression", "blowoff_ratio_rebound"):
+        assert variant[key] < 1.0  # the default is digressive
+        assert vrig.load_rig("motorcycle-rear", severity=0).parameters[key] == 1.0
+        assert vrig.load_rig("motorcycle-rear", severity=0.5).parameters[key] == pytest.approx(
+            1.0 + 0.5 * (variant[key] - 1.0)
+        )
+        two = vrig.load_rig("motorcycle-rear", severity=2).parameters
+        assert two[key] == pytest.approx(max(floor, 1.0 + 2.0 * (variant[key] - 1.0)))
+    zero = vrig.load_rig("motorcycle-rear", severity=0)
+    assert zero.parameters["series_stiffness"] == variant["series_stiffness"]
+    assert zero.parameters["knee_velocity_rebound"] == variant["knee_velocity_rebound"]
+    assert not any(zero.model.actuator(i).name.endswith("_bleed") for i in range(zero.model.nu))
 
 
 def test_arx_inverse_of_the_linearised_damper_is_as_good_as_the_frf_inverse():
