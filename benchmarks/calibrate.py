@@ -229,6 +229,14 @@ CALIBRATIONS = {
         "table": "Table 3.2",
         "target": None,
         "band": (0.0, 30.0),
+        # the monoshock's valve law (the variant digressive, datasheet-typical, not calibrated)
+        "physics": {
+            "knee_velocity_compression": 0.1,
+            "knee_velocity_rebound": 0.1,
+            "blowoff_ratio_compression": 0.35,
+            "blowoff_ratio_rebound": 0.35,
+            "series_stiffness": 1.4e7,
+        },
         "repeatability": {
             "parameter": "control_noise",  # the controller's 1/f noise [m rms]
             "grid": [7e-5, 1.4e-4, 2.8e-4],  # 0.1-0.4 % of the 70 mm full scale

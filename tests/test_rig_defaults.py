@@ -84,9 +84,9 @@ def test_the_shipped_side_cars_name_the_documented_defaults():
         "elastomeric-damper": 0.91,
         "shaker": 0.5,
         "radiator": 3.0,
-        "light-truck-front": 4.1,
-        "motorcycle-rear": 6.4,
-        "pneumatic-trailer": 6.8,
+        "light-truck-front": 4.6,  # issue 23: measured on the digressive damper (4.1 on mild)
+        "motorcycle-rear": 7.6,  # (6.4 on mild)
+        "pneumatic-trailer": 38.0,  # (6.8 on mild: frf converges slowly on the digressive shock)
         "fuel-tank-2ch": 22.0,
         "fuel-tank-7ch": 14.0,
     }

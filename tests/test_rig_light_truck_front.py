@@ -13,6 +13,7 @@ import pytest
 from scipy.optimize import brentq
 
 import vrig
+from vrig.rigs import damper
 
 NAME = "light-truck-front"
 G = 9.81
@@ -144,12 +145,18 @@ def rig():
     return vrig.load_rig(NAME)
 
 
-def _static(model, ctrl, seconds=2.5):
-    """Sensor readings after ``seconds`` under constant wheel forces (settled: the corner mode is
-    damped at zeta ~ 0.7)."""
+def _static(rig, ctrl, seconds=2.5):
+    """Sensor readings of ``rig`` after ``seconds`` under constant wheel forces (settled: the
+    corner mode is damped at zeta ~ 0.7), vrig's damper callback registered (the default
+    damper's series-compliance node: it carries no static load once settled)."""
+    model = rig.model
     data = mujoco.MjData(model)
-    data.ctrl[:] = ctrl
-    mujoco.mj_step(model, data, nstep=round(seconds / model.opt.timestep))
+    data.ctrl[: len(ctrl)] = ctrl  # the six wheel forces; the damper's actuator takes none
+    damper.install(model, data, rig._damper_bound)
+    try:
+        mujoco.mj_step(model, data, nstep=round(seconds / model.opt.timestep))
+    finally:
+        damper.uninstall(data)
     assert not data.warning.number.any()
     return {
         s: data.sensor(s).data.copy()
@@ -184,11 +191,11 @@ def test_readme_derivation_is_the_documented_one():
 
 
 def test_wheel_rate_within_5_percent_of_the_derivation(rig):
-    base = _static(rig.model, _fz(0.0))
+    base = _static(rig, _fz(0.0))
     assert base["wheel_centre"][2] == pytest.approx(0.0, abs=0.002)  # rides at the design pose
     rates = []
     for df in (-300.0, 300.0):
-        dz = _static(rig.model, _fz(df))["wheel_centre"][2] - base["wheel_centre"][2]
+        dz = _static(rig, _fz(df))["wheel_centre"][2] - base["wheel_centre"][2]
         rates.append(df / dz)
     assert np.mean(rates) == pytest.approx(_wheel_rate(), rel=0.05)
 
@@ -225,10 +232,10 @@ def test_ride_frequency_within_5_percent_of_the_derivation(rig):
 def test_ball_joint_force_against_vertical_load_is_geometrically_non_linear(rig):
     # quasi-static vertical loads about the static one; the documented travel ends before the
     # bumper (+64 mm) and the rebound stop (-79 mm): the non-linearity is the arms' geometry
-    base = _static(rig.model, _fz(0.0))
+    base = _static(rig, _fz(0.0))
     secant = {}
     for df in (-3500.0, -300.0, 300.0, 2600.0):
-        s = _static(rig.model, _fz(df))
+        s = _static(rig, _fz(df))
         dz = s["wheel_centre"][2] - base["wheel_centre"][2]
         assert TRAVEL[0] - 0.005 < dz < TRAVEL[1] + 0.005
         # neither end stop touched: the coil-over stays between the stops' engagement lengths
@@ -242,8 +249,8 @@ def test_ball_joint_force_against_vertical_load_is_geometrically_non_linear(rig)
 
 
 def test_lateral_load_moves_the_vertical_bushing_forces(rig):
-    base = _static(rig.model, np.zeros(6))
+    base = _static(rig, np.zeros(6))
     fy = 3000.0
-    s = _static(rig.model, np.array([0.0, fy, 0.0, 0.0, 0.0, 0.0]))
+    s = _static(rig, np.array([0.0, fy, 0.0, 0.0, 0.0, 0.0]))
     for k in ("ucaf_force", "ucar_force", "lcaf_force", "lcar_force"):
         assert abs(s[k][2] - base[k][2]) > 0.01 * fy, k  # cross-coupling (jacking, arm angles)

@@ -193,10 +193,13 @@ def test_pressure_to_strain_superposition_holds_below_the_bump_buffer(rig):
     assert dbl < 1.1 * floor + 0.01
 
 
-def test_pressure_to_strain_superposition_fails_on_the_bump_buffer(rig):
+def test_pressure_to_strain_superposition_fails_on_the_bump_buffer():
     # 14 mm rms: -a stays off the buffer and within the floor; at 2a (28 mm rms) the spring
     # reaches its buffer (load in the arm the pressure does not see) and its rebound strap:
-    # the linear relation fitted at a misses by more than a quarter of the floor again
+    # the linear relation fitted at a misses by more than a quarter of the floor again. On the
+    # bilinear shock (variant mild): the default's digressive shock lets the wheel travel grow,
+    # and its 2a run at 14 mm trips the pan's 100 kN force interlock (README "Dynamic features")
+    rig = vrig.load_rig("pneumatic-trailer", seed=0, variant="mild")
     floor, neg, dbl, p_max = _superposition(rig, 0.014)
     assert p_max > P_BUFFER
     assert neg < 1.1 * floor + 0.01

@@ -131,11 +131,11 @@ def test_side_car_severity_must_scale_documented_numeric_parameters(tmp_path):
 _CACHE: dict = {}
 
 
-def _eta(name, severity, method="arx"):
+def _eta(name, severity, method="arx", variant=None):
     """IT00 η0 [%] of the text's procedure (quick settings of benchmarks.calibrate) on the
-    calibrated twin (where there is one) at ``severity``: the mean over the channels the text
-    reports."""
-    key = (name, severity, method)
+    calibrated twin (where there is one; else ``variant``, None: the default) at ``severity``:
+    the mean over the channels the text reports."""
+    key = (name, severity, method, variant)
     if key not in _CACHE:
         from benchmarks import calibrate
         from vrig.reconstruction import InverseNarx
@@ -143,7 +143,8 @@ def _eta(name, severity, method="arx"):
         cal = calibrate.CALIBRATIONS.get(name)
         if cal is None or cal["target"] is None:  # no linear baseline (motorcycle: Table 3.2 only)
             cal = MOTORCYCLE
-        variant = "thesis" if name in calibrate.CALIBRATIONS else None
+        if variant is None:
+            variant = "thesis" if name in calibrate.CALIBRATIONS else None
         rig = vrig.load_rig(name, seed=0, variant=variant, severity=severity)
         if method == "arx":
             m = calibrate._arx(cal)
@@ -162,9 +163,23 @@ def test_linearised_twin_gives_a_narx_nothing_to_win(name):
     assert abs(narx - arx) <= 0.10 * arx, (arx, narx)
 
 
-@pytest.mark.parametrize("name", NONLINEAR)
-def test_linear_error_grows_with_severity(name):
-    e = [_eta(name, s) for s in (0.0, 1.0, 2.0)]
+GROWTH_CASES = [
+    *(pytest.param(n, None, id=n) for n in NONLINEAR if n != "motorcycle-rear"),
+    pytest.param("motorcycle-rear", "mild", id="motorcycle-rear-mild"),
+    # a finding (issue 23), not hidden: on the default digressive damper the mean IT00 error
+    # peaks at s = 1 (24.5, 58.4, 51.3 % at s = 0, 1, 2; README "Severity axis"): doubling the
+    # bleed asymmetry leaves 800 N s/m in compression and the blow-off at its 0.05 floor
+    pytest.param(
+        "motorcycle-rear", None, id="motorcycle-rear-digressive",
+        marks=pytest.mark.xfail(strict=True, reason="the digressive motorcycle's linear error "
+                                "peaks at s = 1 (README 'Severity axis')"),
+    ),
+]  # fmt: skip
+
+
+@pytest.mark.parametrize("name, variant", GROWTH_CASES)
+def test_linear_error_grows_with_severity(name, variant):
+    e = [_eta(name, s, variant=variant) for s in (0.0, 1.0, 2.0)]
     assert e[0] < e[1] < e[2], e
 
 
@@ -175,7 +190,7 @@ def test_motorcycle_severity_zero_bonds_the_tyre_and_symmetrises_the_damping():
     raw = json.loads(rig_path("motorcycle-rear").read_text())["parameters"]
     k = raw["tyre_stiffness"]["value"]
     cc, cr = raw["compression_damping"]["value"], raw["rebound_damping"]["value"]
-    zero = vrig.load_rig("motorcycle-rear", severity=0)
+    zero = vrig.load_rig("motorcycle-rear", variant="mild", severity=0)  # the bilinear actuators
     m = zero.model
     push, pull = m.tendon("tyre").id, m.tendon("tyre_tension").id
     assert m.tendon_stiffness[push] == m.tendon_stiffness[pull] == pytest.approx(k)
@@ -191,6 +206,27 @@ def test_motorcycle_severity_zero_bonds_the_tyre_and_symmetrises_the_damping():
         (mean - 2 * half, mean + 2 * half)
     )
     assert two["tyre_tension_stiffness"] == 0  # kept at its minimum, not negative
+
+
+def test_motorcycle_severity_scales_the_default_dampers_blow_off():
+    """The default (digressive) damper: s = 0 takes the knee away (blow-off ratios 1: one slope
+    per stroke, the mean bleed both ways), s = 2 doubles the blow-off's departure from 1, kept at
+    the documented minimum; knees and the series compliance (linear) are not scaled."""
+    raw = json.loads(rig_path("motorcycle-rear").read_text())
+    variant = raw["variants"][raw["default_variant"]]["parameters"]
+    floor = raw["parameters"]["blowoff_ratio_rebound"]["minimum"]
+    for key in ("blowoff_ratio_compression", "blowoff_ratio_rebound"):
+        assert variant[key] < 1.0  # the default is digressive
+        assert vrig.load_rig("motorcycle-rear", severity=0).parameters[key] == 1.0
+        assert vrig.load_rig("motorcycle-rear", severity=0.5).parameters[key] == pytest.approx(
+            1.0 + 0.5 * (variant[key] - 1.0)
+        )
+        two = vrig.load_rig("motorcycle-rear", severity=2).parameters
+        assert two[key] == pytest.approx(max(floor, 1.0 + 2.0 * (variant[key] - 1.0)))
+    zero = vrig.load_rig("motorcycle-rear", severity=0)
+    assert zero.parameters["series_stiffness"] == variant["series_stiffness"]
+    assert zero.parameters["knee_velocity_rebound"] == variant["knee_velocity_rebound"]
+    assert not any(zero.model.actuator(i).name.endswith("_bleed") for i in range(zero.model.nu))
 
 
 def test_arx_inverse_of_the_linearised_damper_is_as_good_as_the_frf_inverse():
