@@ -134,7 +134,7 @@ def test_the_chain_checks_its_fields():
     assert branch.damping == pytest.approx(1e5 * 0.01)
 
 
-# --- the elastomeric damper: defaults unchanged, the rate-dependent variant ------------------
+# --- the elastomeric damper: mild unchanged, the chain in thesis (issue 23) -------------------
 def _side_car(tmp_path, *, chain: bool, diagnostic: bool = False):
     """The shipped side-car (absolute MJCF path), without its Maxwell chain and parameters
     (``chain=False``: the side-car as it was before the element), with the mount's compression
@@ -142,7 +142,8 @@ def _side_car(tmp_path, *, chain: bool, diagnostic: bool = False):
     d = json.loads(SIDE_CAR.read_text())
     d["mjcf"] = str((SIDE_CAR.parent / d["mjcf"]).resolve())
     if not chain:
-        del d["maxwell"], d["variants"]["rate-dependent"]
+        del d["maxwell"], d["variants"]["thesis"]  # thesis carries the chain (issue 23)
+        d["default_variant"] = "mild"
         for k in [k for k in d["parameters"] if k.startswith("maxwell_")]:
             del d["parameters"][k]
     if diagnostic:
@@ -154,7 +155,7 @@ def _side_car(tmp_path, *, chain: bool, diagnostic: bool = False):
     return path
 
 
-@pytest.mark.parametrize("variant", ["mild", "thesis"])
+@pytest.mark.parametrize("variant", ["mild"])  # thesis carries the chain since issue 23
 def test_the_existing_variants_are_unchanged_bit_for_bit(tmp_path, variant):
     rig = vrig.load_rig("elastomeric-damper", variant=variant, seed=0)
     before = vrig.load_rig(_side_car(tmp_path, chain=False), variant=variant, seed=0)
@@ -165,17 +166,15 @@ def test_the_existing_variants_are_unchanged_bit_for_bit(tmp_path, variant):
     assert np.array_equal(rig.run(x, seed=0).data, before.run(x, seed=0).data)
 
 
-def test_the_rate_dependent_variant_is_thesis_plus_the_chain():
-    desc = vrig.load_rig("elastomeric-damper").description
-    rd, thesis = desc.variants["rate-dependent"].values, desc.variants["thesis"].values
-    assert {k: v for k, v in rd.items() if not k.startswith("maxwell_")} == thesis
-    rig = vrig.load_rig("elastomeric-damper", variant="rate-dependent")
+def test_the_thesis_variant_carries_the_chain():
+    rig = vrig.load_rig("elastomeric-damper", variant="thesis")
+    assert all(rig.parameters[f"maxwell_stiffness_{i}"] > 0 for i in (1, 2, 3))
     names = [rig.model.actuator(i).name for i in range(rig.model.nu)]
     assert [n for n in names if n.startswith("rubber_")] == [
         "rubber_1_compliance", "rubber_2_compliance", "rubber_3_compliance",
     ]  # fmt: skip
     assert rig.model.na == 3
-    one = vrig.load_rig("elastomeric-damper", maxwell_stiffness_2=1e5)
+    one = vrig.load_rig("elastomeric-damper", variant="mild", maxwell_stiffness_2=1e5)
     assert one.model.na == 1 and one.model.actuator("rubber_2_compliance").gainprm[0] == 1e5
 
 
@@ -200,28 +199,28 @@ def _documented(name, variant):
 
 def test_dynamic_stiffness_rises_with_frequency_as_documented(tmp_path):
     """Sine runs at 1, 5, 20 Hz, 0.05 mm (below the first Iwan slip): the thesis mount is the
-    static 1 kN/mm with its viscous loss, the rate-dependent one adds the chain and stiffens
-    within the documented 1.2-1.6 x of static over 5-30 Hz."""
+    static 1 kN/mm with its viscous loss (mild: no chain), the thesis one adds the chain and
+    stiffens within the documented 1.2-1.6 x of static over 5-30 Hz."""
     path = _side_car(tmp_path, chain=True, diagnostic=True)
     quiet = dict(valve_noise=0.0, load_noise=0.0, seed=0)
     freqs = (1.0, 5.0, 20.0)
     static = _documented("linear_stiffness", "thesis") + 4 * _documented("iwan_stiffness", "thesis")
     c = _documented("viscous_damping", "thesis")
-    ks = [_documented(f"maxwell_stiffness_{i}", "rate-dependent") for i in (1, 2, 3)]
+    ks = [_documented(f"maxwell_stiffness_{i}", "thesis") for i in (1, 2, 3)]
     taus = json.loads(SIDE_CAR.read_text())["maxwell"][0]["relaxation_time"]
     measured = {}
-    for variant in ("thesis", "rate-dependent"):
+    for variant in ("mild", "thesis"):
         rig = vrig.load_rig(path, variant=variant, **quiet)
         measured[variant] = np.array([abs(_rig_stiffness(rig, hz)) for hz in freqs])
     w = 2 * np.pi * np.array(freqs)
     base = static + 1j * w * c
     chain = sum(_branch_stiffness(k, tau, np.array(freqs)) for k, tau in zip(ks, taus, strict=True))
-    np.testing.assert_allclose(measured["thesis"], np.abs(base), rtol=0.03)
-    np.testing.assert_allclose(measured["rate-dependent"], np.abs(base + chain), rtol=0.03)
-    ratio = measured["rate-dependent"] / static
+    np.testing.assert_allclose(measured["mild"], np.abs(base), rtol=0.03)
+    np.testing.assert_allclose(measured["thesis"], np.abs(base + chain), rtol=0.03)
+    ratio = measured["thesis"] / static
     assert np.all(np.diff(ratio) > 0.05)  # rises with frequency
     assert np.all((ratio[1:] >= 1.2) & (ratio[1:] <= 1.6))  # 5 and 20 Hz: documented range
-    assert measured["thesis"][-1] / measured["thesis"][0] < 1.03  # no rate dependence before
+    assert measured["mild"][-1] / measured["mild"][0] < 1.03  # no rate dependence without it
 
 
 def test_a_chain_on_a_missing_joint_is_refused_once_it_has_a_branch(tmp_path):
@@ -230,6 +229,6 @@ def test_a_chain_on_a_missing_joint_is_refused_once_it_has_a_branch(tmp_path):
     d["maxwell"][0]["joint"] = "nope"
     path = tmp_path / "elastomeric-damper.rig.json"
     path.write_text(json.dumps(d))
-    assert vrig.load_rig(path, variant="thesis").model.na == 0  # no branch: nothing to place
+    assert vrig.load_rig(path, variant="mild").model.na == 0  # no branch: nothing to place
     with pytest.raises(vrig.RigModelError, match="no joint 'nope'"):
-        vrig.load_rig(path, variant="rate-dependent")
+        vrig.load_rig(path, variant="thesis")
