@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 
 import vrig
-from vrig.errors import RigParameterError
+from vrig.errors import ReconstructionError, RigParameterError
 from vrig.rigs import rig_path, severity_rigs
 
 NONLINEAR = ["elastomeric-damper", "motorcycle-rear", "radiator", "shock-absorber"]
@@ -151,7 +151,11 @@ def _eta(name, severity, method="arx", variant=None):
         else:  # contains the ARX: all linear lags; quadratic terms of the inputs if BIC admits
             kw = {"responses": cal["responses"]} if cal.get("responses") else {}
             m = InverseNarx(cal["arx_order"], 2, kind="input-polynomial", criterion="bic", **kw)
-        errors = calibrate._reconstruct(rig, cal, m)[0]
+        try:
+            errors = calibrate._reconstruct(rig, cal, m)[0]
+        except ReconstructionError:  # IT00's drive tripped an interlock: worse than any figure
+            _CACHE[key] = math.inf
+            return _CACHE[key]
         channels = calibrate._channels(cal, rig)
         _CACHE[key] = sum(errors[c] for c in channels) / len(channels)
     return _CACHE[key]
