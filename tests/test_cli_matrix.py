@@ -8,7 +8,8 @@ run once per session (one job: the box is shared) and judged twice:
   drive-limit stop before IT00 (exit ``FAILED_IT00`` with a trip) — a method that does badly is
   shown, not hidden;
 * issue 15's acceptance: no traceback, documented exit codes, and for a method the side-car does
-  not mark ``unsupported`` no trip and a kept iteration where no channel is worse than at IT00.
+  not mark ``unsupported`` no trip and a kept iteration where no channel is worse than at IT00
+  (exit 0 with a gain over IT00, or a divergence stop that keeps its best, IT00 at worst).
 
 A method the rig's side-car marks ``unsupported`` (the reference text reports it failing there)
 is not refused (issue 23): the command warns once and runs it.
@@ -106,8 +107,13 @@ def test_every_rig_and_method_runs_from_the_cli(matrix_rows):
             continue
         if r["trip"]:
             problems.append(f"{where}: an interlock trip or a drive beyond its limits ({r['stop']})")
-        if r["exit"] not in (0, cli.ExitCode.STOPPED_DIVERGED) or not r["best_mean"] < r["IT00"]:
-            # a divergence stop (documented code 5) keeps a best iteration better than IT00
+        diverged = r["exit"] == cli.ExitCode.STOPPED_DIVERGED
+        if not (r["exit"] == 0 and r["best_mean"] < r["IT00"]) and not (
+            diverged and r["best_mean"] <= r["IT00"]
+        ):
+            # a divergence stop (documented code 5) keeps its best iteration, IT00 at worst (the
+            # motorcycle's ARX on its valved damper: IT00 66 %, every correction worse, at any
+            # gain 0.2-0.4 — a method doing badly, shown, issue 23)
             problems.append(
                 f"{where}: exit {r['exit']}, IT00 {r['IT00']:.2f} %, best {r['best_mean']:.2f} % "
                 f"({r['stop']}; {r['message']})"
