@@ -37,8 +37,10 @@ def _thesis(name):
 
 
 def test_the_non_linear_rigs_have_a_severity_axis_and_the_linear_ones_refuse_it():
-    assert set(NONLINEAR) <= set(severity_rigs())
-    for name in ("fuel-tank-7ch", "fuel-tank-2ch", "shaker"):  # linear in their operating range
+    # fuel-tank-2ch since issue 23 (its progressive buffers and snubbers, tests/
+    # test_fuel_tank_split.py); not in NONLINEAR: on it the linear error falls with severity
+    assert set(NONLINEAR) | {"fuel-tank-2ch"} <= set(severity_rigs())
+    for name in ("fuel-tank-7ch", "shaker"):  # linear in their operating range
         assert name not in severity_rigs()
         with pytest.raises(RigParameterError, match="no severity axis") as exc:
             vrig.load_rig(name, severity=0.5)

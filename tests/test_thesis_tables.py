@@ -134,7 +134,8 @@ def test_severity_is_passed_to_the_severity_rigs_and_named_in_the_heading(tmp_pa
         tmp_path, True, log=lambda *_: None, variants=["thesis"], severity=1.5
     )
     assert ("shock-absorber", "thesis", 1.5) in calls
-    assert ("fuel-tank-2ch", "thesis", None) in calls  # a linear rig runs as loaded
+    assert ("fuel-tank-2ch", "thesis", 1.5) in calls  # a severity rig since issue 23
+    assert {s for name, _v, s, _lvl in calls.normal if name == "Table 6.7"} == {None}  # linear
     assert "variant 'thesis', severity 1.5" in text
     assert (tmp_path / "thesis_reproduction_thesis_s1.5.md").exists()
 
