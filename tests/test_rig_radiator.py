@@ -133,7 +133,7 @@ def test_documented_modes_follow_from_the_documented_parameters(variant):
 @pytest.fixture(scope="module")
 def wide_band_frfs():
     """H1 FRFs from a 0-225 Hz random drive (50 um rms), mount play taken up (linear mounts)."""
-    # the modes are measured here: without the controller's 1/f noise (57 um rms on `thesis`,
+    # the modes are measured here: without the controller's 1/f noise (62 um rms on `thesis`,
     # issue 23), which a 50 um rms drive would not stand out of below 40 Hz
     rig = vrig.load_rig("radiator", seed=0, control_noise=0.0, **NO_PLAY)
     fs = rig.fs
