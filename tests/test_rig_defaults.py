@@ -80,12 +80,12 @@ def test_the_shipped_side_cars_name_the_documented_defaults():
         if "gym" in d.get("reconstruction", {})
     }
     assert tolerances == {
-        "shock-absorber": 1.7,
-        "elastomeric-damper": 0.91,
+        "shock-absorber": 6.1,  # issue 23: the run-to-run variation (1.7 before)
+        "elastomeric-damper": 0.65,  # issue 23: the Maxwell chain in thesis
         "shaker": 0.5,
-        "radiator": 3.0,
+        "radiator": 5.6,  # issue 23: the controller noise
         "light-truck-front": 4.6,  # issue 23: measured on the digressive damper (4.1 on mild)
-        "motorcycle-rear": 7.6,  # (6.4 on mild)
+        "motorcycle-rear": 10.0,  # thesis: digressive + noise (7.6 without, 6.4 on mild)
         "pneumatic-trailer": 38.0,  # (6.8 on mild: frf converges slowly on the digressive shock)
         "fuel-tank-2ch": 8.5,  # issue 23: the two-observable thesis twin (22 before)
         "fuel-tank-7ch": 14.0,
