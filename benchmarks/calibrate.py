@@ -124,6 +124,21 @@ def _split(split_hz, order):
     return make
 
 
+def _controller_noise(full_scale: float) -> dict:
+    """The ``repeatability`` block of a rig whose run-to-run variation is the servo controller's
+    1/f command/feedback-path noise (``control_noise`` [m rms]): a grid over 0.1-0.4 % of the
+    drive's ``full_scale`` [m]; the text's table, band and numbers come from the side-car."""
+    return {
+        "parameter": "control_noise",
+        "grid": [f * full_scale for f in (1e-3, 2e-3, 4e-3)],
+        "quick_grid": [f * full_scale for f in (1e-3, 4e-3)],
+        "scaled": (),
+        "factors": [1.0],
+        "quick_factors": [1.0],
+        "what": "the controller's command/feedback-path noise (control_noise)",
+    }
+
+
 CALIBRATIONS = {
     "elastomeric-damper": {
         "table": "Table 6.3",
@@ -179,15 +194,7 @@ CALIBRATIONS = {
             "knee_velocity_rebound": 0.15,
             "knee_velocity_compression": 0.15,
         },
-        "repeatability": {
-            "parameter": "control_noise",  # the controller's 1/f noise [m rms]
-            "grid": [5e-5, 1e-4, 2e-4],  # 0.1-0.4 % of the 50 mm full scale
-            "quick_grid": [5e-5, 2e-4],
-            "scaled": (),
-            "factors": [1.0],
-            "quick_factors": [1.0],
-            "what": "the controller's command/feedback-path noise (control_noise)",
-        },
+        "repeatability": _controller_noise(0.05),  # Table 3.1 (the side-car's "repeatability")
         "predict": {
             "inverse ARX(4) IT05": ("arx", 5, 17.0),
             "NARX(4, 3) full, simulation focus, SEMP terms": (
@@ -212,18 +219,10 @@ CALIBRATIONS = {
         "second_grid": [1.75e6],
         "quick_second_grid": [1.75e6],
         "what": "both mount plays (vertical_play and radial_play)",
-        "repeatability": {  # Table 3.3 (table, band, numbers: the side-car's "repeatability")
-            "parameter": "control_noise",  # the controller's 1/f noise [m rms]
-            "grid": [4e-5, 8e-5, 1.6e-4],  # 0.1-0.4 % of the 40 mm full scale
-            "quick_grid": [4e-5, 1.6e-4],
-            # the doughnuts' contact damping stays at loss factor 0.25: it also sets the text's
-            # modes (70 / 150 / 170 Hz, Fig. 3.5) and the rattle above 1 g, which a higher
-            # loss factor (0.40 tried) flattens; so the noise alone is calibrated here
-            "scaled": (),
-            "factors": [1.0],
-            "quick_factors": [1.0],
-            "what": "the controller's command/feedback-path noise (control_noise)",
-        },
+        # Table 3.3; the doughnuts' contact damping stays at loss factor 0.25: it also sets the
+        # text's modes (70 / 150 / 170 Hz, Fig. 3.5) and the rattle above 1 g, which a higher
+        # loss factor (0.40 tried) flattens; so the noise alone is calibrated here
+        "repeatability": _controller_noise(0.04),
         "predict": {
             "NARX(6, 2) full, simulation focus, SEMP terms, top tank": (
                 _narx(
@@ -263,15 +262,7 @@ CALIBRATIONS = {
             "blowoff_ratio_rebound": 0.35,
             "series_stiffness": 1.4e7,
         },
-        "repeatability": {
-            "parameter": "control_noise",  # the controller's 1/f noise [m rms]
-            "grid": [7e-5, 1.4e-4, 2.8e-4],  # 0.1-0.4 % of the 70 mm full scale
-            "quick_grid": [7e-5, 2.8e-4],
-            "scaled": (),
-            "factors": [1.0],
-            "quick_factors": [1.0],
-            "what": "the controller's command/feedback-path noise (control_noise)",
-        },
+        "repeatability": _controller_noise(0.07),  # Table 3.2
         "predict": {},
     },
     "fuel-tank-2ch": {
