@@ -308,11 +308,12 @@ def _cal(rig_name: str) -> dict:
     if "repeatability" not in cal:
         return cal
     from vrig.rigs import rig_path
+    from vrig.rigs.spec import read_description
 
-    text = json.loads(Path(rig_path(rig_name)).read_text())["repeatability"]
+    text = read_description(rig_path(rig_name)).repeatability  # parsed and checked by vrig
     rep = {
         "table": text["table"],
-        "band": tuple(float(b) for b in text["band"]),
+        "band": text["band"],
         "targets": dict(text["numbers"]),
         **cal["repeatability"],
     }

@@ -97,11 +97,11 @@ def test_zero_level_leaves_the_runs_bit_for_bit():
     assert np.array_equal(a, b)
 
 
-def _cli_numbers(rig):
+def _cli_numbers(rig, folder):
     """``vrig repeatability --rig RIG``: (first column, text column) per channel."""
     out = io.StringIO()
     with redirect_stdout(out):
-        assert cli(["repeatability", "--rig", rig, "--out", f"/tmp/vrig-test-rep-{rig}"]) == 0
+        assert cli(["repeatability", "--rig", rig, "--out", str(folder)]) == 0
     rows = {}
     for line in out.getvalue().splitlines():
         m = re.match(r"^(\w+)\s+([\d.]+)%\s+([\d.]+)%.*\s([\d.]+)%$", line)
@@ -119,7 +119,7 @@ def _cli_numbers(rig):
     ],
 )
 def test_repeatability_numbers_within_one_point_of_the_text(rig, text, tmp_path):
-    rows = _cli_numbers(rig)
+    rows = _cli_numbers(rig, tmp_path / "repeatability")
     assert set(rows) == set(text)
     for channel, number in text.items():
         twin, quoted = rows[channel]
