@@ -125,3 +125,30 @@ def test_repeatability_numbers_within_one_point_of_the_text(rig, text, tmp_path)
         twin, quoted = rows[channel]
         assert quoted == number  # the CLI quotes the text's figure in the text's band
         assert abs(twin - number) <= 1.0, (rig, channel, twin, number)
+
+
+@pytest.mark.parametrize(
+    "block, message",
+    [
+        ({"table": "T", "band": [0, 400], "numbers": {"damper_load": 98.0}}, "not inside"),
+        ({"table": "T", "band": [0, 10], "numbers": {"no_such": 98.0}}, "unknown responses"),
+    ],
+)
+def test_a_bad_repeatability_block_is_refused_naming_the_problem(tmp_path, block, message):
+    import json
+
+    from vrig.rigs import rig_path
+
+    src = rig_path("shock-absorber")
+    d = json.loads(src.read_text())
+    d["mjcf"] = str((src.parent / d["mjcf"]).resolve())
+    d["repeatability"] = block
+    path = tmp_path / "mutant.rig.json"
+    path.write_text(json.dumps(d))
+    with pytest.raises(vrig.RigModelError, match=message):
+        vrig.load_rig(path)
+
+
+def test_a_negative_controller_noise_is_refused():
+    with pytest.raises(vrig.RigParameterError, match="control_noise"):
+        vrig.load_rig("shock-absorber", control_noise=-1e-4)
