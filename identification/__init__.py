@@ -35,6 +35,7 @@ from .errors import (
 from .interop import from_input_output_data, to_input_output_data
 from .inverse import InverseModel, estimate_delay
 from .models import Arx, Narx
+from .narx_search import CandidateResult, NarxSearch, SearchCandidate
 from .order_selection import OrderScan, order_scan
 from .regression import regression_matrix
 from .selection import ForwardSelection, forward_regression
@@ -53,6 +54,7 @@ from .validation import (
 
 __all__ = [
     "Arx",
+    "CandidateResult",
     "ChannelStructure",
     "CorrelationTests",
     "ErrorSignalModel",
@@ -64,9 +66,11 @@ __all__ = [
     "InverseModel",
     "ModelFileError",
     "Narx",
+    "NarxSearch",
     "OrderScan",
     "PressResult",
     "RankDeficiencyWarning",
+    "SearchCandidate",
     "SimulationDivergedError",
     "SplitSpectraModel",
     "StabilityWarning",

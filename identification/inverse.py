@@ -25,6 +25,7 @@ from .errors import (
     UnstableModelError,
 )
 from .models import Arx, Narx
+from .narx_search import NarxSearch
 
 __all__ = ["InverseModel", "estimate_delay"]
 
@@ -100,10 +101,15 @@ class InverseModel:
 
     Parameters
     ----------
-    model : Narx, Arx or ErrorSignalModel (unfitted)
+    model : Narx, Arx, ErrorSignalModel or NarxSearch (unfitted)
         The structure of the inverse model (its inputs are the responses, its outputs the drives).
         An :class:`~identification.ErrorSignalModel` gives an inverse ARX plus a NARX model of
-        its drive error; ``max_radius`` then applies to both of its parts.
+        its drive error; ``max_radius`` then applies to both of its parts. A
+        :class:`~identification.NarxSearch` searches the inverse's structure and options by
+        free-run validation: the lead is chosen first with its cheap stand-in
+        (:meth:`~identification.NarxSearch.lead_model`, an ARX), then the search runs once at
+        that lead (the next lead is tried if no candidate is bounded); ``model`` becomes the
+        search's ``best_`` and ``search_`` keeps the search (its ``report()``).
     lead : int, "delay" or "auto"
         Time shift in samples: the drive at t is modelled from responses up to t + lead.
         ``"delay"`` uses the rig delay from :func:`estimate_delay`. ``"auto"`` (default) tries
@@ -158,9 +164,9 @@ class InverseModel:
         holdout: float = 0.25,
         lead_domain: str = "drive",
     ):
-        if not isinstance(model, (Narx, ErrorSignalModel)):
+        if not isinstance(model, (Narx, ErrorSignalModel, NarxSearch)):
             raise IdentificationError(
-                "model must be a Narx or Arx (or an ErrorSignalModel) instance, got "
+                "model must be a Narx, Arx, ErrorSignalModel or NarxSearch instance, got "
                 f"{type(model).__name__}"
             )
         if lead not in ("auto", "delay") and (not isinstance(lead, (int, np.integer)) or lead < 0):
@@ -215,8 +221,11 @@ class InverseModel:
         else:
             candidates = [int(self.lead)]
 
+        search = self.model if isinstance(self.model, NarxSearch) else None
+        template = search.lead_model() if search is not None else self.model
+
         def fitted(lead, d, r):
-            model = copy.deepcopy(self.model)
+            model = copy.deepcopy(template)
             if self.max_radius is not None:
                 model.max_radius = self.max_radius
             n = d.shape[0]
@@ -253,6 +262,15 @@ class InverseModel:
                     continue
             fallback = (lead, model)
             break
+        if search is not None:
+            return self._fit_search(
+                search,
+                [fallback[0]] if fallback else [],
+                ranked,
+                drive,
+                response,
+                (drive_names, response_names),
+            )
         if fallback is not None:
             self.lead_, self.model = fallback
             self.contraction_ = self.model.contraction_
@@ -261,6 +279,34 @@ class InverseModel:
             f"no lead among {ranked} gives an inverse model whose free run stays bounded: "
             f"{last_error}",
             getattr(last_error, "cause", None),
+        )
+
+    def _fit_search(self, search: NarxSearch, first, ranked, drive, response, names):
+        """Run ``search`` at the lead its stand-in chose (then the other ranked leads, while no
+        candidate is bounded); ``model`` becomes its ``best_``."""
+        drive_names, response_names = names
+        n = drive.shape[0]
+        last = None
+        for lead in dict.fromkeys([*first, *ranked]):
+            s = copy.deepcopy(search)
+            if self.max_radius is not None:
+                s.options["max_radius"] = self.max_radius
+            try:
+                s.fit(
+                    response[lead:],
+                    drive[: n - lead],
+                    input_names=response_names,
+                    output_names=drive_names,
+                )
+            except IdentificationError as exc:
+                last = exc
+                continue
+            self.lead_, self.model, self.search_ = lead, s.best_, s
+            self.contraction_ = self.model.contraction_
+            return self
+        raise UnstableModelError(
+            f"no lead among {list(ranked)} gives a searched inverse model whose free run stays "
+            f"bounded: {last}"
         )
 
     def _rank_leads(self, usable, drive, response, fitted, delay: int = 0) -> list[int]:

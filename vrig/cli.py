@@ -155,6 +155,8 @@ class _Failure(Exception):
     def __init__(self, message: str, code: int = ExitCode.FAILED):
         super().__init__(message)
         self.code = code
+
+
 # ---------------------------------------------------------------------------------------------
 # parser
 # ---------------------------------------------------------------------------------------------
@@ -310,6 +312,19 @@ def _add_model_arguments(rec) -> None:
         type=int,
         help="NARX polynomial degree (narx: default 2; split: makes the low band NARX; "
         "error-signal: of the error NARX, default 2)",
+    )
+    rec.add_argument(
+        "--search",
+        action="store_true",
+        help="narx: search the inverse's structure and fitting options by free-run validation "
+        "(orders up to twice --order, degrees 1..--degree, least squares / simulation focus, "
+        "all / FROLS / SEMP terms; identification.NarxSearch) instead of fitting one model",
+    )
+    rec.add_argument(
+        "--budget",
+        type=float,
+        metavar="S",
+        help="seconds the --search may take (default 60)",
     )
     rec.add_argument(
         "--split-hz",
@@ -611,6 +626,14 @@ def _method(args, band):
         )
     if args.split_hz is not None and m != "split":
         raise _UsageError("--split-hz applies to --method split only")
+    search = bool(getattr(args, "search", False))
+    budget = getattr(args, "budget", None)
+    if search and m != "narx":
+        raise _UsageError("--search applies to --method narx only")
+    if budget is not None and not search:
+        raise _UsageError("--budget applies to --search only")
+    if budget is not None and not (0 < budget < float("inf")):
+        raise _UsageError(f"--budget must be a positive number of seconds, got {budget:g}")
     order = (3 if m == "error-signal" else 4) if args.order is None else args.order
     if not 1 <= order <= 20:
         raise _UsageError(f"--order must be 1..20, got {order}")
@@ -622,6 +645,12 @@ def _method(args, band):
     fit = "" if focus == "prediction" else f", {focus} focus"
     if m == "narx":
         degree = 2 if args.degree is None else args.degree
+        if search:
+            budget = 60.0 if budget is None else budget
+            return InverseNarx(order, degree, search=True, budget=budget), (
+                f"narx searched by free-run validation (orders up to {2 * order}, degrees "
+                f"1..{degree}, budget {budget:g} s)"
+            )
         return InverseNarx(order, degree, focus=focus), f"narx order {order} degree {degree}{fit}"
     if m == "split":
         lo, hi = band
@@ -918,7 +947,8 @@ _ADVICE = {
     ("IT00", "interlock"): "IT00DRV, the inverse model's first drive, tripped the rig "
     "(TRIPPED00): use " + _NARROWER + ", or a smaller desired response",
     ("IT00", "unstable"): "the rig's simulation became unstable under IT00DRV (TRIPPED00): use "
-    + _NARROWER + ", or a smaller desired response",
+    + _NARROWER
+    + ", or a smaller desired response",
     ("after IT00", "interlock"): "a lower --gain, e.g. {half}, overshoots less",
     ("after IT00", "refused"): "a lower --gain, e.g. {half}, overshoots less",
     ("after IT00", "diverged"): "a lower --gain, e.g. {half}, or --strategy adaptive "
@@ -1018,7 +1048,9 @@ def _cmd_check_linearity(args) -> int:
     from .linearity import check_rig_linearity
 
     if not (np.isfinite(args.level) and 0 < args.level <= 0.5):
-        raise _UsageError(f"--level must be a fraction of full scale in (0, 0.5], got {args.level:g}")
+        raise _UsageError(
+            f"--level must be a fraction of full scale in (0, 0.5], got {args.level:g}"
+        )
     if not (np.isfinite(args.seconds) and 2 <= args.seconds <= _MAX_SECONDS):
         raise _UsageError(f"--seconds must be 2..{_MAX_SECONDS:g}, got {args.seconds:g}")
     _check_seed(args.seed)

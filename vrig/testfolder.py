@@ -139,6 +139,9 @@ def _method_summary(method) -> dict:
     if isinstance(method, SavableMethod):
         for key, value in method.options().items():
             out[key] = _method_summary(value) if isinstance(value, Method) else _plain(value)
+    report = getattr(method, "search_report", None)
+    if callable(report) and report() is not None:
+        out["search_report"] = report().splitlines()  # the structure search, one row per line
     if isinstance(method, InverseModelMethod):
         lead = method.fitted_lead()
         if isinstance(lead, int):

@@ -133,7 +133,16 @@ from .data import (
 )
 from .search import Candidate, _sim, grid
 from .simulation import SimSearch
-from .table import DataSet, Problem, Published, PublishedConfig, ScoredRecord, Sweep, Transfer
+from .table import (
+    DataSet,
+    Problem,
+    Published,
+    PublishedConfig,
+    ScoredRecord,
+    SearchRow,
+    Sweep,
+    Transfer,
+)
 
 # ---------------------------------------------------------------- Silverbox
 SILVERBOX_SIM = (
@@ -232,6 +241,17 @@ SILVERBOX = DataSet(
         "; SysIdentPy column: its 5-term published multisine model",
     ),
     simulation=SILVERBOX_SIM,
+    search=SearchRow(
+        dict(
+            orders=(2, 4, 6, 8, 10),
+            lags="sysidentpy",
+            degrees=(1, 2, 3),
+            kinds=("pure", "input-polynomial"),
+            options={"constant": True},
+        ),
+        note="grid: orders 2-10 (SysIdentPy lags), degrees 1-3, pure-power and "
+        "input-polynomial terms, every fitting option",
+    ),
     sweep=Sweep((5, 6, 8, 10, 15, 20), "Silverbox multisine test RMSE [mV]"),
 )
 
@@ -282,6 +302,19 @@ TANKS = DataSet(
     ),
     mirror="SysIdentPy: same candidate set and number of terms",
     simulation=TANKS_SIM,
+    search=SearchRow(
+        dict(
+            orders=_TANKS_LAGS,
+            lags="sysidentpy",
+            degrees=(1, 2, 3),
+            kinds=("full", "pure"),
+            folds=2,
+            options={"constant": True, "holdout": 0.0},
+        ),
+        note="grid: orders 1-5 (SysIdentPy lags), degrees 1-3, all and pure-power terms, every "
+        "fitting option; two validation folds and simulation focus without early stopping "
+        "(holdout 0), as the simulation rows (1024 samples)",
+    ),
 )
 
 
@@ -359,6 +392,17 @@ F16 = DataSet(
         quick_skip="SysIdentPy skipped in --quick (its BIC search takes about a minute)",
     ),
     simulation=F16_SIM,
+    search=SearchRow(
+        dict(
+            orders=((20, 9),),
+            lags="sysidentpy",
+            degrees=(1, 2, 3),
+            kinds=("input-polynomial",),
+            options={"constant": True},
+        ),
+        note="grid: the published lags (y 1..20, u 1..9), degrees 1-3, input-polynomial terms, "
+        "every fitting option",
+    ),
 )
 
 
@@ -463,6 +507,12 @@ MR_DAMPER = DataSet(
     mirror="SysIdentPy: same candidate set and number of terms (inputs advanced 1 sample)",
     inputs="inputs D, Y",
     simulation=MR_SIM,
+    search=SearchRow(
+        dict(orders=(1, 2, 3, 4), degrees=(1, 2, 3), kinds=("input-polynomial",)),
+        features="v,tanh:2",
+        note="inputs D, Y, v, tanh(v / 2 cm/s) (the best simulation row's input set); grid: "
+        "orders 1-4, degrees 1-3, input-polynomial terms, every fitting option",
+    ),
 )
 
 

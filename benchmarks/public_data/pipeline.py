@@ -2,16 +2,17 @@
 
 from __future__ import annotations
 
+import time
 from dataclasses import dataclass
 
 import numpy as np
 
-from identification import Narx
+from identification import IdentificationError, Narx, NarxSearch
 
 from .data import data_file
 from .datasets import DATASETS
 from .report import Report, Row, _fmt, _skipped
-from .search import Candidate, Selection, _safe, choose, free_run, score_candidates
+from .search import Candidate, Selection, _inputs, _safe, choose, free_run, score_candidates
 from .simulation import Scoring, simulation_rows
 from .sysidentpy import SKIP_SYSIDENTPY, SysIdentPy, get_sysidentpy
 from .table import DataSet, Problem, Published, ScoredRecord
@@ -59,7 +60,79 @@ def run_dataset(
         _transfer_rows(report, ds, prob, sim[0].model, "the first simulation-focus model")
     if ds.sweep is not None and not quick:
         _sweep_note(report, ds, prob, sels[0].best)
+    if ds.search is not None:
+        _search_row(report, ds, prob, quick)
     return Fitted(prob, sels, sim)
+
+
+#: how close to the best row of the data set's grids the NarxSearch row must come (issue 24)
+SEARCH_GOAL = 1.10
+
+
+def _search_row(report: Report, ds: DataSet, prob: Problem, quick: bool) -> None:
+    """The :class:`~identification.NarxSearch` row and its note: the one call, scored on the
+    main test, against the best figure the data set's grids found (rows above, main test)."""
+    spec = ds.search
+    u_all, test = prob.sim if prob.sim and spec.features else (prob.u, prob.test)
+    cand = Candidate(1, 1, 1, None, features=spec.features)  # only names the input set
+    budget = spec.quick_budget if quick else spec.budget
+    t0 = time.perf_counter()
+    try:
+        search = NarxSearch(budget, init_window=ds.skip, **spec.grid).fit(
+            _inputs(u_all, cand), prob.y
+        )
+    except IdentificationError as exc:
+        report.rows.append(
+            Row(ds.name, ds.test, test.text, ds.label, "NarxSearch", status=f"failed: {exc}")
+        )
+        return
+    wall = time.perf_counter() - t0
+    m = search.best_
+    v = _safe(lambda: test.score(ds.metric, _runner(m), m.max_lag_, cand))
+    label = f"NarxSearch ({budget:g} s): {search.best_result_.candidate.label()}"
+    fig = ds.figure()
+    tried = len(search.results_)
+    ok = sum(r.status == "ok" for r in search.results_)
+    note = f"{tried} candidates, {ok} validated, refit: {search.refit_}"
+    report.rows.append(
+        Row(
+            ds.name,
+            ds.test,
+            test.text,
+            ds.label,
+            label,
+            int(np.sum(m.n_terms_)),
+            v,
+            *_figure_columns(fig),
+            fit_s=wall,
+            note="; ".join(x for x in (spec.note, note) if x),
+        )
+    )
+    report.notes.append(_search_goal(report, ds, v, wall, budget))
+
+
+def _search_goal(report: Report, ds: DataSet, v: float, wall: float, budget: float) -> str:
+    """The goal line of the NarxSearch row: within 10 % of the best grid row, never diverged,
+    within the budget."""
+    grid_rows = [
+        r.vrig
+        for r in report.rows[:-1]
+        if r.dataset == ds.name
+        and r.test == ds.test
+        and r.vrig is not None
+        and np.isfinite(r.vrig)
+        and "published config" not in r.model
+    ]
+    best = min(grid_rows, default=np.inf)
+    ratio = v / best if np.isfinite(best) and best > 0 else np.inf
+    within = bool(np.isfinite(v) and ratio <= SEARCH_GOAL)
+    return (
+        f"goal {ds.name} / NarxSearch: {ds.label} within 10 % of the best grid row "
+        f"({_fmt(best)}): {_fmt(v)} ({ratio:.2f}x) - {'reached' if within else 'NOT reached'}; "
+        f"{'never diverged' if np.isfinite(v) else 'DIVERGED on the test'}; "
+        f"{wall:.1f} s wall ({'within' if wall <= 1.2 * budget else 'OVER'} the {budget:g} s "
+        "budget)"
+    )
 
 
 def _runner(model: Narx):

@@ -96,6 +96,24 @@ class Transfer:
     sysidentpy_note: str = ""
 
 
+@dataclass(frozen=True, eq=False)
+class SearchRow:
+    """The data set's :class:`identification.NarxSearch` row: one call, the search's own
+    validation on the training data only, then one score on the main test.
+
+    ``grid``: the ``NarxSearch`` arguments (orders, degrees, kinds, options, ...; the
+    initialisation window is the data set's); ``features``: the input set when the data set's
+    simulation rows use several (the key of their input dict); ``budget``/``quick_budget``:
+    seconds of the normal and ``--quick`` runs; ``note``: printed with the row.
+    """
+
+    grid: dict
+    features: str = ""
+    budget: float = 60.0
+    quick_budget: float = 20.0
+    note: str = ""
+
+
 @dataclass(frozen=True)
 class Sweep:
     """Informational note (full run only): the main test's error of the chosen one-step
@@ -113,7 +131,8 @@ class DataSet:
     ``grid``/``quick_grid``: the one-step (FROLS) candidates of the normal and ``--quick`` runs;
     ``budget``: also a row whose search keeps to the published model's number of terms;
     ``mirror``: SysIdentPy fits the chosen one-step structure (the note says so); ``inputs``:
-    names the inputs in the note; ``simulation``: the simulation-error searches.
+    names the inputs in the note; ``simulation``: the simulation-error searches; ``search``: the
+    :class:`identification.NarxSearch` row.
     """
 
     name: str
@@ -136,6 +155,7 @@ class DataSet:
     transfer: Transfer | None = None
     simulation: tuple[SimSearch, ...] = ()
     sweep: Sweep | None = None
+    search: SearchRow | None = None
 
     def figure(self, test: str = "") -> Published | None:
         """The published figure printed beside ``test`` (default: the main test), if any."""

@@ -229,6 +229,15 @@ def _register_builtins() -> None:
         linear=False,
     )
     register_method(
+        "narx-search",
+        lambda: InverseNarx(4, 2, search=True, budget=60.0),
+        description="inverse NARX searched by free-run validation (orders 1-8, degrees 1-2, "
+        "both term kinds, least squares / simulation focus, all / FROLS / SEMP terms; 60 s "
+        "budget; identification.NarxSearch)",
+        quick=False,  # a minute per record
+        linear=False,
+    )
+    register_method(
         "error-signal",
         lambda: InverseErrorSignal(3, 2, 2),
         description="inverse ARX(3) plus a quadratic input-polynomial NARX(2) of its drive "

@@ -28,7 +28,7 @@ from collections.abc import Mapping
 import numpy as np
 from scipy import signal
 
-from identification import Arx, ErrorSignalModel, InverseModel, Narx
+from identification import Arx, ErrorSignalModel, InverseModel, Narx, NarxSearch
 
 from ..processing import band_split
 from ..timehistory import TimeHistory
@@ -115,6 +115,12 @@ class _InverseTimeDomain:
         """The method's options (``order``, ``degree``, ...), as given."""
         return {k: getattr(self, k) for k in self._OPTIONS}
 
+    def search_report(self) -> str | None:
+        """The structure search's table (:meth:`identification.NarxSearch.report`) when the
+        inverse was searched, else None."""
+        search = getattr(getattr(self, "inverse", None), "search_", None)
+        return None if search is None else search.report()
+
     def fitted_models(self) -> dict:
         """``{"model": InverseModel}`` after :meth:`identify`, ``{}`` before."""
         inverse = getattr(self, "inverse", None)
@@ -124,9 +130,16 @@ class _InverseTimeDomain:
         m = self.inverse.model
         src = "" if self.responses is None else f" from {self.responses}"
         remedy = getattr(m, "stability_", {}).get("remedy")
+        search = getattr(self.inverse, "search_", None)
+        found = ""
+        if search is not None:
+            found = (
+                f", searched: {search.best_result_.candidate.label()} of "
+                f"{len(search.results_)} candidates in {search.search_time_:.0f} s"
+            )
         return (
             f"{self.name}: {type(m).__name__} {m.n_terms_.tolist()} terms, "
-            f"lead {self.inverse.lead_}{src}" + (f" ({remedy})" if remedy else "")
+            f"lead {self.inverse.lead_}{src}{found}" + (f" ({remedy})" if remedy else "")
         )
 
 
@@ -210,6 +223,15 @@ class InverseNarx(_InverseTimeDomain):
         Which regressors get the function terms (the inverse's inputs are the responses).
     stability_margin : float, optional
         Multiple of the identification response the free run is checked at (see above).
+    search : bool, optional
+        Search the inverse's structure and fitting options by free-run validation
+        (:class:`identification.NarxSearch`) instead of fitting the one given: orders
+        :data:`SEARCH_ORDERS` up to twice ``order``, degrees 1 .. ``degree``, both term kinds
+        above, least squares and simulation focus, all/FROLS/SEMP terms, within ``budget``.
+        ``kind``, ``focus``, ``selection``, ``n_terms`` and ``criterion`` are then searched,
+        not used.
+    budget : float, optional
+        Seconds the search may take (``search=True``; default 60).
     **kw
         Options of every time-domain inverse: ``lead`` (``"auto"``, default, or a number of
         samples >= 0), ``max_lead`` (samples, default 32), ``responses`` (the response channel
@@ -218,7 +240,9 @@ class InverseNarx(_InverseTimeDomain):
     """
 
     name = "narx"
-    _OPTIONS = ("order", "degree", "kind", "focus", "selection", "n_terms")
+    _OPTIONS = ("order", "degree", "kind", "focus", "selection", "n_terms", "search", "budget")
+    #: orders the search tries (those up to twice ``order``)
+    SEARCH_ORDERS = (1, 2, 3, 4, 6, 8, 12)
 
     def __init__(
         self,
@@ -233,9 +257,14 @@ class InverseNarx(_InverseTimeDomain):
         functions=None,
         function_sources: str = "inputs",
         stability_margin: float = 3.0,
+        search: bool = False,
+        budget: float = 60.0,
         **kw,
     ):
         super().__init__(**kw)
+        if not isinstance(search, bool):
+            raise ValueError(f"search must be True or False, got {search!r}")
+        self.search, self.budget = search, budget
         self.order, self.degree, self.kind, self.focus = order, degree, kind, focus
         self.stability_margin = stability_margin
         self.selection, self.n_terms, self.criterion = selection, n_terms, criterion
@@ -243,6 +272,15 @@ class InverseNarx(_InverseTimeDomain):
         self._model()  # validate the options now, not at identification
 
     def _model(self):
+        if self.search:
+            return NarxSearch(
+                self.budget,
+                orders=[n for n in self.SEARCH_ORDERS if n <= max(2 * self.order, 1)],
+                degrees=range(1, self.degree + 1),
+                kinds=("input-polynomial", "full"),
+                functions=[None, self.functions] if self.functions else None,
+                options={"stability_margin": self.stability_margin},
+            )
         return Narx(
             order=self.order,
             degree=self.degree,

@@ -1,0 +1,203 @@
+"""NarxSearch: structure and option search by free-run validation (issue 24).
+
+Truths used: a known generating NARX (its terms), a constructed system whose least-squares cubic
+model passes its own 1.5x stability check and still diverges on a held-out block (checked here
+first, so the test cannot pass vacuously), and the search's documented contract (never returns
+a model that diverges on a validation block or a stress input; the budget bounds the wall time).
+"""
+
+from __future__ import annotations
+
+import time
+import warnings
+
+import numpy as np
+import pytest
+
+from identification import (
+    IdentificationError,
+    InsufficientDataError,
+    Narx,
+    NarxSearch,
+    SimulationDivergedError,
+    band_limited_noise,
+    metrics,
+)
+
+
+def _problem_a(n: int, seed: int, noise: float = 0.05):
+    """y(t) = 0.2 y(t-1) + 0.1 y(t-1) x(t-1) + 0.9 x(t-2), output noise ``noise`` x RMS."""
+    rng = np.random.default_rng(seed)
+    x = rng.uniform(-1, 1, n)
+    y = np.zeros(n)
+    for t in range(2, n):
+        y[t] = 0.2 * y[t - 1] + 0.1 * y[t - 1] * x[t - 1] + 0.9 * x[t - 2]
+    return x, y, y + noise * y.std() * rng.standard_normal(n)
+
+
+GENERATING_TERMS = {"y1(t-1)", "y1(t-1)*u1(t-1)", "u1(t-2)"}
+
+
+def _saturating(u):
+    """A second-order system with a tanh input non-linearity: a cubic polynomial model fits it
+    at small amplitude and extrapolates badly at large amplitude."""
+    y = np.zeros_like(u)
+    for t in range(2, len(u)):
+        y[t] = 1.2 * y[t - 1] - 0.5 * y[t - 2] + 0.4 * np.tanh(0.5 * u[t - 1])
+    return y
+
+
+@pytest.fixture(scope="module")
+def known_narx_search():
+    x, _, yn = _problem_a(3000, seed=0)
+    grid = dict(orders=(1, 2, 3), degrees=(1, 2), kinds=("full",))
+    return NarxSearch(budget=None, **grid).fit(x, yn), grid
+
+
+def test_finds_the_generating_structure(known_narx_search):
+    search, _ = known_narx_search
+    assert set(search.best_.term_names()[0]) == GENERATING_TERMS
+    assert search.best_result_.status == "ok"
+    assert search.refit_ == "whole record"
+
+
+def test_free_run_beats_every_single_option_fit(known_narx_search):
+    """On a fresh record, against the noise-free output: the search's model is at least as good
+    as each single-option fit of the generating structure and of a generous guess."""
+    search, _ = known_narx_search
+    xv, yv, _ = _problem_a(3000, seed=1)
+    _, _, yn = _problem_a(3000, seed=0)
+    xi = _problem_a(3000, seed=0)[0]
+
+    def err(model):
+        try:
+            return float(metrics.rrse(yv[4:], model.simulate(xv, y0=yv[:4])[4:])[0])
+        except SimulationDivergedError:
+            return np.inf
+
+    mine = err(search.best_)
+    others = {}
+    for order, degree in ((2, 2), (3, 2)):
+        for opts in (
+            {},
+            {"selection": "frols", "criterion": "bic"},
+            {"selection": "simulation"},
+            {"focus": "simulation"},
+        ):
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")
+                try:
+                    m = Narx(order=order, degree=degree, **opts).fit(xi, yn)
+                except IdentificationError:
+                    continue
+            others[(order, degree, tuple(opts.items()))] = err(m)
+    assert others, "no single-option fit to compare with"
+    assert mine <= min(others.values()) * (1 + 1e-3), (mine, others)
+    assert mine < 0.02  # the generating terms: only parameter noise is left
+
+
+def test_never_returns_a_model_that_diverges_on_a_held_out_block():
+    n = 4000
+    u = band_limited_noise(n, cutoff=0.3, seed=0)[:, 0]
+    u[3000:] *= 3.0  # the held-out quarter is driven harder
+    y = _saturating(u) + 0.01 * np.random.default_rng(0).standard_normal(n)
+    # the premise: the least-squares cubic model passes its own 1.5x check, and diverges there
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        ls = Narx(order=2, degree=3).fit(u[:3000], y[:3000])
+    assert ls.stability_["margin"] is True
+    with pytest.raises(SimulationDivergedError):
+        ls.simulate(u[3000:], y0=y[3000:3002])
+    search = NarxSearch(
+        budget=None,
+        orders=(2,),
+        degrees=(1, 2, 3),
+        kinds=("full",),
+        focus=("prediction",),
+        selection=("all",),
+        n_blocks=1,
+    ).fit(u, y)
+    row = next(r for r in search.results_ if r.candidate.structure[:2] == (2, 3))
+    assert row.status == "rejected" and "validation block" in row.reason
+    assert search.best_result_.candidate.degree < 3
+    sim = search.best_.simulate(u[3000:], y0=y[3000:3002])  # bounded: no exception
+    assert np.all(np.isfinite(sim))
+
+
+def test_mimo_non_square():
+    """Two inputs, one output; then one input, two outputs: per-output scores, right shapes."""
+    n = 2500
+    u = band_limited_noise(n, 2, cutoff=0.4, seed=3)
+    y = np.zeros((n, 2))
+    for t in range(1, n):
+        y[t, 0] = 0.5 * y[t - 1, 0] + u[t - 1, 0] + 0.3 * u[t - 1, 1] ** 2
+        y[t, 1] = 0.3 * y[t - 1, 1] + 0.2 * y[t - 1, 0] + u[t - 1, 1]
+    grid = dict(budget=None, orders=(1, 2), degrees=(1, 2), kinds=("full",), selection=("all",))
+    s = NarxSearch(**grid, focus=("prediction",)).fit(u, y[:, :1], output_names=["f"])
+    assert s.best_.n_inputs_ == 2 and s.best_.n_outputs_ == 1
+    assert s.best_.output_names_ == ("f",)
+    assert s.best_result_.score < 0.01  # noise-free, the structure is in the grid
+    s2 = NarxSearch(**grid, focus=("prediction",)).fit(u[:, 0], y)
+    assert s2.best_.n_outputs_ == 2 and s2.best_result_.scores.shape == (2,)
+
+
+def test_deterministic_under_a_seed():
+    x, _, yn = _problem_a(2000, seed=4)
+    grid = dict(budget=None, orders=(1, 2), degrees=(1, 2), kinds=("full",), seed=7)
+    a = NarxSearch(**grid).fit(x, yn)
+    b = NarxSearch(**grid).fit(x, yn)
+    assert [r.candidate for r in a.results_] == [r.candidate for r in b.results_]
+    assert [r.score for r in a.results_] == [r.score for r in b.results_]
+    assert np.array_equal(np.concatenate(a.best_.coef_), np.concatenate(b.best_.coef_))
+
+
+def test_budget_is_respected():
+    """A grid far larger than the budget: the wall time stays within 20 % of the budget (one
+    candidate at most overruns its prediction) and candidates are skipped for the budget."""
+    x, _, yn = _problem_a(6000, seed=5)
+    budget = 6.0
+    t0 = time.perf_counter()
+    s = NarxSearch(budget=budget, orders=(1, 2, 3, 4, 6, 8), degrees=(1, 2, 3)).fit(x, yn)
+    wall = time.perf_counter() - t0
+    assert wall <= 1.2 * budget, s.report()
+    assert any(r.status == "skipped" and "budget" in r.reason for r in s.results_)
+    assert s.search_time_ <= wall
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "match"),
+    [
+        ({"budget": 0}, "budget"),
+        ({"budget": -5.0}, "budget"),
+        ({"budget": float("inf")}, "budget"),
+        ({"orders": ()}, "orders is empty"),
+        ({"degrees": []}, "degrees is empty"),
+        ({"kinds": ()}, "kinds is empty"),
+        ({"focus": ()}, "focus is empty"),
+        ({"selection": ("lasso",)}, "selection values"),
+        ({"degrees": (0,)}, "degrees must be integers >= 1"),
+        ({"holdout": 0.9}, "holdout"),
+        ({"folds": 3}, "folds"),
+        ({"options": {"degree": 2}}, "searched"),
+        ({"init_window": 2, "orders": (4,)}, "init_window"),
+    ],
+)
+def test_bad_arguments_are_refused_clearly(kwargs, match):
+    with pytest.raises(IdentificationError, match=match):
+        NarxSearch(**kwargs)
+
+
+def test_record_too_short_for_the_validation_blocks():
+    x, _, yn = _problem_a(80, seed=6)
+    with pytest.raises(InsufficientDataError, match="too short for the validation"):
+        NarxSearch(orders=(8,), degrees=(1,)).fit(x, yn)
+
+
+def test_report_lists_every_candidate_with_its_fate(known_narx_search):
+    search, _ = known_narx_search
+    text = search.report()
+    assert text.splitlines()[0].startswith("NarxSearch:")
+    assert len(text.splitlines()) == len(search.results_) + 2
+    assert "order 2, degree 2 full" in text
+    with pytest.raises(IdentificationError, match="not fitted"):
+        NarxSearch().report()
