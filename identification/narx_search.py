@@ -163,7 +163,15 @@ class SearchCandidate:
         return f"{order}, degree {self.degree}{kind}{funs}, {fit}, {how}"
 
     def narx(self, criterion: str, options: dict) -> Narx:
-        """The unfitted model of this candidate (``options``: extra ``Narx`` arguments)."""
+        """The unfitted model of this candidate.
+
+        Parameters
+        ----------
+        criterion : str
+            Size criterion of a FROLS or SEMP path (``Narx(criterion=...)``).
+        options : dict
+            Further ``Narx`` arguments (not the searched ones).
+        """
         kw = dict(options)
         if self.selection != "all":
             kw.update(selection=("frols" if self.selection == "frols" else "simulation"))
