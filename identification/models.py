@@ -121,9 +121,26 @@ def _check_focus_options(focus, horizon, max_iter, stability_margin) -> None:
         )
 
 
-def _check_structure_options(order, degree, na, nb, nk, kind, solver) -> None:
-    """Model structure: ``order`` xor explicit ``na``/``nb``/``nk``, degree, term kind, solver."""
+LAG_CONVENTIONS = ("text", "sysidentpy")
+"""The lag conventions of ``Narx(order=n, lags=...)``: the reference text's full-order structure
+(output lags 1..n, input lags 0..n, eq. 5-3) or SysIdentPy's ``ylag=xlag=n`` (output and input
+lags 1..n)."""
+
+
+def _check_structure_options(order, degree, na, nb, nk, kind, solver, lags) -> None:
+    """Model structure: ``order`` xor explicit ``na``/``nb``/``nk``, lag convention, degree,
+    term kind, solver."""
+    if lags not in LAG_CONVENTIONS:
+        raise IdentificationError(
+            f"lags must be 'text' (order n: output lags 1..n, input lags 0..n) or 'sysidentpy' "
+            f"(output and input lags 1..n), got {lags!r}"
+        )
     explicit = na is not None or nb is not None or nk is not None
+    if explicit and lags != "text":
+        raise IdentificationError(
+            f"lags={lags!r} applies to order=...; with explicit na/nb/nk the input lags are "
+            "nk .. nk + nb - 1 (SysIdentPy's xlag=n is nb=n, nk=1)"
+        )
     if order is None and not explicit:
         raise IdentificationError(
             "give the model order (e.g. Narx(order=4, degree=2)) or explicit na/nb/nk"
@@ -202,9 +219,17 @@ class Narx:
     ----------
     order : int or sequence of int, optional
         Full-order dynamic model order n_k per output channel (na = n_k for every output,
-        nb = n_k + 1 terms for every input, nk = 0). Give either ``order`` or ``na``/``nb``/``nk``.
+        nb = n_k + 1 terms for every input, nk = 0; see ``lags``). Give either ``order`` or
+        ``na``/``nb``/``nk``.
     degree : int or sequence of int
         Polynomial degree L_k >= 1 per output channel (1 = linear ARX).
+    lags : {"text", "sysidentpy"}
+        Lag convention of ``order``. ``"text"`` (default): the reference text's full-order
+        structure, output lags 1..n and input lags 0..n (eq. 5-3: the input acts in the same
+        sample). ``"sysidentpy"``: SysIdentPy's ``ylag=n, xlag=n``, output and input lags 1..n
+        (the input acts one sample later), the same model as ``na=n, nb=n, nk=1`` term for term;
+        use it to compare with SysIdentPy like for like. Only with ``order`` (explicit
+        ``na``/``nb``/``nk`` state their own lags).
     na, nb, nk : int, sequence or 2-D table, optional
         Explicit ARX orders instead of ``order``: output lags 1..na of each output, input lags
         nk .. nk + nb - 1 of each input (MATLAB ``arx`` convention); an int applies to every
@@ -316,6 +341,7 @@ class Narx:
         na=None,
         nb=None,
         nk=None,
+        lags: str = "text",
         kind: str = "full",
         constant: bool = False,
         solver="qr",
@@ -334,7 +360,7 @@ class Narx:
         functions=None,
         function_sources: str = "inputs",
     ):
-        _check_structure_options(order, degree, na, nb, nk, kind, solver)
+        _check_structure_options(order, degree, na, nb, nk, kind, solver, lags)
         _check_fit_options(
             n_terms,
             err_tol,
@@ -352,6 +378,7 @@ class Narx:
         self.order = order
         self.degree = degree
         self.na, self.nb, self.nk = na, nb, nk
+        self.lags = lags
         self.kind = kind
         self.constant = bool(constant)
         self.solver = solver
@@ -409,6 +436,10 @@ class Narx:
         if self.order is not None:
             orders = per_channel_int(self.order, ny, "order", minimum=0)
             _check_lag(max(orders), n_samples, "order")
+            if self.lags == "sysidentpy":  # na = nb = n, nk = 1: not eq. 5-3, no full order
+                ones = np.ones(nu, dtype=np.int64)
+                regs = [explicit_regressors(ny, nu, [n] * ny, n * ones, ones) for n in orders]
+                return regs, (None,) * ny
             return [full_order_regressors(ny, nu, n) for n in orders], orders
         na = _lag_table(self.na, ny, ny, "na", 0)
         nb = _lag_table(self.nb, ny, nu, "nb", 0)
@@ -952,6 +983,7 @@ class Narx:
             "na": plain(self.na),
             "nb": plain(self.nb),
             "nk": plain(self.nk),
+            "lags": self.lags,
             "kind": self.kind,
             "constant": self.constant,
             "solver": solver,
@@ -1221,6 +1253,9 @@ class Arx(Narx):
     na, nb, nk : int, sequence or 2-D table, optional
         Explicit ARX orders instead of ``order`` (output lags 1..na, input lags nk..nk + nb - 1,
         in samples), as for :class:`Narx`.
+    lags : {"text", "sysidentpy"}
+        Lag convention of ``order``: input lags 0..n (the text's, default) or 1..n
+        (SysIdentPy's ``xlag=n``), as for :class:`Narx`.
     constant : bool
         Include a constant term.
     solver : str or callable
@@ -1264,6 +1299,7 @@ class Arx(Narx):
         na=None,
         nb=None,
         nk=None,
+        lags: str = "text",
         constant: bool = False,
         solver="qr",
         rcond=None,
@@ -1292,6 +1328,7 @@ class Arx(Narx):
             na=na,
             nb=nb,
             nk=nk,
+            lags=lags,
             kind="full",
             constant=constant,
             solver=solver,
