@@ -16,6 +16,7 @@ from pathlib import Path
 import numpy as np
 
 from ._files import atomic_write, read_npz
+from ._initial_state import estimate_state
 from ._transforms import FUNCTIONS
 from ._validation import (
     as_signal,
@@ -824,8 +825,13 @@ class Narx:
             self._plan = compile_plan(self.channels_, self.coef_, self.n_outputs_, self.n_inputs_)
         return self._plan
 
-    def simulate(self, u, y0=None, *, bound=None) -> np.ndarray:
+    def simulate(self, u, y0=None, *, initial_state=None, bound=None) -> np.ndarray:
         """Free-run simulation (Algorithm 5.2): outputs fed back, shape (N, ny).
+
+        Three starts: a zero past (the default), a window of *measured* first outputs (``y0``:
+        the result begins with them, simulation starts after them), or a past *before* sample
+        0 (``initial_state``, e.g. :meth:`estimate_initial_state`'s: every sample is
+        simulated). Give at most one of ``y0`` and ``initial_state``.
 
         Parameters
         ----------
@@ -837,6 +843,13 @@ class Narx:
             starts at sample ``L`` from its last ``max_lag_`` samples (the same numbers, bit for
             bit, as ``simulate(u[L - max_lag_:], y0=y0[-max_lag_:])``). Default: zero past
             (inputs and outputs before sample 0 are zero) and every sample is simulated.
+        initial_state : array (max_lag_, ny) or (max_lag_,), optional (keyword only)
+            The outputs ``y(-max_lag_) .. y(-1)`` before sample 0, oldest first (the inputs
+            before sample 0 are zero): every sample 0 .. N-1 is simulated from this past. An
+            all-zero state gives exactly the default zero-past run. Use
+            ``simulate(u, initial_state=model.estimate_initial_state(u, y))`` to start from
+            the past that best explains the measured first outputs when no measured window
+            should be copied into the result.
         bound : float or array (ny,), optional
             Magnitude bound per channel; default ``bound_``. ``np.inf`` checks finiteness only.
 
@@ -844,12 +857,124 @@ class Narx:
         ------
         SimulationDivergedError
             when an output leaves the bound or becomes non-finite (names channel and sample).
+        IdentificationError
+            when both ``y0`` and ``initial_state`` are given, or either has the wrong shape.
         """
         self._check_fitted()
         u = as_signal(u, "u", n_channels=self.n_inputs_)
+        if initial_state is not None:
+            if y0 is not None:
+                raise IdentificationError(
+                    "give y0 (measured first outputs, copied into the result) or "
+                    "initial_state (the past before sample 0), not both"
+                )
+            state = self._check_initial_state(initial_state)
+            return self._run_from_state(u, state, self._bound(bound))
         if y0 is not None:
             y0 = check_initial_outputs(y0, u, self.max_lag_, self.n_outputs_)
         return simulate_plan(self.plan_, u, y0, self._bound(bound), self.output_names_)
+
+    def _check_initial_state(self, state) -> np.ndarray:
+        p, ny = self.max_lag_, self.n_outputs_
+        a = np.asarray(state, dtype=np.float64)
+        if a.ndim == 1 and ny == 1:
+            a = a[:, None]
+        if a.shape != (p, ny):
+            raise IdentificationError(
+                f"initial_state must have shape (max_lag_, ny) = {(p, ny)} (the outputs "
+                f"y(-{p}) .. y(-1) before sample 0, oldest first), got {a.shape}"
+            )
+        if not np.all(np.isfinite(a)):
+            raise IdentificationError("initial_state contains NaN or inf")
+        return a
+
+    def _run_from_state(self, u, state, bound) -> np.ndarray:
+        """Free run of every sample of ``u`` from the past outputs ``state`` (p, ny) and a zero
+        past input (the zero-past run's padding with ``state`` in the output rows)."""
+        p = self.max_lag_
+        U = np.zeros((u.shape[0] + p, self.n_inputs_))
+        U[p:] = u
+        try:
+            return simulate_plan(self.plan_, U, state, bound, self.output_names_)[p:]
+        except SimulationDivergedError as exc:
+            raise SimulationDivergedError(
+                exc.channel, exc.channel_name, exc.sample - p, exc.value, exc.bound
+            ) from None
+
+    def estimate_initial_state(self, u, y, *, n_fit: int | None = None) -> np.ndarray:
+        """The past outputs before sample 0 whose free run best fits the first measured outputs.
+
+        Returns the (max_lag_, ny) array ``y(-max_lag_) .. y(-1)`` (oldest first) minimising
+        the weighted squared free-run error ``sum_{t < n_fit} sum_k ((y_k(t) - yhat_k(t)) /
+        std(y_k[:n_fit]))^2`` of ``simulate(u[:n_fit], initial_state=x)``; **the inputs before
+        sample 0 are taken as zero** (as in the zero-past run), so the estimated outputs also
+        absorb the effect of the unknown past inputs where the model allows (a linear model
+        whose last output-lag coefficient matrix is non-singular can represent any past).
+
+        When every term holds at most one past output, untransformed (ARX,
+        ``kind="input-polynomial"``, also ``y*u`` products), the free run is affine in the
+        state and the estimate is one linear least-squares solution (past outputs no term
+        reaches are returned as 0). Otherwise :func:`scipy.optimize.least_squares` refines it
+        from zero and from that linear estimate, and the better fit is kept.
+
+        The state is identifiable when the first ``n_fit`` free-run outputs depend on every
+        component: e.g. for ARX ``y(t) = sum_i a_i y(t-i) + ...`` with ``max_lag_ = na``, the
+        first ``na`` outputs are a triangular map of ``y(-na) .. y(-1)`` with ``a_na`` on its
+        diagonal, so any ``a_na != 0`` makes it unique.
+
+        Parameters
+        ----------
+        u : array (N, nu) or (N,)
+            Input record starting at sample 0.
+        y : array (N, ny) or (N,)
+            Measured outputs, time-aligned with ``u``.
+        n_fit : int, optional (keyword only)
+            Number of first samples fitted, ``max_lag_ <= n_fit <= N``. Default ``min(N,
+            max(50, 2 max_lag_))``: the 50 samples nonlinear_benchmarks' initialisation windows
+            use.
+
+        Raises
+        ------
+        IdentificationError
+            On a bad ``n_fit``, mismatched records, or a free run from a zero past that is not
+            bounded over the fitted samples for a model affine in its state.
+        """
+        self._check_fitted()
+        u = as_signal(u, "u", n_channels=self.n_inputs_)
+        y = as_signal(y, "y", n_channels=self.n_outputs_)
+        check_same_length(u, y, "u", "y")
+        p, N = self.max_lag_, u.shape[0]
+        if n_fit is None:
+            n_fit = min(N, max(50, 2 * p))
+        if (
+            not isinstance(n_fit, (int, np.integer))
+            or isinstance(n_fit, bool)
+            or not max(p, 1) <= n_fit <= N
+        ):
+            raise IdentificationError(
+                f"n_fit must be an integer number of samples in [max(max_lag_, 1), N] = "
+                f"[{max(p, 1)}, {N}], got {n_fit!r}"
+            )
+        bound, uf = self.bound_, u[:n_fit]
+
+        def run(state):
+            try:
+                return self._run_from_state(uf, state, bound)
+            except SimulationDivergedError:
+                return None
+
+        return estimate_state(run, y[:n_fit], p, affine=self._state_affine())
+
+    def _state_affine(self) -> bool:
+        """True when every term holds at most one past-output factor, untransformed: the free
+        run is then affine in its initial state."""
+        ny = self.n_outputs_
+        for ch in self.channels_:
+            is_out = np.concatenate([[False], ch.regressors[:, 0] < ny])
+            out_fun = np.concatenate([[False], (ch.regressors[:, 0] < ny) & ch.transformed])
+            if np.any(is_out[ch.terms].sum(axis=1) > 1) or np.any(out_fun[ch.terms]):
+                return False
+        return True
 
     def _bound(self, bound) -> np.ndarray:
         if bound is None:
