@@ -53,6 +53,7 @@ from .structure import (
     polynomial_term_count,
     polynomial_terms,
 )
+from .validation import criterion_value
 
 __all__ = ["Arx", "Narx"]
 
@@ -357,8 +358,9 @@ class Narx:
         margin. With ``focus="simulation"`` a model must also be bounded at the margin (it is
         meant for simulation, on inputs other than the record): otherwise, when terms feed
         past outputs back non-linearly, three remedies are tried and the bounded one whose free
-        run validates best on the refinement's held-out end (``holdout``; the whole record when
-        0) is kept: (a) those terms' coefficients damped (x0.5, 0.25, ... until bounded, see
+        run validates best on the refinement's held-out end (``holdout``) is kept (with
+        ``holdout=0`` nothing is held out and a larger model always fits the record better:
+        the one with the smallest BIC of its free-run error over the record): (a) those terms' coefficients damped (x0.5, 0.25, ... until bounded, see
         :data:`DAMPING_FACTORS`) and the refinement rerun with every accepted step bounded at
         1x, at the margin and at :data:`REMEDY_HEADROOM` times the margin (there also on the
         input reversed in time: a second waveform of the same amplitude and spectrum); (b) the
@@ -394,8 +396,9 @@ class Narx:
         not; ``"remedy"``: what was done to make the free run bounded, or None; ``"tried"``,
         only when a remedy ran: one dict per remedy tried with ``"remedy"``, ``"bounded"`` (on
         the identification input at 1x and at the margin, and on the held-out probe inputs),
-        ``"validation_error"`` (RMS free-run error / std of each output on the held-out end,
-        inf when not bounded) and ``"chosen"``)
+        ``"validation_error"`` (RMS free-run error / std of each output on the held-out end, or
+        the whole record with ``holdout=0``; inf when not bounded), with ``holdout=0``
+        ``"bic"`` (the score then), and ``"chosen"``)
     """
 
     _linear_only = False
@@ -790,15 +793,17 @@ class Narx:
             tried = [report for report, _ in runs]
             ok = [i for i, r in enumerate(tried) if r["bounded"]]
             last = len(runs) - 1  # the drop: kept on a tie (fewer terms) or when none is bounded
-            best = min(ok, key=lambda i: (tried[i]["validation_error"], i != last), default=last)
+            score = "bic" if self.holdout == 0 else "validation_error"
+            best = min(ok, key=lambda i: (tried[i][score], i != last), default=last)
             self._restore(runs[best][1])
             for i, r in enumerate(tried):
                 r["chosen"] = i == best
             pick = tried[best]
             done.append(pick["remedy"])
             if pick["bounded"]:
+                where = "held-out" if self.holdout > 0 else "whole-record (by BIC)"
                 return (
-                    f"{pick['remedy']} (held-out free-run error {pick['validation_error']:.3g}; "
+                    f"{pick['remedy']} ({where} free-run error {pick['validation_error']:.3g}; "
                     f"the best bounded of {len(tried)} remedies tried, see stability_['tried'])",
                     tried,
                 )
@@ -843,7 +848,8 @@ class Narx:
                 break
         else:
             what = f"damping the non-linear output feedback (down to x{DAMPING_FACTORS[-1]:g})"
-            runs.append(({"remedy": what, "bounded": False, "validation_error": np.inf}, None))
+            report = {"remedy": what, "bounded": False, "validation_error": np.inf}
+            runs.append(({**report, "bic": np.inf} if self.holdout == 0 else report, None))
         self._restore(start)
         kept = tuple(
             dataclasses.replace(ch, terms=ch.terms[~m])
@@ -884,8 +890,14 @@ class Narx:
                 simulate_plan(self.plan_, probe, None, self.bound_, self.output_names_)
         except SimulationDivergedError:
             bounded = False
-        error = self._validation_error(u, y) if bounded else np.inf
-        return {"remedy": what, "bounded": bounded, "validation_error": error}, self._state()
+        report = {
+            "remedy": what,
+            "bounded": bounded,
+            "validation_error": self._validation_error(u, y) if bounded else np.inf,
+        }
+        if self.holdout == 0:
+            report["bic"] = self._free_run_bic(u, y) if bounded else np.inf
+        return report, self._state()
 
     def _feasibility(self, flat: FlatModel, u, y):
         """``feasible(theta)``: the free run of ``flat`` with ``theta`` bounded within
@@ -924,15 +936,34 @@ class Narx:
         the record; inf when the free run leaves ``bound_``."""
         N, p = u.shape[0], self.max_lag_
         cut = max(round(N * (1.0 - self.holdout)), p) if self.holdout > 0 else p
+        e = self._free_run_residuals(u, y, cut)
+        if e is None:
+            return np.inf
         std = y[p:].std(axis=0)
-        w = 1.0 / np.where(std > 0, std, 1.0)
+        return float(np.sqrt(np.mean((e / np.where(std > 0, std, 1.0)) ** 2)))
+
+    def _free_run_residuals(self, u, y, cut: int):
+        """``y[cut:]`` minus the free run from the measured outputs before ``cut`` (None when
+        it leaves ``bound_``)."""
+        p = self.max_lag_
         try:
             sim = simulate_plan(
                 self.plan_, u[cut - p :], y[cut - p : cut], self.bound_, self.output_names_
             )
         except SimulationDivergedError:
+            return None
+        return y[cut:] - sim[p:]
+
+    def _free_run_bic(self, u, y) -> float:
+        """BIC of the free-run residuals over the record (:func:`~.validation.criterion_value`,
+        every coefficient counted): the remedies' score when nothing is held out."""
+        e = self._free_run_residuals(u, y, self.max_lag_)
+        if e is None:
             return np.inf
-        return float(np.sqrt(np.mean(((y[cut:] - sim[p:]) * w) ** 2)))
+        try:
+            return criterion_value("bic", e, int(self.n_terms_.sum()))
+        except IdentificationError:  # an exact free run (V = 0) or too few samples
+            return -np.inf if not np.any(e) else np.inf
 
     def _least_squares_fixed(self, u, y, channels):
         """Least squares on a given structure (no selection)."""

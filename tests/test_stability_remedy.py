@@ -151,3 +151,20 @@ def test_the_probe_inputs_are_other_waveforms_of_the_same_spectrum():
         cross = ps[:, 0] * np.conj(ps[:, 1])
         np.testing.assert_allclose(cross, spec[:, 0] * np.conj(spec[:, 1]), atol=1e-7)
         assert np.corrcoef(p[:, 0], u[:, 0])[0, 1] < 0.5  # another waveform
+
+
+def test_with_nothing_held_out_the_remedies_are_compared_by_bic():
+    """``holdout=0``: the whole-record error always favours the larger model, so the remedies
+    are scored by BIC; the chosen one has the smallest among the bounded ones."""
+    u = _input(0)
+    clean = _system(u)
+    y = clean + 0.05 * clean.std() * np.random.default_rng(1).standard_normal(u.size)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", StabilityWarning)
+        model = Narx(order=2, degree=3, focus="simulation", holdout=0.0).fit(u, y)
+    tried = model.stability_["tried"]
+    bounded = [t for t in tried if t["bounded"]]
+    assert bounded and all(np.isfinite(t["bic"]) for t in bounded)
+    chosen = next(t for t in tried if t["chosen"])
+    assert chosen["bic"] == min(t["bic"] for t in bounded)
+    assert "by BIC" in model.stability_["remedy"]
