@@ -328,13 +328,16 @@ def _lm_step(A, grad, mu):
 def _lm_stage(flat, theta, data, horizon, max_iter, tol, monitor=None):
     """Levenberg-Marquardt at one horizon (Marquardt scaling, Nielsen's damping update).
 
-    Solves ``(J^T J + mu diag(J^T J)) delta = J^T e``; a trial whose free run leaves the bound
-    is rejected. With a ``monitor`` the stage also stops when the held-out error has not
-    improved for its patience (early stopping). Returns ``(theta, cost, its, converged, hist)``.
+    Solves ``(J^T J + mu diag(J^T J)) delta = J^T e``; a trial whose free run leaves the bound,
+    or that ``feasible`` (the last item of ``data``, None: no constraint) refuses, is rejected.
+    With a ``monitor`` the stage also stops when the held-out error has not improved for its
+    patience (early stopping). Returns ``(theta, cost, its, converged, hist)``.
     """
-    u, y, w, bound = data
+    u, y, w, bound, feasible = data
 
     def evaluate(th, jac):
+        if not jac and feasible is not None and not feasible(th):
+            return None, None, None
         return simulation_error(
             flat, th, u, y, horizon=horizon, weight=w, bound=bound, jacobian=jac
         )
@@ -394,6 +397,7 @@ def refine(
     tol: float = 1e-5,
     bound: np.ndarray | None = None,
     holdout: float = 0.0,
+    feasible=None,
 ) -> RefinementResult:
     """Minimise the free-run error of ``flat`` over the record ``u, y`` from ``theta0``.
 
@@ -422,6 +426,11 @@ def refine(
         the free-run error on the held-out part has not improved for 5 accepted steps and keeps
         the latest iterate within 1 % of the best held-out error. 0: no early stopping, the
         whole record is fitted.
+    feasible : callable, optional
+        A constraint ``feasible(theta) -> bool`` (e.g. a bounded free run on other inputs):
+        every trial step it refuses is rejected like a diverging one, so from a feasible
+        ``theta0`` every accepted iterate, hence the result, is feasible (a descent method
+        kept inside the feasible set; no projection). Default: no constraint.
     """
     N, ny = y.shape
     p = flat.max_lag
@@ -438,7 +447,7 @@ def refine(
             )
         monitor = _Monitor(flat, u[cut - p :], y[cut - p :], w, bound)
         u, y, N = u[:cut], y[:cut], cut
-    data = (u, y, w, bound)
+    data = (u, y, w, bound, feasible)
     theta = np.array(theta0, dtype=np.float64)
     full = N if horizon is None else min(int(horizon), N)
     e0, _, _ = simulation_error(flat, theta, u, y, horizon=full, weight=w, bound=bound)
