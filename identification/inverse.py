@@ -166,7 +166,7 @@ class InverseModel:
     ):
         if not isinstance(model, (Narx, ErrorSignalModel, NarxSearch)):
             raise IdentificationError(
-                "model must be a Narx, Arx, ErrorSignalModel or NarxSearch instance, got "
+                "model must be a Narx or Arx (or an ErrorSignalModel or a NarxSearch) instance, got "
                 f"{type(model).__name__}"
             )
         if lead not in ("auto", "delay") and (not isinstance(lead, (int, np.integer)) or lead < 0):
