@@ -191,6 +191,12 @@ def test_reconstruct_a_desired_file(reconstructed, tmp_path, capsys):
         (["--rig", "shock-absorber", "--seconds", "1"], "--seconds must be 2..3600"),
         (["--rig", "shock-absorber", "--degree", "3"], "--degree applies to narx and split"),
         (["--rig", "shock-absorber", "--split-hz", "3"], "--split-hz applies to --method split"),
+        (["--rig", "shock-absorber", "--search"], "--search applies to --method narx only"),
+        (["--rig", "shock-absorber", "--budget", "5"], "--budget applies to --search only"),
+        (
+            ["--rig", "shock-absorber", "--method", "narx", "--search", "--budget", "0"],
+            "--budget must be a positive number of seconds",
+        ),
         (["--rig", "shock-absorber", "--method", "frf", "--order", "3"], "--order applies to"),
         (["--rig", "shock-absorber", "--order", "0"], "--order must be 1..20"),
         (

@@ -89,6 +89,22 @@ def test_inverse_narx_is_exact_when_the_inverse_is_polynomial():
     np.testing.assert_allclose(recovered[:-1], drive[:-1], atol=1e-9)
 
 
+@pytest.mark.filterwarnings("ignore::identification.errors.RankDeficiencyWarning")
+def test_a_searched_inverse_finds_the_polynomial_inverse_and_its_lead():
+    """The same plant: its inverse is a quadratic NARX with lead 1 and order 1. A NarxSearch
+    inverse (the lead chosen by its ARX stand-in first) recovers the drive to round-off."""
+    from identification import NarxSearch
+
+    drive_id = 0.5 * band_limited_noise(4000, 1, cutoff=0.4, seed=5)[:, 0]
+    search = NarxSearch(budget=None, orders=(1, 2), degrees=(1, 2), kinds=("full",))
+    inv = InverseModel(search, lead="auto").fit(drive_id, _quadratic_plant(drive_id))
+    assert inv.lead_ == 1 and isinstance(inv.model, Narx)
+    assert inv.search_.best_result_.candidate.degree == 2
+    drive = 0.4 * band_limited_noise(3000, 1, cutoff=0.3, seed=6)[:, 0]
+    recovered = inv.simulate(_quadratic_plant(drive))[:, 0]
+    np.testing.assert_allclose(recovered[:-1], drive[:-1], atol=1e-8)
+
+
 def test_inverse_model_bad_input():
     with pytest.raises(IdentificationError, match="lead"):
         InverseModel(Arx(order=2), lead=-1)

@@ -523,3 +523,34 @@ def test_a_narx_inverse_is_kept_bounded_at_the_desired_responses_level():
     assert abs(coef["drive(t-1)*drive(t-1)"] - 0.25) < 0.02  # the generating structure
     with pytest.raises(SimulationDivergedError):
         exact.drive(th(2.0 * r, "response"))  # reported as a divergence, not a huge drive
+
+
+def test_a_searched_narx_method_reports_its_search():
+    """InverseNarx(search=True): the inverse's structure found by NarxSearch within its budget;
+    the plant's exact inverse is linear (order 1 with a lead of 1 sample), so the search's
+    drive for a fresh response matches the true drive, and the search's table is reported."""
+    from identification import band_limited_noise
+    from vrig.reconstruction import InverseNarx
+
+    def plant(d):
+        return np.concatenate([[0.0], 0.5 * d[:-1]]) + 0.3 * np.concatenate(
+            [[0.0, 0.0], d[:-2]]
+        )
+
+    fs = 200.0
+    d_id = band_limited_noise(5000, 1, cutoff=0.3, seed=1)[:, 0]
+    d_new = band_limited_noise(2000, 1, cutoff=0.2, seed=2)[:, 0]
+
+    def th(x, name):
+        return vrig.TimeHistory(x[:, None], fs, [name], ["m"])
+
+    method = InverseNarx(2, 2, search=True, budget=20.0)
+    assert method.options()["search"] is True
+    method.identify(th(d_id, "drive"), th(plant(d_id), "load"))
+    report = method.search_report()
+    assert report.startswith("NarxSearch:") and "searched:" in method.describe()
+    drive = method.drive(th(plant(d_new), "load"))[:, 0]
+    err = np.sqrt(np.mean((drive[200:-5] - d_new[200:-5]) ** 2)) / d_new.std()
+    assert err < 1e-3, (err, method.describe())
+    with pytest.raises(ValueError, match="search must be True or False"):
+        InverseNarx(2, 2, search="yes")
