@@ -390,6 +390,7 @@ class Narx:
     input_names_, output_names_ : tuple of str
     bound_ : ndarray, free-run bound per output channel
     fit_time_ : float, seconds spent in fit
+    timed_out_ : bool, the fit's ``deadline`` passed before its iterative stages ended
     refinement_ : RefinementResult or None, what the simulation focus did
     coef_std_ : tuple of ndarray or None, standard errors of ``coef_`` (simulation focus)
     stability_ : dict, the stability contract's checks (``"input"``, ``"margin"``: bounded or
@@ -559,7 +560,7 @@ class Narx:
         )
 
     # ------------------------------------------------------------------ fitting
-    def fit(self, u, y, *, input_names=None, output_names=None):
+    def fit(self, u, y, *, input_names=None, output_names=None, deadline=None):
         """Identify the model from input ``u`` (N, nu) and output ``y`` (N, ny); returns self.
 
         Channels that share a structure share one regression matrix, factorised once for all
@@ -576,8 +577,15 @@ class Narx:
             Identification output record, same N, in its physical units.
         input_names, output_names : sequence of str, optional
             Channel names (default ``u1, u2, ...``, ``y1, y2, ...``), kept in the model.
+        deadline : float, optional
+            A ``time.perf_counter()`` value after which the iterative stages stop early and keep
+            the best reached so far: the simulation-error refinement (and the stability remedy's
+            refinements) start no further iteration, and free-run term selection (SEMP) adds no
+            further term. ``timed_out_`` says whether it happened. The least-squares fit and the
+            stability contract always run to the end. Default: no deadline.
         """
         t0 = time.perf_counter()
+        self._deadline = deadline
         u, y = self._fit_least_squares(u, y, input_names, output_names)
         if self.focus == "simulation":
             self._refine(u, y)
@@ -586,6 +594,8 @@ class Narx:
             self.contraction_ = self.stabilise(self.max_radius)
         self._enforce_stability(u, y)
         self.fit_time_ = time.perf_counter() - t0
+        self.timed_out_ = deadline is not None and time.perf_counter() > deadline
+        self._deadline = None
         return self
 
     def _fit_least_squares(self, u, y, input_names=None, output_names=None):
@@ -619,6 +629,7 @@ class Narx:
         self.contraction_ = 1.0
         self.stability_ = {"input": None, "margin": None, "remedy": None}
         self.fit_time_ = float("nan")
+        self.timed_out_ = False
         return u, y
 
     def _least_squares(self, u, y, channels, start):
@@ -707,6 +718,7 @@ class Narx:
             bound=self.bound_,
             holdout=self.holdout,
             feasible=feasible,
+            deadline=getattr(self, "_deadline", None),
         )
         self.refinement_, self.coef_std_ = res, None
         if not np.isfinite(res.cost):

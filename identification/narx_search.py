@@ -202,7 +202,8 @@ class CandidateResult:
         ``ok``: validated; ``rejected``: fitted but a free run diverged (see ``reason``);
         ``failed``: the fit raised; ``skipped``: not tried (budget, size).
     reason : str
-        Why it was rejected, failed or skipped ("" when ok).
+        Why it was rejected, failed or skipped; for an ok row "" or a note (its fit was cut
+        short by the budget: ``Narx.fit(deadline=...)``).
     score : float
         Mean over the outputs of the validation free-run error (RRSE; ``inf`` unless ok).
     scores : ndarray (ny,)
@@ -673,8 +674,9 @@ class NarxSearch:
         sq_err, sq_dev, one_step = 0.0, 0.0, []
         for ufit, yfit, blocks, stress in self._folds:
             model = c.narx(self.criterion, self.options)
+            deadline = None if self._deadline is None else self._deadline - self._reserve()
             try:
-                model.fit(ufit, yfit)
+                model.fit(ufit, yfit, deadline=deadline)
             except (IdentificationError, np.linalg.LinAlgError, FloatingPointError) as exc:
                 result.status, result.reason = "failed", _first_line(exc)
                 if isinstance(exc, UnstableModelError) and hasattr(model, "coef_"):
@@ -686,6 +688,8 @@ class NarxSearch:
                 result.status, result.reason = "rejected", verdict
                 result.one_step = self._one_step(model, blocks)
                 return
+            if model.timed_out_:
+                result.reason = "cut short by the budget (the best iterate reached)"
             sq_err, sq_dev = sq_err + verdict[0], sq_dev + verdict[1]
             one_step.append(self._one_step(model, blocks))
             self._models.setdefault(c, model)

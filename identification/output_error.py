@@ -27,6 +27,8 @@ sizes here). The Jacobian itself is checked against finite differences in the te
 
 from __future__ import annotations
 
+import time
+
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -252,6 +254,9 @@ class RefinementResult:
         coefficients, i.e. refinement made the held-out error worse; a short or
         unrepresentative held-out part can cause that: try ``holdout=0``). None without a
         holdout.
+    timed_out : bool
+        The ``deadline`` passed before the iterations ended (the result is the best iterate
+        reached by then).
     """
 
     theta: np.ndarray
@@ -263,6 +268,7 @@ class RefinementResult:
     converged: bool
     history: list[float] = field(default_factory=list)
     kept_step: int | None = None
+    timed_out: bool = False
 
 
 def _check_budget(rows: int, n_params: int) -> None:
@@ -333,7 +339,7 @@ def _lm_stage(flat, theta, data, horizon, max_iter, tol, monitor=None):
     With a ``monitor`` the stage also stops when the held-out error has not improved for its
     patience (early stopping). Returns ``(theta, cost, its, converged, hist)``.
     """
-    u, y, w, bound, feasible = data
+    u, y, w, bound, feasible, deadline = data
 
     def evaluate(th, jac):
         if not jac and feasible is not None and not feasible(th):
@@ -350,6 +356,8 @@ def _lm_stage(flat, theta, data, horizon, max_iter, tol, monitor=None):
     cost, A, grad = float(e @ e), J.T @ J, J.T @ e
     mu, nu, its, history = 1e-3, 2.0, 0, []
     while its < max_iter:
+        if deadline is not None and time.perf_counter() > deadline:
+            return theta, cost, its, False, history
         its += 1
         delta, d = _lm_step(A, grad, mu)
         if delta is None:
@@ -398,6 +406,7 @@ def refine(
     bound: np.ndarray | None = None,
     holdout: float = 0.0,
     feasible=None,
+    deadline: float | None = None,
 ) -> RefinementResult:
     """Minimise the free-run error of ``flat`` over the record ``u, y`` from ``theta0``.
 
@@ -431,6 +440,10 @@ def refine(
         every trial step it refuses is rejected like a diverging one, so from a feasible
         ``theta0`` every accepted iterate, hence the result, is feasible (a descent method
         kept inside the feasible set; no projection). Default: no constraint.
+    deadline : float, optional
+        A ``time.perf_counter()`` value after which no further iteration starts; the result is
+        then the best iterate reached (early stopping's choice still applies) and says
+        ``timed_out``. Default: no deadline.
     """
     N, ny = y.shape
     p = flat.max_lag
@@ -447,7 +460,7 @@ def refine(
             )
         monitor = _Monitor(flat, u[cut - p :], y[cut - p :], w, bound)
         u, y, N = u[:cut], y[:cut], cut
-    data = (u, y, w, bound, feasible)
+    data = (u, y, w, bound, feasible, deadline)
     theta = np.array(theta0, dtype=np.float64)
     full = N if horizon is None else min(int(horizon), N)
     e0, _, _ = simulation_error(flat, theta, u, y, horizon=full, weight=w, bound=bound)
@@ -482,7 +495,10 @@ def refine(
             flat, theta, u, y, horizon=stages[-1], weight=w, bound=bound, jacobian=True
         )
         cov = _covariance(e, J, flat)
-    return RefinementResult(theta, cost, initial, total, stages, cov, converged, history, kept)
+    late = deadline is not None and time.perf_counter() > deadline
+    return RefinementResult(
+        theta, cost, initial, total, stages, cov, converged, history, kept, late and not converged
+    )
 
 
 def _covariance(e, J, flat: FlatModel):

@@ -201,3 +201,15 @@ def test_report_lists_every_candidate_with_its_fate(known_narx_search):
     assert "order 2, degree 2 full" in text
     with pytest.raises(IdentificationError, match="not fitted"):
         NarxSearch().report()
+
+
+def test_a_fit_past_its_deadline_stops_iterating_and_says_so():
+    """Narx.fit(deadline=...): a deadline already past stops the simulation-error refinement
+    before its first iteration (the least-squares start is kept, the contract still holds)."""
+    x, _, yn = _problem_a(2000, seed=8)
+    late = Narx(order=2, degree=2, focus="simulation").fit(x, yn, deadline=time.perf_counter())
+    assert late.timed_out_ and late.refinement_.timed_out
+    assert late.refinement_.iterations == 0
+    assert late.stability_["input"] is True
+    free = Narx(order=2, degree=2, focus="simulation").fit(x, yn)
+    assert not free.timed_out_ and free.refinement_.iterations > 0
