@@ -28,7 +28,6 @@ sizes here). The Jacobian itself is checked against finite differences in the te
 from __future__ import annotations
 
 import time
-
 from dataclasses import dataclass, field
 
 import numpy as np
