@@ -111,6 +111,22 @@ def _probe_inputs(u: np.ndarray, scale: float, n: int = N_PROBES, seed: int = 0)
     return out
 
 
+def _check_terms_finite(X: np.ndarray, u: np.ndarray, y: np.ndarray, outputs) -> None:
+    """An :class:`IdentificationError` saying why when a regression matrix built from finite
+    records is not finite: a polynomial term of the records overflowed float64 (records of
+    magnitude ~1e300 to the degree 2). A least-squares fit is otherwise scale-invariant (the
+    solvers scale each column without overflow), so the remedy is to rescale the records."""
+    if np.all(np.isfinite(X)):
+        return
+    col = int(np.flatnonzero(~np.all(np.isfinite(X), axis=0))[0])
+    raise IdentificationError(
+        f"output channel(s) {list(outputs)}: regression term {col} overflows float64 (the "
+        f"records peak at |u| = {np.max(np.abs(u)):.3g}, |y| = {np.max(np.abs(y)):.3g}; a "
+        "product of lagged values is beyond 1.8e308): rescale the records (e.g. to SI or "
+        "percent units) or lower the degree"
+    )
+
+
 def _names(given, n: int, prefix: str, what: str) -> tuple[str, ...]:
     if given is None:
         return tuple(f"{prefix}{i + 1}" for i in range(n))
@@ -646,6 +662,7 @@ class Narx:
         paths: list = [None] * ny
         for g in groups:
             X = regression_matrix(u, y, channels[g[0]], start)
+            _check_terms_finite(X, u, y, g)
             if not select:
                 coef = solve(X, y[start:, g], rcond=self.rcond)
                 for j, k in enumerate(g):
