@@ -35,7 +35,7 @@ from .errors import (
     UnstableModelError,
 )
 from .free_run_selection import check_criterion, criterion_path, simulation_selection
-from .output_error import FlatModel, refine
+from .output_error import FlatModel, check_refinement_budget, refine
 from .regression import regression_matrix
 from .selection import forward_regression
 from .simulation import compile_plan, predict_plan_k_step, simulate_plan
@@ -624,6 +624,8 @@ class Narx:
                     f"({N} samples minus the largest lag {start}). Provide at least "
                     f"{ch.n_terms + start} samples, or lower the order/degree."
                 )
+        if self.focus == "simulation":  # refused now, not after the least-squares start
+            self._check_refinement_size(channels, rows, ny)
         self.n_inputs_, self.n_outputs_ = nu, ny
         self.input_names_ = _names(input_names, nu, "u", "input_names")
         self.output_names_ = _names(output_names, ny, "y", "output_names")
@@ -636,6 +638,20 @@ class Narx:
         self.stability_ = {"input": None, "margin": None, "remedy": None}
         self.fit_time_ = float("nan")
         return u, y
+
+    def _check_refinement_size(self, channels, rows: int, ny: int) -> None:
+        """``focus="simulation"``: the output-error Jacobian the refinement will need
+        (:func:`~.output_error.refine`: ``rows x ny`` residuals by the model's parameters), checked
+        against the memory budget before anything is built. Its size is known now (every term,
+        or ``n_terms`` per channel with forward selection); with ``err_tol`` / ``criterion`` the
+        term count is only known after the selection, and ``refine`` checks it then."""
+        if self.selection == "simulation" or self.err_tol is not None or self.criterion:
+            return
+        n_params = sum(
+            ch.n_terms if self.n_terms is None else min(self.n_terms, ch.n_terms)
+            for ch in channels
+        )
+        check_refinement_budget(rows * ny, n_params)
 
     def _least_squares(self, u, y, channels, start):
         """One-step least squares (with forward selection when asked): channels, coefs, errs."""
