@@ -554,3 +554,45 @@ def test_a_searched_narx_method_reports_its_search():
     assert err < 1e-3, (err, method.describe())
     with pytest.raises(ValueError, match="search must be True or False"):
         InverseNarx(2, 2, search="yes")
+
+
+# ---------------------------------------------------------------------------------------------
+# issue 25 item 7: a user's own rig (a side-car without a "reconstruction" block)
+# ---------------------------------------------------------------------------------------------
+USER_RIG = __import__("pathlib").Path(__file__).parent / "data" / "servo_mass.rig.json"
+
+
+def test_split_on_a_users_rig_splits_at_the_bands_rule_not_a_type_error():
+    """``vrig.reconstruct(rig, desired, method="split")`` on a rig loaded from its path whose
+    side-car has no "reconstruction" block raised ``TypeError: SplitSpectra.__init__() missing
+    ... 'split_hz'``. The rule (vrig.field.default_split_hz, the one the CLI and the envs use):
+    the side-car's split, else the band's geometric mean, or a quarter of its upper edge for a
+    band from 0 Hz."""
+    from vrig.field import default_split_hz
+    from vrig.reconstruction import DriveIteration
+
+    rig = vrig.load_rig(USER_RIG)
+    assert rig.defaults.method("split").split_hz is None and rig.bandwidth == (0.0, 250.0)
+    desired = vrig.TimeHistory(np.zeros((4000, 2)), rig.fs, [c.name for c in rig.outputs])
+    assert DriveIteration(rig, desired, method="split").method.split_hz == 250.0 / 4
+    band = DriveIteration(rig, desired, method="split", bandwidth=(4.0, 100.0)).method
+    assert band.split_hz == pytest.approx(20.0)  # sqrt(4 * 100)
+    given = DriveIteration(rig, desired, method="split", split_hz=30.0).method
+    assert given.split_hz == 30.0
+    assert default_split_hz((0.0, 40.0)) == 10.0 and default_split_hz((1.0, 100.0)) == 10.0
+    # a shipped rig whose side-car names its split keeps it (the shaker: 40 Hz in 10-60 Hz)
+    shaker = vrig.load_rig("shaker", fidelity="fast")
+    assert default_split_hz((10.0, 60.0), shaker) == 40.0
+    # the method by name without its required option: a ValueError naming it
+    with pytest.raises(ValueError, match="split_hz"):
+        vrig.reconstruction.make_method("split")
+
+
+def test_reconstruct_split_runs_on_a_users_rig():
+    rig = vrig.load_rig(USER_RIG, fidelity="fast")
+    names = [c.name for c in rig.inputs]
+    drive = random_drive(triangular_psd((0.0, 40.0)), 4000, rig.fs, rms=0.002, seed=1, names=names)
+    desired = rig.run(drive, seed=2)
+    result = reconstruct(rig, desired, method="split", iterations=1, bandwidth=(0.0, 40.0))
+    assert result.method.split_hz == 10.0
+    assert result.errors.shape == (2, 2) and np.all(np.isfinite(result.errors))

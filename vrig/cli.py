@@ -74,7 +74,14 @@ from pathlib import Path
 
 import numpy as np
 
-from .field import TARGET_KINDS, default_band, desired_response, parse_target, pseudo_field
+from .field import (
+    TARGET_KINDS,
+    default_band,
+    default_split_hz,
+    desired_response,
+    parse_target,
+    pseudo_field,
+)
 
 __all__ = ["EXIT_CODE_MEANINGS", "STOP_EXIT", "ExitCode", "main"]
 
@@ -654,9 +661,9 @@ def _method(args, band):
         return InverseNarx(order, degree, focus=focus), f"narx order {order} degree {degree}{fit}"
     if m == "split":
         lo, hi = band
-        split = args.split_hz
+        split = args.split_hz  # the side-car's when the user gave none (_defaults)
         if split is None:
-            split = float(np.sqrt(lo * hi)) if lo > 0 else hi / 4
+            split = default_split_hz(band)
         if not lo < split < hi:
             raise _UsageError(
                 f"--split-hz must lie inside the band {lo:g}-{hi:g} Hz, got {split:g}"

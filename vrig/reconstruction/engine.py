@@ -15,7 +15,7 @@ from scipy.signal import windows
 from identification.errors import SimulationDivergedError
 
 from ..errors import RigLimitError, SimulationInstabilityError
-from ..field import default_band
+from ..field import default_band, default_split_hz
 from ..processing import band_gains, decimate, gprepro, identification_band
 from ..progress import status
 from ..rigs.limits import check_drive_limits
@@ -117,6 +117,8 @@ class DriveIteration:
     settings : IterationSettings, optional
         The iteration's settings (default: the defaults); the engine uses the identification
         ones and ``id_seed`` / ``run_seed``, the loop's (gain, iterations, ...) are the caller's.
+        Method ``"split"`` without a ``split_hz`` option splits at
+        :func:`vrig.field.default_split_hz` (the rig side-car's split, else the band's rule).
     **options
         Settings by name applied on top of ``settings`` (see :meth:`IterationSettings.build`).
     """
@@ -141,7 +143,10 @@ class DriveIteration:
         band = s.bandwidth if s.bandwidth is not None else default_band(rig)  # side-car's
         self.band = _check_band(band, rig.fs)
         self.id_band = identification_band(self.band, fs=rig.fs)
-        self.method = make_method(s.method, **s.method_options)
+        options = dict(s.method_options)
+        if s.method == "split" and "split_hz" not in options:  # the rig's, else the band's
+            options["split_hz"] = default_split_hz(self.band, rig)
+        self.method = make_method(s.method, **options)
         self.decimation = (
             max(1, int(rig.fs // (8 * self.id_band[1]))) if s.decimation is None else s.decimation
         )

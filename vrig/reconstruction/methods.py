@@ -672,6 +672,13 @@ def make_method(method, **options):
                 f"method {method!r} takes no option {', '.join(map(repr, unknown))}; its options: "
                 f"{', '.join(takes) or 'none'}"
             )
+    missing = [
+        n for n, p in params.items()
+        if p.default is p.empty and p.kind in (p.POSITIONAL_OR_KEYWORD, p.KEYWORD_ONLY)
+        and n not in options
+    ]  # fmt: skip
+    if missing:  # e.g. split without split_hz (vrig.reconstruct fills it from the rig's band)
+        raise ValueError(f"method {method!r} needs the option(s) {', '.join(missing)}")
     try:
         return cls(**options)
     except TypeError as exc:  # an option the class's base does not take either
