@@ -82,6 +82,7 @@ from .field import (
     parse_target,
     pseudo_field,
 )
+from .files import file_kind, mount_points
 
 __all__ = ["EXIT_CODE_MEANINGS", "STOP_EXIT", "ExitCode", "main"]
 
@@ -685,14 +686,40 @@ def _method(args, band):
 
 def _out_dir(out, default: str, overwrite: bool) -> Path:
     path = Path(out) if out else Path("results") / default
+    try:
+        _check_out_dir(path, overwrite)
+    except OSError as exc:  # e.g. a name too long for the file system: bad input, up front
+        raise _UsageError(f"--out {path}: {exc.strerror or exc}") from None
+    return path
+
+
+def _check_out_dir(path: Path, overwrite: bool) -> None:
+    """``--out`` before anything runs: a folder (or nothing yet), empty unless ``--overwrite``,
+    and one the save may replace: not the working directory or a folder holding it (the shell
+    would be left in a deleted directory), not a mount point and holding none (a mounted file
+    system would be emptied: :func:`vrig.files.mount_points`)."""
     if path.exists() and not path.is_dir():
         raise _UsageError(f"--out {path} is a file, not a folder")
-    if path.is_dir() and any(path.iterdir()) and not overwrite:
+    if not path.is_dir():
+        return
+    if any(path.iterdir()) and not overwrite:
         raise _UsageError(
             f"results folder {path} is not empty: pass --overwrite to replace its records, or "
             "choose another --out"
         )
-    return path
+    here, target = Path.cwd().resolve(), path.resolve()
+    if target == here or target in here.parents:
+        raise _UsageError(
+            f"--out {path} is the current directory or holds it: the results folder is replaced "
+            "as a whole, which would leave your shell in a deleted directory; choose a new "
+            "folder (e.g. --out results)"
+        )
+    mounted = mount_points(path)
+    if mounted:
+        raise _UsageError(
+            f"--out {path}: {mounted[0]} is a mount point; replacing the folder would empty a "
+            "mounted file system (or fail to move it): choose another --out"
+        )
 
 
 # ---------------------------------------------------------------------------------------------
@@ -788,9 +815,16 @@ def _check_reconstruct_args(args) -> None:
     ):
         raise _UsageError(f"--seconds must be 2..{_MAX_SECONDS:g}, got {args.seconds:g}")
     _check_seed(args.seed)
-    if args.desired is not None and not Path(args.desired).is_file():
-        what = "a folder, not a file" if Path(args.desired).is_dir() else "no file"
-        raise _UsageError(f"--desired: {what} {args.desired}")
+    if args.desired is not None:
+        try:
+            kind = file_kind(args.desired)
+        except OSError as exc:  # e.g. a name too long
+            raise _UsageError(f"--desired {args.desired}: {exc.strerror or exc}") from None
+        if kind in ("no file", "a folder"):
+            what = "no file" if kind == "no file" else "a folder, not a file"
+            raise _UsageError(f"--desired: {what} {args.desired}")
+        if kind is not None:  # a FIFO, a device...: never "no file" (issue 25)
+            raise _UsageError(f"--desired {args.desired} is not a regular file: it is {kind}")
 
 
 def _cmd_reconstruct(args) -> int:
