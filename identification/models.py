@@ -516,6 +516,44 @@ class Narx:
             channels.append(ch)
         return tuple(channels)
 
+    def term_count(self, n_outputs: int, n_inputs: int) -> np.ndarray:
+        """Polynomial terms per output channel of this structure on ``n_outputs`` outputs and
+        ``n_inputs`` inputs, in closed form (nothing is built): what a fit needs at least as
+        many samples as (after the largest lag), before any term selection (``n_terms``) and
+        without the function terms (``functions``).
+
+        Parameters
+        ----------
+        n_outputs, n_inputs : int
+            Numbers of output and input channels of the record the model would be fitted on.
+
+        Returns
+        -------
+        ndarray of int, shape (n_outputs,)
+        """
+        degrees = per_channel_int(self.degree, n_outputs, "degree", minimum=1)
+        regs, _orders = self._regressors(n_outputs, n_inputs, None)
+        return np.array(
+            [
+                polynomial_term_count(
+                    regs[k], degrees[k], kind=self.kind, constant=self.constant, ny=n_outputs
+                )
+                for k in range(n_outputs)
+            ]
+        )
+
+    def max_lag(self, n_outputs: int, n_inputs: int) -> int:
+        """The largest lag [samples] of this structure on ``n_outputs`` outputs and
+        ``n_inputs`` inputs: the samples a fit loses at the start of the record.
+
+        Parameters
+        ----------
+        n_outputs, n_inputs : int
+            Numbers of output and input channels.
+        """
+        regs, _orders = self._regressors(n_outputs, n_inputs, None)
+        return max((int(r[:, 1].max()) if r.size else 0) for r in regs)
+
     def _regressors(self, ny: int, nu: int, n_samples: int | None):
         """Each channel's linear regressors and full order (None with explicit na/nb/nk); the
         largest lag is checked against the record length before the tables are built."""

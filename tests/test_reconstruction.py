@@ -596,3 +596,31 @@ def test_reconstruct_split_runs_on_a_users_rig():
     result = reconstruct(rig, desired, method="split", iterations=1, bandwidth=(0.0, 40.0))
     assert result.method.split_hz == 10.0
     assert result.errors.shape == (2, 2) and np.all(np.isfinite(result.errors))
+
+
+def test_the_shortest_identification_record_is_what_the_identification_needs():
+    """DriveIteration.check_length's rule (issue 25 item 6): ARX(4) at the default lead search
+    needs max_lead + DELAY_SAMPLES = 128 model-rate samples - exactly the delay estimate's own
+    need (identification.estimate_delay refuses 127 and takes 128); the H1 inverse 32."""
+    from identification import IdentificationError, estimate_delay
+    from vrig.reconstruction import DriveIteration
+    from vrig.reconstruction.methods import DELAY_SAMPLES, FRF_MIN_SAMPLES, InverseArx
+
+    assert InverseArx(4).min_samples(1, 1) == 32 + DELAY_SAMPLES == 128
+    rng = np.random.default_rng(0)
+    u = rng.standard_normal(128)
+    y = np.convolve(u, [0.0, 0.0, 1.0, 0.5])[:128]
+    assert estimate_delay(u, y, max_lag=32) == 2
+    with pytest.raises(IdentificationError, match="need more than 127 samples"):
+        estimate_delay(u[:127], y[:127], max_lag=32)
+    rig = vrig.load_rig(USER_RIG, fidelity="fast")
+    names = [c.name for c in rig.outputs]
+    # fs 1000 Hz, band 0-250 Hz: no decimation; 127 samples refused before anything is played
+    short = vrig.TimeHistory(rng.standard_normal((127, 2)), rig.fs, names)
+    with pytest.raises(ValueError, match=r"127 samples at the model rate 1000 Hz.*needs at least 128"):
+        DriveIteration(rig, short, method="arx").check_length()
+    DriveIteration(rig, short.with_data(rng.standard_normal((128, 2)))).check_length()
+    assert DriveIteration(rig, short, method="frf").method.min_samples(1, 2) == FRF_MIN_SAMPLES
+    # a longer identification drive (id_duration) makes a short desired record usable
+    DriveIteration(rig, short, method="arx", id_duration=0.2).check_length()
+

@@ -200,7 +200,7 @@ class DriveIteration:
         return signal.resample_poly(x, self.decimation, 1, axis=0)[: self.n]
 
     def identify(self) -> None:
-        """IDDRV -> IDRES -> inverse model.
+        """IDDRV -> IDRES -> inverse model (after :meth:`check_length`).
 
         Default: IDDRV from ``id_psd`` (triangular over the identification band) at ``id_rms``
         (5 % of full scale), the RMS halved (up to three times) while the rig refuses or trips
@@ -208,6 +208,7 @@ class DriveIteration:
         (:func:`~vrig.reconstruction.matching.identify_matched`; what it did is kept in
         ``id_matching``). Either way ``id_report`` says which level was used and why, and how
         the identification response's RMS and peak compare with DESRES's."""
+        self.check_length()
         if self.settings.id_match:
             iddrv, idres, self.id_matching = identify_matched(self)
             self.id_report = self.id_matching.summary()
@@ -333,9 +334,43 @@ class DriveIteration:
     def check_desired(self) -> None:
         """Raise ``ValueError`` when a desired channel has nothing to reproduce in the band
         (constant, a pure trend or out of band): its η0 would be a ratio of round-off
-        (2.3e14 % for a constant record). Called by :meth:`first_drive` and, before the
+        (2.3e14 % for a constant record), or when the identification record is too short for
+        the method (:meth:`check_length`). Called by :meth:`first_drive` and, before the
         identification, by :func:`reconstruct`; identifying alone needs no desired content."""
+        self.check_length()
         _check_content(self._desired, self.desres, self.band)
+
+    def check_length(self) -> None:
+        """Raise ``ValueError`` before anything is played when the identification record is
+        shorter than the method needs.
+
+        The rule: the identification record (``id_duration``, by default the desired record's
+        length) at the model rate ``fs / decimation`` must hold the method's ``min_samples``
+        (a method without one: no check): a time-domain inverse needs its delay estimate
+        (``max_lead +`` :data:`~vrig.reconstruction.methods.DELAY_SAMPLES`, 128 samples at the
+        default lead search) and one sample per term of its largest channel after its lags;
+        the H1 inverse :data:`~vrig.reconstruction.methods.FRF_MIN_SAMPLES`; split spectra the
+        larger of its two bands'. The model's own fit checks the rest (e.g. a term selection).
+        """
+        need_fn = getattr(self.method, "min_samples", None)
+        if need_fn is None:
+            return
+        need = int(need_fn(self.n_inputs, len(self.rig.outputs)))
+        have = -(-self.id_samples // self.decimation)
+        if have >= need:
+            return
+        fs_model = self.rig.fs / self.decimation
+        where = (
+            f"id_duration {self.settings.id_duration:g} s"
+            if self.settings.id_duration is not None
+            else f"the desired record's {self._desired.duration:g} s"
+        )
+        raise ValueError(
+            f"the identification record ({where}) is {have} samples at the model rate "
+            f"{fs_model:g} Hz, but the {_describe(self.method)} inverse needs at least {need} "
+            f"({need / fs_model:.3g} s): give a longer desired record (or id_duration), a "
+            "lower order, or a method needing fewer samples (frf)"
+        )
 
     def first_drive(self) -> np.ndarray:
         """IT00DRV = inverse(DESRES), band-limited and tapered (:meth:`shape`), at the rig rate."""
