@@ -624,3 +624,26 @@ def test_the_shortest_identification_record_is_what_the_identification_needs():
     # a longer identification drive (id_duration) makes a short desired record usable
     DriveIteration(rig, short, method="arx", id_duration=0.2).check_length()
 
+
+def test_a_polynomial_inverse_identified_below_the_targets_peak_is_flagged():
+    """Issue 25 item 7: on a user's rig at the global defaults (identification at 5 % of full
+    scale) the NARX inverse is used beyond the amplitude range it was fitted on; its polynomial
+    extrapolates and IT01DRV overshot the full scale (arx, frf: linear, ran). The identification
+    report says so, and the CLI's advice after such a stop is --id-match, not a lower gain."""
+    from vrig.cli import _advice
+    from vrig.reconstruction import DriveIteration
+
+    rig = vrig.load_rig(USER_RIG, fidelity="fast")
+    names = [c.name for c in rig.inputs]
+    drive = random_drive(triangular_psd((0.0, 40.0)), 4000, rig.fs, rms=0.002, seed=1, names=names)
+    desired = rig.run(drive, seed=2)
+    low = (0.0005,)  # identification at a quarter of the target's drive level [m rms]
+    narx = DriveIteration(rig, desired, method="narx", order=2, id_rms=low, bandwidth=(0, 40))
+    narx.identify()
+    assert max(narx.id_report["peak_ratio"]) < 1  # the target peaks beyond the identification
+    assert "extrapolates" in narx.id_report["extrapolation"]
+    assert "--id-match" in _advice("refused", "after IT00", 0.8, narx.id_report)
+    arx = DriveIteration(rig, desired, method="arx", id_rms=low, bandwidth=(0, 40))
+    arx.identify()  # a linear inverse extrapolates linearly: no note
+    assert "extrapolation" not in arx.id_report
+    assert "--gain" in _advice("refused", "after IT00", 0.8, arx.id_report)

@@ -868,7 +868,8 @@ def _cmd_reconstruct(args) -> int:
         best = result.best_iteration
         _say(
             "reconstruct",
-            f"stopped: {result.stopped} ({_advice(result.stop_kind, 'after IT00', args.gain)}); "
+            f"stopped: {result.stopped} "
+            f"({_advice(result.stop_kind, 'after IT00', args.gain, result.identification)}); "
             f"best IT{best:02d} kept as FINDRV01/FINRES01 in {out}/",
         )
     return code
@@ -897,7 +898,7 @@ def _reconstruct(rig, field, method, band, args, out: Path, save: dict, extra: d
         raise _UsageError(str(exc)) from exc
     except ReconstructionError as exc:  # nothing played: keep what was made, say what to change
         written = _save(exc.result, out, rig, args, save)
-        advice = _advice(exc.result.stop_kind, exc.stage, args.gain)
+        advice = _advice(exc.result.stop_kind, exc.stage, args.gain, exc.result.identification)
         raise _Failure(
             f"{exc} ({advice}); kept {', '.join(p.name for p in written)} in {out}/",
             ExitCode.FAILED_IT00,
@@ -924,6 +925,8 @@ def _print_result(result, args) -> None:
     if ident:
         level = ", ".join(f"{v:.3g}" for v in ident["rms_percent"])
         print(f"identification {ident['mode']}: {level} % of full scale rms; {ident['reason']}")
+        if ident.get("extrapolation"):
+            print(ident["extrapolation"])
 
 
 def _save(result, out: Path, rig, args, save: dict) -> list[Path]:
@@ -1001,10 +1004,18 @@ _ADVICE = {
 }
 
 
-def _advice(kind: str, stage: str, gain: float) -> str:
+def _advice(kind: str, stage: str, gain: float, identification: dict | None = None) -> str:
     """What to change after a reconstruction that stopped (``stage`` ``"after IT00"``) or could
     not play any iteration (``stage`` ``"identification"``, ``"model"``, ``"IT00"``), by the
-    kind of stop (``result.stop_kind``)."""
+    kind of stop (``result.stop_kind``). A drive that overshot (refused, a trip, divergence)
+    from a polynomial inverse identified below the target's peak (``identification``'s
+    ``"extrapolation"`` note) is the identification's doing, not the gain's: ``--id-match``."""
+    overshoot = kind in ("refused", "interlock", "diverged") and stage in ("IT00", "after IT00")
+    if overshoot and (identification or {}).get("extrapolation"):
+        return (
+            "the polynomial inverse was identified below the target's peak and extrapolates "
+            "(the note above): --id-match identifies it over the target's range"
+        )
     text = _ADVICE.get((stage, kind)) or _ADVICE.get((stage, None))
     if text is None:
         return (

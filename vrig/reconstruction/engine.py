@@ -92,6 +92,30 @@ def _describe(method) -> str:
     return f"{name}({order}" + (f", degree {degree}" if degree else "") + ")"
 
 
+def _is_polynomial(method) -> bool:
+    """Whether ``method`` (or a band of a split) is a polynomial inverse (degree >= 2)."""
+    parts = [getattr(method, "low", None), getattr(method, "high", None), method]
+    return any((getattr(p, "degree", None) or 1) > 1 for p in parts if p is not None)
+
+
+def _extrapolation_note(method, peak_ratio, names) -> str | None:
+    """The note of a polynomial inverse identified on responses that peak below DESRES's:
+    the inverse is then evaluated outside the amplitude range it was fitted on, where its
+    polynomial terms extrapolate (a quadratic term at 3x the range is 9x), and its drive can
+    overshoot - the user's-rig NARX of issue 25 stopped at IT01 on a drive beyond full scale
+    for it, where the linear inverses ran (their extrapolation is linear). None otherwise."""
+    ratio = np.asarray(peak_ratio, dtype=float)
+    if not _is_polynomial(method) or not np.all(np.isfinite(ratio)) or ratio.min() >= 1.0:
+        return None
+    k = int(np.argmin(ratio))
+    return (
+        f"note: the polynomial inverse ({_describe(method)}) is identified on responses that "
+        f"peak at {100 * ratio[k]:.0f} % of the desired response's peak ({names[k]}): beyond "
+        "that its polynomial extrapolates and its drive may overshoot; identify matched to the "
+        "target (id_match=True, vrig reconstruct --id-match) or at a higher id_rms"
+    )
+
+
 class DriveIteration:
     """One reconstruction, step by step: the engine of :func:`reconstruct` and of the gymnasium
     environments (so a policy's fixed gain reproduces ``reconstruct`` exactly).
@@ -160,6 +184,7 @@ class DriveIteration:
         self._desired = desired
         self.n = self.desres.n_samples
         self.names = [c.name for c in rig.inputs]
+        self.names_out = [c.name for c in rig.outputs]
         self.units = [c.unit for c in rig.inputs]
         self.id_drive: TimeHistory | None = None
         self.id_response: TimeHistory | None = None
@@ -207,7 +232,9 @@ class DriveIteration:
         on it. With ``id_match`` the drive is matched to DESRES's spectrum and amplitude range
         (:func:`~vrig.reconstruction.matching.identify_matched`; what it did is kept in
         ``id_matching``). Either way ``id_report`` says which level was used and why, and how
-        the identification response's RMS and peak compare with DESRES's."""
+        the identification response's RMS and peak compare with DESRES's; a default
+        identification of a polynomial inverse whose responses peak below DESRES's adds an
+        ``"extrapolation"`` note (the inverse will be used beyond its fitted range)."""
         self.check_length()
         if self.settings.id_match:
             iddrv, idres, self.id_matching = identify_matched(self)
@@ -258,6 +285,10 @@ class DriveIteration:
         }
         if attempt:
             self.id_report["reason"] += f", halved {attempt}x after interlock trips ({last_trip})"
+        note = _extrapolation_note(self.method, self.id_report["peak_ratio"], self.names_out)
+        if note:
+            self.id_report["extrapolation"] = note
+            status(note)
         return iddrv, idres
 
     def reidentify(self, drive: TimeHistory, raw: TimeHistory) -> None:
