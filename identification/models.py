@@ -35,7 +35,7 @@ from .errors import (
     UnstableModelError,
 )
 from .free_run_selection import check_criterion, criterion_path, simulation_selection
-from .output_error import FlatModel, refine
+from .output_error import FlatModel, check_refinement_budget, refine
 from .regression import regression_matrix
 from .selection import forward_regression
 from .simulation import compile_plan, predict_plan_k_step, simulate_plan
@@ -109,6 +109,22 @@ def _probe_inputs(u: np.ndarray, scale: float, n: int = N_PROBES, seed: int = 0)
         copy = np.fft.irfft(spectrum * phase, n=N, axis=0) + mean
         out.append(np.ascontiguousarray(scale * copy))
     return out
+
+
+def _check_terms_finite(X: np.ndarray, u: np.ndarray, y: np.ndarray, outputs) -> None:
+    """An :class:`IdentificationError` saying why when a regression matrix built from finite
+    records is not finite: a polynomial term of the records overflowed float64 (records of
+    magnitude ~1e300 to the degree 2). A least-squares fit is otherwise scale-invariant (the
+    solvers scale each column without overflow), so the remedy is to rescale the records."""
+    if np.all(np.isfinite(X)):
+        return
+    col = int(np.flatnonzero(~np.all(np.isfinite(X), axis=0))[0])
+    raise IdentificationError(
+        f"output channel(s) {list(outputs)}: regression term {col} overflows float64 (the "
+        f"records peak at |u| = {np.max(np.abs(u)):.3g}, |y| = {np.max(np.abs(y)):.3g}; a "
+        "product of lagged values is beyond 1.8e308): rescale the records (e.g. to SI or "
+        "percent units) or lower the degree"
+    )
 
 
 def _names(given, n: int, prefix: str, what: str) -> tuple[str, ...]:
@@ -501,6 +517,44 @@ class Narx:
             channels.append(ch)
         return tuple(channels)
 
+    def term_count(self, n_outputs: int, n_inputs: int) -> np.ndarray:
+        """Polynomial terms per output channel of this structure on ``n_outputs`` outputs and
+        ``n_inputs`` inputs, in closed form (nothing is built): what a fit needs at least as
+        many samples as (after the largest lag), before any term selection (``n_terms``) and
+        without the function terms (``functions``).
+
+        Parameters
+        ----------
+        n_outputs, n_inputs : int
+            Numbers of output and input channels of the record the model would be fitted on.
+
+        Returns
+        -------
+        ndarray of int, shape (n_outputs,)
+        """
+        degrees = per_channel_int(self.degree, n_outputs, "degree", minimum=1)
+        regs, _orders = self._regressors(n_outputs, n_inputs, None)
+        return np.array(
+            [
+                polynomial_term_count(
+                    regs[k], degrees[k], kind=self.kind, constant=self.constant, ny=n_outputs
+                )
+                for k in range(n_outputs)
+            ]
+        )
+
+    def max_lag(self, n_outputs: int, n_inputs: int) -> int:
+        """The largest lag [samples] of this structure on ``n_outputs`` outputs and
+        ``n_inputs`` inputs: the samples a fit loses at the start of the record.
+
+        Parameters
+        ----------
+        n_outputs, n_inputs : int
+            Numbers of output and input channels.
+        """
+        regs, _orders = self._regressors(n_outputs, n_inputs, None)
+        return max((int(r[:, 1].max()) if r.size else 0) for r in regs)
+
     def _regressors(self, ny: int, nu: int, n_samples: int | None):
         """Each channel's linear regressors and full order (None with explicit na/nb/nk); the
         largest lag is checked against the record length before the tables are built."""
@@ -618,6 +672,8 @@ class Narx:
                     f"({N} samples minus the largest lag {start}). Provide at least "
                     f"{ch.n_terms + start} samples, or lower the order/degree."
                 )
+        if self.focus == "simulation":  # refused now, not after the least-squares start
+            self._check_refinement_size(channels, rows, ny)
         self.n_inputs_, self.n_outputs_ = nu, ny
         self.input_names_ = _names(input_names, nu, "u", "input_names")
         self.output_names_ = _names(output_names, ny, "y", "output_names")
@@ -631,6 +687,20 @@ class Narx:
         self.fit_time_ = float("nan")
         self.timed_out_ = False
         return u, y
+
+    def _check_refinement_size(self, channels, rows: int, ny: int) -> None:
+        """``focus="simulation"``: the output-error Jacobian the refinement will need
+        (:func:`~.output_error.refine`: ``rows x ny`` residuals by the model's parameters), checked
+        against the memory budget before anything is built. Its size is known now (every term,
+        or ``n_terms`` per channel with forward selection); with ``err_tol`` / ``criterion`` the
+        term count is only known after the selection, and ``refine`` checks it then."""
+        if self.selection == "simulation" or self.err_tol is not None or self.criterion:
+            return
+        n_params = sum(
+            ch.n_terms if self.n_terms is None else min(self.n_terms, ch.n_terms)
+            for ch in channels
+        )
+        check_refinement_budget(rows * ny, n_params)
 
     def _least_squares(self, u, y, channels, start):
         """One-step least squares (with forward selection when asked): channels, coefs, errs."""
@@ -657,6 +727,7 @@ class Narx:
         paths: list = [None] * ny
         for g in groups:
             X = regression_matrix(u, y, channels[g[0]], start)
+            _check_terms_finite(X, u, y, g)
             if not select:
                 coef = solve(X, y[start:, g], rcond=self.rcond)
                 for j, k in enumerate(g):

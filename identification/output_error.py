@@ -38,7 +38,7 @@ from .budget import check_allocation, product
 from .errors import IdentificationError, SimulationDivergedError
 from .simulation import compile_plan, simulate_plan
 
-__all__ = ["FlatModel", "RefinementResult", "refine", "simulation_error"]
+__all__ = ["FlatModel", "RefinementResult", "check_refinement_budget", "refine", "simulation_error"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -182,7 +182,7 @@ def simulation_error(
     b = np.full(ny, np.inf) if bound is None else np.asarray(bound, dtype=np.float64)
     rows = (N - p) * ny
     if jacobian:
-        _check_budget(rows, flat.n_params)
+        check_refinement_budget(rows, flat.n_params)
     if not jacobian and h >= N:  # one segment: the compiled plan-based free run is faster
         return _plan_error(flat, theta, u, y, w, b)
     E = np.empty(rows)
@@ -270,7 +270,19 @@ class RefinementResult:
     timed_out: bool = False
 
 
-def _check_budget(rows: int, n_params: int) -> None:
+def check_refinement_budget(rows: int, n_params: int) -> None:
+    """An :class:`~identification.errors.IdentificationError` when the output-error Jacobian
+    (``rows`` residuals x ``n_params`` parameters, float64) would exceed the memory budget
+    (:func:`~identification.budget.check_allocation`); :meth:`Narx.fit` calls it before the
+    least-squares start, so that a refinement too large is refused at once.
+
+    Parameters
+    ----------
+    rows : int
+        Residuals: the record's samples after the largest lag, times the outputs.
+    n_params : int
+        The model's parameters (all channels).
+    """
     check_allocation(
         product(rows, n_params, 8),
         f"the output-error Jacobian ({rows:,} residuals x {n_params:,} parameters x 8 bytes)",
@@ -446,7 +458,7 @@ def refine(
     """
     N, ny = y.shape
     p = flat.max_lag
-    _check_budget((N - p) * ny, flat.n_params)
+    check_refinement_budget((N - p) * ny, flat.n_params)
     std = y[p:].std(axis=0)
     w = 1.0 / np.where(std > 0, std, 1.0)
     monitor = None

@@ -7,7 +7,10 @@ Every estimator is a plain function with one signature::
 ``X`` is the regression matrix (N, M), ``Y`` the targets (N,) or (N, k) — several output channels
 that share ``X`` are solved together with a single factorisation. The result has shape (M,) or
 (M, k). Columns are scaled to unit norm before factorising (the solution is unchanged; rank
-decisions become scale-free). A rank-deficient problem (relative singular value below ``rcond``,
+decisions become scale-free), their norms taken after dividing each by its largest magnitude, so
+that neither overflows nor underflows: a least-squares fit is scale-invariant, and records of any
+magnitude whose regression terms are finite float64 numbers (e.g. 1e100, or 1e-200) are solved
+as well as records of magnitude 1. A rank-deficient problem (relative singular value below ``rcond``,
 default ``max(N, M) * eps``) gives a :class:`~identification.errors.RankDeficiencyWarning` naming
 the effective rank, and the minimum-norm solution.
 
@@ -82,22 +85,34 @@ def _solver(func):
         if not (np.all(np.isfinite(X)) and np.all(np.isfinite(Y))):
             raise IdentificationError("X and Y must be finite (NaN or inf found)")
         tol = _default_rcond(N, M, rcond)
-        norms = np.sqrt(np.einsum("ij,ij->j", X, X))
-        live = norms > 0
-        if np.all(live):
-            Xs = np.empty(X.shape, order="F")
-            np.divide(X, norms, out=Xs)
-        else:
-            Xs = np.asfortranarray(X[:, live] / norms[live])
+        Xs, norms, live = _unit_columns(X)
         coef = np.zeros((M, Y.shape[1]))
         rank = 0
         if Xs.shape[1]:
-            coef[live], rank = func(Xs, Y, tol, norms[live])
+            coef[live], rank = func(Xs, Y, tol, norms)
         if rank < M:
             _warn_rank(rank, M, func.__name__)
         return coef[:, 0] if vector else coef
 
     return wrapper
+
+
+def _unit_columns(X: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``(Xs, norms, live)``: the non-zero columns of ``X`` (``live``) scaled to unit norm, as a
+    Fortran-ordered copy, and their norms.
+
+    Each column is divided by its largest magnitude before its norm is taken (LAPACK ``dnrm2``'s
+    idea), so the norm neither overflows nor underflows wherever the column itself is finite:
+    regression terms of records of magnitude 1e100 (squares 1e400) or 1e-200 give the same
+    scaled problem, hence the same solution up to the scale, as records of magnitude 1.
+    """
+    peak = np.maximum(X.max(axis=0, initial=0.0), -X.min(axis=0, initial=0.0))
+    live = peak > 0
+    Xs = np.empty((X.shape[0], int(live.sum())), order="F")
+    np.divide(X if np.all(live) else X[:, live], peak[live], out=Xs)
+    unit = np.sqrt(np.einsum("ij,ij->j", Xs, Xs))
+    Xs /= unit
+    return Xs, peak[live] * unit, live
 
 
 def _truncated_solve(A: np.ndarray, B: np.ndarray, rank: int) -> np.ndarray:

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 import pytest
 
@@ -66,6 +68,25 @@ def test_fewer_usable_samples_than_terms(data):
     # order 4, degree 3, 2 inputs, 1 output: R = 4 + 2*5 = 14 -> C(17, 3) - 1 = 679 terms
     with pytest.raises(InsufficientDataError, match="679 terms but only 296 usable samples"):
         Narx(order=4, degree=3).fit(u, y)
+
+
+def test_the_closed_form_term_count_is_what_the_fit_needs():
+    """Narx.term_count / max_lag (issue 25: a record's length is checked up front with them)
+    agree with the fit's own refusal: 679 terms (C(17, 3) - 1) after a largest lag of 4."""
+    m = Narx(order=4, degree=3)
+    assert list(m.term_count(1, 2)) == [679] and m.max_lag(1, 2) == 4
+    rng = np.random.default_rng(1)
+    need = 679 + 4
+    with pytest.raises(InsufficientDataError, match="679 terms"):
+        Narx(order=4, degree=3).fit(rng.standard_normal((need - 1, 2)), rng.standard_normal(need - 1))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # a model that large on white noise is no model: no matter
+        try:
+            Narx(order=4, degree=3).fit(rng.standard_normal((need, 2)), rng.standard_normal(need))
+        except InsufficientDataError:  # pragma: no cover - the failure this test guards
+            pytest.fail("a record of term count + largest lag samples was refused as too short")
+        except IdentificationError:
+            pass  # fitted; its stability contract may refuse a random model, which is not size
 
 
 def test_negative_order():

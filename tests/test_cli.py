@@ -464,6 +464,109 @@ def test_bench_finds_the_runner_next_to_vrig_from_any_directory(tmp_path):
     assert "methods:" in run.stdout and "arx" in run.stdout
 
 
+# ---------------------------------------------------------------------------------------------
+# issue 25 item 6: --out and --desired paths refused up front
+# ---------------------------------------------------------------------------------------------
+def test_out_that_is_the_working_directory_or_holds_it_is_refused(capsys, monkeypatch, tmp_path):
+    """`--out . --overwrite` replaced the working directory (the shell was left in a deleted
+    one); a parent of it too. Both exit 2 before the run; the folders stay."""
+    _no_run(monkeypatch)
+    here = tmp_path / "work" / "here"
+    here.mkdir(parents=True)
+    (here / "notes.txt").write_text("mine")
+    monkeypatch.chdir(here)
+    for out in (".", "..", str(here)):
+        argv = ["reconstruct", "--rig", "shock-absorber", "--seconds", "2", "--overwrite"]
+        assert main([*argv, "--out", out]) == 2
+        assert "is the current directory or holds it" in _one_line(capsys)
+    assert (here / "notes.txt").read_text() == "mine"
+
+
+def test_an_out_name_too_long_for_the_file_system_is_bad_input(capsys, monkeypatch, tmp_path):
+    """A 300-character --out exited 1 (the OSError after the run started); now 2, up front."""
+    _no_run(monkeypatch)
+    argv = ["reconstruct", "--rig", "shock-absorber", "--seconds", "2"]
+    assert main([*argv, "--out", str(tmp_path / ("x" * 300))]) == 2
+    assert "File name too long" in _one_line(capsys)
+    assert main([*argv, "--desired", str(tmp_path / ("y" * 300))]) == 2
+    assert "--desired" in _one_line(capsys)
+
+
+@pytest.mark.skipif(not hasattr(os, "mkfifo"), reason="needs FIFOs (POSIX)")
+def test_a_fifo_as_desired_is_named_not_a_regular_file(capsys, monkeypatch, tmp_path):
+    """A FIFO was reported as "no file"."""
+    _no_run(monkeypatch)
+    fifo = tmp_path / "desired.csv"
+    os.mkfifo(fifo)
+    argv = ["reconstruct", "--rig", "shock-absorber", "--desired", str(fifo)]
+    assert main([*argv, "--out", str(tmp_path / "o")]) == 2
+    line = _one_line(capsys)
+    assert "is not a regular file: it is a FIFO (named pipe)" in line and "no file" not in line
+
+
+def _mount_tmpfs(where: Path) -> None:
+    """Mount a tmpfs at ``where`` (root on Linux only: the test is skipped otherwise)."""
+    if sys.platform != "linux" or os.geteuid() != 0:
+        pytest.skip("mounting a tmpfs needs root on Linux")
+    done = subprocess.run(["mount", "-t", "tmpfs", "vrig-test", str(where)], capture_output=True)
+    if done.returncode != 0:
+        pytest.skip(f"cannot mount a tmpfs here: {done.stderr.decode().strip()}")
+
+
+@pytest.mark.parametrize("inside", [True, False])
+def test_overwrite_never_empties_a_mounted_file_system(inside, capsys, monkeypatch, tmp_path):
+    """`--overwrite` on a results folder holding a mount point emptied the mounted file
+    system (the old folder is deleted after the swap). Refused up front (exit 2), and the
+    shared folder swap refuses it too (an API save); the mounted files stay."""
+    from vrig.files import staged_directory
+
+    _no_run(monkeypatch)
+    out = tmp_path / "results"
+    mnt = out / "usb" if inside else out
+    mnt.mkdir(parents=True)
+    _mount_tmpfs(mnt)
+    try:
+        (mnt / "precious.dat").write_text("keep")
+        (out / "old.txt").write_text("old record")
+        argv = ["reconstruct", "--rig", "shock-absorber", "--seconds", "2", "--overwrite"]
+        assert main([*argv, "--out", str(out)]) == 2
+        assert "is a mount point" in _one_line(capsys)
+        with pytest.raises(OSError, match="mount point"):
+            with staged_directory(out) as new:
+                (new / "summary.json").write_text("{}")
+        assert (mnt / "precious.dat").read_text() == "keep"
+        assert (out / "old.txt").read_text() == "old record"
+    finally:  # wherever a failing swap may have moved it
+        for line in Path("/proc/mounts").read_text().splitlines():
+            point = line.split()[1]
+            if line.startswith("vrig-test ") and point.startswith(str(tmp_path)):
+                subprocess.run(["umount", point], check=True)
+
+
+def test_a_desired_record_too_short_for_the_method_is_bad_input_before_anything_runs(
+    capsys, monkeypatch, tmp_path
+):
+    """A 50-row desired file exited 7 after the identification had run; now 2, up front: the
+    identification record (the desired record's 0.1 s at the model rate of 100 Hz: 10 samples)
+    must hold what the inverse needs (ARX(4) at the default lead search: 32 + 96 = 128 samples,
+    the delay estimate's need; vrig.reconstruction.DriveIteration.check_length)."""
+    from vrig.rigs import MujocoRig
+
+    def no_rig_run(*args, **kwargs):
+        raise AssertionError("the rig ran before the short record was refused")
+
+    monkeypatch.setattr(MujocoRig, "run", no_rig_run)
+    t = np.arange(50) / 500.0
+    short = tmp_path / "short.csv"
+    vrig.io.write(short, vrig.TimeHistory(1e3 * np.sin(2 * np.pi * 5 * t)[:, None], 500.0,
+                                          ["damper_load"], ["N"]))  # fmt: skip
+    argv = ["reconstruct", "--rig", "shock-absorber", "--desired", str(short)]
+    assert main([*argv, "--out", str(tmp_path / "o")]) == 2
+    line = _one_line(capsys)
+    assert "is 10 samples at the model rate 100 Hz" in line and "needs at least 128" in line
+    assert not (tmp_path / "o").exists()
+
+
 def _desired_files(tmp_path) -> dict:
     files = {"folder": tmp_path / "folder.csv", "not a zip": tmp_path / "damaged.npz"}
     files["folder"].mkdir()

@@ -49,7 +49,7 @@ def test_environments_are_registered_on_import_vrig():
     for env_id in ENV_IDS:
         spec = gym.spec(env_id)
         assert spec.max_episode_steps == 10
-        assert spec.entry_point == "vrig.envs.drive_iteration:DriveIterationEnv"
+        assert spec.entry_point == "vrig.envs.checker:make_checked"
     assert gym.spec("vrig/ElastomericDamper-v1").kwargs["rig"] == "elastomeric-damper"
     assert gym.spec("vrig/LightTruckFront-v1").kwargs["rig"] == "light-truck-front"
     # every per-rig id has a measured tolerance (its side-car's), not the 2 % fallback
@@ -213,6 +213,59 @@ def test_reset_options_and_desired_sets(tmp_path):
     np.testing.assert_allclose(f.unwrapped.desired.data, 0.5 * truth.data)
     with pytest.raises(ValueError, match="channel"):
         make(desired=[vrig.TimeHistory(np.c_[truth.data, truth.data], truth.fs, ["a", "b"])])
+
+
+def _beyond_the_rig(e):
+    """A desired response 1000 x a reachable one: its IT00 drive exceeds the drive's full
+    scale (a RigLimitError before anything is sent)."""
+    d = e.unwrapped.physics.target_record(3)
+    return d.with_data(1000.0 * d.data)
+
+
+def test_a_failed_first_reset_leaves_the_env_as_new_with_gymnasiums_checker():
+    """Issue 25 item 5: with gymnasium.make's default wrappers (the env checker on), a first
+    reset that raises (the target trips) broke the env for good: every step after a later,
+    successful reset raised a TypeError inside gymnasium's checker. Now the failed reset leaves
+    no trace: the next reset and step equal a fresh env's, bit for bit."""
+    e, fresh = make_short(), make_short()
+    assert "EnvChecker" in str(e)  # the default gymnasium.make stack, checker included
+    with pytest.raises(vrig.RigLimitError):
+        e.reset(seed=0, options={"desired": _beyond_the_rig(e)})
+    assert e.unwrapped.engine is None and e.unwrapped.pending is None
+    with pytest.raises(RuntimeError, match="reset"):  # no episode: refused, not half-run
+        e.step(e.unwrapped.layout.action(0.8))
+    action = e.unwrapped.layout.action(0.8)
+    got = [e.reset(seed=0), e.step(action), e.step(action)]
+    want = [fresh.reset(seed=0), fresh.step(action), fresh.step(action)]
+    assert records_equal(got, want)
+    # a failure later on (not the checker's first reset) recovers the same way
+    with pytest.raises(vrig.RigLimitError):
+        e.reset(options={"desired": _beyond_the_rig(e)})
+    assert records_equal([e.reset(seed=0), e.step(action)], want[:2])
+
+
+def test_complex_actions_and_fractional_seeds_are_refused_not_truncated():
+    """Issue 25 item 5: a complex action lost its imaginary part (numpy's cast), a field seed
+    1.5 became 1. Both are refused before anything changes."""
+    e = make_short()
+    e.reset(seed=1)
+    lay = e.unwrapped.layout
+    drive = e.unwrapped.drive.copy()
+    with pytest.raises(TypeError, match="complex"):
+        e.step(lay.action(0.8).astype(complex) + 0.3j)
+    with pytest.raises(TypeError, match="complex"):
+        e.step(lay.action(0.8).astype(complex))  # a zero imaginary part is still complex
+    np.testing.assert_array_equal(e.unwrapped.drive, drive)  # nothing changed
+    _o, _r, _t, _tr, info = e.step(lay.action(0.8))  # the episode goes on
+    assert info["iteration"] == 1
+    for key in ("field_seed", "run_seed"):
+        for bad in (1.5, -1, True, "3"):
+            with pytest.raises(ValueError, match=key):
+                e.reset(options={key: bad})
+    _o, info = e.reset(seed=2, options={"field_seed": np.int64(7), "run_seed": 3})
+    assert info["field_seed"] == 7 and info["run_seed"] == 3
+    with pytest.raises(ValueError, match="real"):
+        vrig.IterationSettings(gain=np.complex128(0.8 + 0.3j))
 
 
 def test_band_edges_are_log_spaced_over_the_band():

@@ -10,7 +10,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from vrig import TimeHistory
+from vrig import FileFormatError, TimeHistory
 from vrig.io import (
     read,
     read_csv,
@@ -22,6 +22,7 @@ from vrig.io import (
     write_mat,
     write_rpc3,
 )
+from vrig.io.rpc3 import DELTA_T_RANGE
 
 SAMPLES_DIR = Path(__file__).resolve().parents[2] / "shared" / "external-data" / "rpc3-samples"
 BELGIAN = "acc_Belgium_road(half)_20Kph_Pass02_DATA7.rsp"
@@ -417,6 +418,40 @@ def test_other_header_errors_raise_value_error(tmp_path, change, match):
         _read_bytes(tmp_path, buf)
 
 
+@pytest.mark.parametrize(
+    ("change", "match"),
+    [
+        (dict(PTS_PER_GROUP="100000000000"), "one group"),  # issue 25: numpy's ValueError
+        (dict(PTS_PER_GROUP="1" + "0" * 21), "one group"),
+        (dict(PTS_PER_GROUP="9223372036854775807"), "one group"),
+        (dict(CHANNELS="100000000000"), "one group"),
+        (dict(FRAMES="100000000000"), "a record"),
+        (dict(DELTA_T="1E-300"), "DELTA_T"),  # fs 1e300 Hz: accepted before issue 25
+        (dict(DELTA_T="1E+300"), "DELTA_T"),  # fs 1e-300 Hz
+        (dict(DELTA_T="1E-10"), "DELTA_T"),  # 10 GHz
+        (dict(DELTA_T="1E+05"), "DELTA_T"),  # one sample in 27.8 h
+    ],
+)
+def test_absurd_sizes_and_time_steps_are_a_file_format_error(tmp_path, change, match):
+    """Sizes beyond any readable file are refused from the header, before numpy is asked for
+    the arrays; DELTA_T must be a rig record's time step (DELTA_T_RANGE: 1 ns to one day)."""
+    buf = _edit(_small_rpc3(tmp_path), **change)
+    with pytest.raises(FileFormatError, match=match):
+        _read_bytes(tmp_path, buf)
+
+
+def test_the_time_step_range_holds_its_edges_and_the_writer_keeps_to_it(tmp_path):
+    lo, hi = DELTA_T_RANGE
+    assert (lo, hi) == (1e-9, 86400.0)  # the documented range: 1 GHz to one sample a day
+    for fs in (1.0 / hi, 1.0 / lo):  # the edges themselves round-trip
+        th = TimeHistory(np.arange(8.0)[:, None], fs, ["x"], ["m"])
+        path = write_rpc3(tmp_path / "edge.rsp", th)
+        assert read_rpc3(path).fs == pytest.approx(fs, rel=1e-12)
+    with pytest.raises(ValueError, match="DELTA_T_RANGE"):
+        write_rpc3(tmp_path / "fast.rsp", TimeHistory(np.zeros((8, 1)), 1e12, ["x"], ["m"]))
+    assert not (tmp_path / "fast.rsp").exists()
+
+
 def test_non_finite_float_data_raises(tmp_path):
     buf = bytearray(_small_rpc3(tmp_path, data_type="FLOATING_POINT"))
     start = 512 * int(dict(_raw_records(bytes(buf)))["NUM_HEADER_BLOCKS"])
@@ -456,7 +491,7 @@ def test_fuzzed_files_give_a_finite_history_or_value_error(kind, edits, cut):
         path.write_bytes(bytes(buf))
         try:
             th = read_rpc3(path)
-        except ValueError:
+        except FileFormatError:  # never a bare ValueError of numpy's (issue 25)
             return
     assert isinstance(th, TimeHistory)
     assert np.all(np.isfinite(th.data)) and np.isfinite(th.fs) and th.fs > 0

@@ -471,3 +471,26 @@ def test_simulation_focus_of_a_degree_2_narx_on_a_linear_system_keeps_it_linear(
     std = dict(zip(oe.term_names()[0], oe.coef_std_[0], strict=True))
     for name, value in zip(oe.term_names()[0], oe.coef_[0], strict=True):
         assert abs(value - truth.get(name, 0.0)) <= 3 * std[name], (name, value, std[name])
+
+
+def test_a_simulation_focus_too_large_for_memory_is_refused_before_anything_is_built(
+    monkeypatch,
+):
+    """Issue 25: focus="simulation" on a 7 x 7 structure was refused (the output-error
+    Jacobian over the memory budget) only after the regression matrix and the least-squares
+    start were built (28 s, 1.16 GB). The Jacobian's size is known from the structure and the
+    record length: (10000 - 2) x 7 residuals x 4655 parameters x 8 bytes = 2.6 GB > 2 GiB."""
+    import identification.models as models
+    from identification.budget import MEMORY_BUDGET_BYTES
+
+    def never(*args, **kwargs):
+        raise AssertionError("the regression matrix was built before the refusal")
+
+    monkeypatch.setattr(models, "regression_matrix", never)
+    rng = np.random.default_rng(0)
+    u, y = rng.standard_normal((10_000, 7)), rng.standard_normal((10_000, 7))
+    # 7 x 2 output lags + 7 x 3 input lags = 35 regressors: 35 + 35 * 36 / 2 = 665 terms
+    n_bytes = (10_000 - 2) * 7 * (7 * 665) * 8
+    assert n_bytes > MEMORY_BUDGET_BYTES
+    with pytest.raises(IdentificationError, match="output-error Jacobian"):
+        Narx(order=2, degree=2, focus="simulation").fit(u, y)

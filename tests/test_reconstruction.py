@@ -554,3 +554,96 @@ def test_a_searched_narx_method_reports_its_search():
     assert err < 1e-3, (err, method.describe())
     with pytest.raises(ValueError, match="search must be True or False"):
         InverseNarx(2, 2, search="yes")
+
+
+# ---------------------------------------------------------------------------------------------
+# issue 25 item 7: a user's own rig (a side-car without a "reconstruction" block)
+# ---------------------------------------------------------------------------------------------
+USER_RIG = __import__("pathlib").Path(__file__).parent / "data" / "servo_mass.rig.json"
+
+
+def test_split_on_a_users_rig_splits_at_the_bands_rule_not_a_type_error():
+    """``vrig.reconstruct(rig, desired, method="split")`` on a rig loaded from its path whose
+    side-car has no "reconstruction" block raised ``TypeError: SplitSpectra.__init__() missing
+    ... 'split_hz'``. The rule (vrig.field.default_split_hz, the one the CLI and the envs use):
+    the side-car's split, else the band's geometric mean, or a quarter of its upper edge for a
+    band from 0 Hz."""
+    from vrig.field import default_split_hz
+    from vrig.reconstruction import DriveIteration
+
+    rig = vrig.load_rig(USER_RIG)
+    assert rig.defaults.method("split").split_hz is None and rig.bandwidth == (0.0, 250.0)
+    desired = vrig.TimeHistory(np.zeros((4000, 2)), rig.fs, [c.name for c in rig.outputs])
+    assert DriveIteration(rig, desired, method="split").method.split_hz == 250.0 / 4
+    band = DriveIteration(rig, desired, method="split", bandwidth=(4.0, 100.0)).method
+    assert band.split_hz == pytest.approx(20.0)  # sqrt(4 * 100)
+    given = DriveIteration(rig, desired, method="split", split_hz=30.0).method
+    assert given.split_hz == 30.0
+    assert default_split_hz((0.0, 40.0)) == 10.0 and default_split_hz((1.0, 100.0)) == 10.0
+    # a shipped rig whose side-car names its split keeps it (the shaker: 40 Hz in 10-60 Hz)
+    shaker = vrig.load_rig("shaker", fidelity="fast")
+    assert default_split_hz((10.0, 60.0), shaker) == 40.0
+    # the method by name without its required option: a ValueError naming it
+    with pytest.raises(ValueError, match="split_hz"):
+        vrig.reconstruction.make_method("split")
+
+
+def test_reconstruct_split_runs_on_a_users_rig():
+    rig = vrig.load_rig(USER_RIG, fidelity="fast")
+    names = [c.name for c in rig.inputs]
+    drive = random_drive(triangular_psd((0.0, 40.0)), 4000, rig.fs, rms=0.002, seed=1, names=names)
+    desired = rig.run(drive, seed=2)
+    result = reconstruct(rig, desired, method="split", iterations=1, bandwidth=(0.0, 40.0))
+    assert result.method.split_hz == 10.0
+    assert result.errors.shape == (2, 2) and np.all(np.isfinite(result.errors))
+
+
+def test_the_shortest_identification_record_is_what_the_identification_needs():
+    """DriveIteration.check_length's rule (issue 25 item 6): ARX(4) at the default lead search
+    needs max_lead + DELAY_SAMPLES = 128 model-rate samples - exactly the delay estimate's own
+    need (identification.estimate_delay refuses 127 and takes 128); the H1 inverse 32."""
+    from identification import IdentificationError, estimate_delay
+    from vrig.reconstruction import DriveIteration
+    from vrig.reconstruction.methods import DELAY_SAMPLES, FRF_MIN_SAMPLES, InverseArx
+
+    assert InverseArx(4).min_samples(1, 1) == 32 + DELAY_SAMPLES == 128
+    rng = np.random.default_rng(0)
+    u = rng.standard_normal(128)
+    y = np.convolve(u, [0.0, 0.0, 1.0, 0.5])[:128]
+    assert estimate_delay(u, y, max_lag=32) == 2
+    with pytest.raises(IdentificationError, match="need more than 127 samples"):
+        estimate_delay(u[:127], y[:127], max_lag=32)
+    rig = vrig.load_rig(USER_RIG, fidelity="fast")
+    names = [c.name for c in rig.outputs]
+    # fs 1000 Hz, band 0-250 Hz: no decimation; 127 samples refused before anything is played
+    short = vrig.TimeHistory(rng.standard_normal((127, 2)), rig.fs, names)
+    with pytest.raises(ValueError, match=r"127 samples at the model rate 1000 Hz.*needs at least 128"):
+        DriveIteration(rig, short, method="arx").check_length()
+    DriveIteration(rig, short.with_data(rng.standard_normal((128, 2)))).check_length()
+    assert DriveIteration(rig, short, method="frf").method.min_samples(1, 2) == FRF_MIN_SAMPLES
+    # a longer identification drive (id_duration) makes a short desired record usable
+    DriveIteration(rig, short, method="arx", id_duration=0.2).check_length()
+
+
+def test_a_polynomial_inverse_identified_below_the_targets_peak_is_flagged():
+    """Issue 25 item 7: on a user's rig at the global defaults (identification at 5 % of full
+    scale) the NARX inverse is used beyond the amplitude range it was fitted on; its polynomial
+    extrapolates and IT01DRV overshot the full scale (arx, frf: linear, ran). The identification
+    report says so, and the CLI's advice after such a stop is --id-match, not a lower gain."""
+    from vrig.cli import _advice
+    from vrig.reconstruction import DriveIteration
+
+    rig = vrig.load_rig(USER_RIG, fidelity="fast")
+    names = [c.name for c in rig.inputs]
+    drive = random_drive(triangular_psd((0.0, 40.0)), 4000, rig.fs, rms=0.002, seed=1, names=names)
+    desired = rig.run(drive, seed=2)
+    low = (0.0005,)  # identification at a quarter of the target's drive level [m rms]
+    narx = DriveIteration(rig, desired, method="narx", order=2, id_rms=low, bandwidth=(0, 40))
+    narx.identify()
+    assert max(narx.id_report["peak_ratio"]) < 1  # the target peaks beyond the identification
+    assert "extrapolates" in narx.id_report["extrapolation"]
+    assert "--id-match" in _advice("refused", "after IT00", 0.8, narx.id_report)
+    arx = DriveIteration(rig, desired, method="arx", id_rms=low, bandwidth=(0, 40))
+    arx.identify()  # a linear inverse extrapolates linearly: no note
+    assert "extrapolation" not in arx.id_report
+    assert "--gain" in _advice("refused", "after IT00", 0.8, arx.id_report)

@@ -24,7 +24,7 @@ from hypothesis import strategies as st
 import vrig
 from vrig.errors import RigLimitError, RigModelError, RigParameterError, SimulationInstabilityError
 from vrig.rigs import rig_path
-from vrig.rigs.spec import schema_path
+from vrig.rigs.spec import read_description, schema_path
 
 ROOT = Path(__file__).resolve().parents[1]
 SIDE_CARS = sorted((ROOT / "models").glob("*/*.rig.json"))
@@ -66,8 +66,30 @@ def test_every_numeric_parameter_of_a_shipped_rig_declares_its_range():
         for name, p in json.loads(side_car.read_text())["parameters"].items():
             if isinstance(p["value"], str):
                 assert "enum" in p, (side_car.name, name)
-            elif name != "quadratic_stiffness":  # k2 may have either sign (the asymmetry)
+                continue
+            if name != "quadratic_stiffness":  # k2 may have either sign (the asymmetry)
                 assert {"minimum", "exclusiveMinimum"} & set(p), (side_car.name, name)
+            # issue 25: an upper bound too (damping=1e300 was accepted)
+            assert {"maximum", "exclusiveMaximum"} & set(p), (side_car.name, name)
+
+
+@pytest.mark.parametrize(
+    ("rig", "name", "bound"),
+    [
+        ("shock-absorber", "damping", 100 * 12000.0),  # 100 x the documented value
+        ("shock-absorber", "load_noise", 10000.0),  # the load cell's full scale [N]
+        ("elastomeric-damper", "load_noise", 25000.0),
+        ("light-truck-front", "damping", 100 * 6500.0),
+    ],
+)
+def test_an_absurd_override_is_refused_with_the_documented_range(rig, name, bound):
+    """The upper bounds follow models/README.md's rule (a noise: its channel's full scale;
+    otherwise 100 x the documented value): the bound itself is accepted, 1e300 is refused."""
+    p = read_description(rig_path(rig)).parameters[name]
+    assert p.check(bound) == bound
+    with pytest.raises(RigParameterError, match=name) as info:
+        p.check(1e300)
+    assert f"{bound:g}" in str(info.value)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -135,7 +157,7 @@ SIDE_CAR_CASES = {
     "parameter default outside its range": (
         _set("parameters", "moving_mass", "value", -0.25),
         "moving_mass",
-        "a finite number > 0 [kg]",
+        "a finite number in (0, 25] [kg]",  # 25: 100 x the documented 0.25 kg
     ),
     "huge settle time": (
         _set("settle_time", 1e300),
@@ -168,15 +190,17 @@ def test_a_bad_side_car_value_is_refused_naming_the_key_and_the_range(tmp_path, 
     assert key in err.value.key
 
 
-OVERRIDE_CASES = [
-    ("shaker", "moving_mass", math.nan, "a finite number > 0 [kg]"),
-    ("shaker", "moving_mass", -0.25, "a finite number > 0 [kg]"),
-    ("shaker", "amplifier_noise", -0.001, "a finite number >= 0 [V rms]"),
-    ("shaker", "suspension_stiffness", "stiff", "a finite number >= 0 [N/m]"),
-    ("shaker", "stroke", True, "a finite number > 0 [m]"),
+OVERRIDE_CASES = [  # the upper bounds: models/README.md's rule (issue 25)
+    ("shaker", "moving_mass", math.nan, "a finite number in (0, 25] [kg]"),
+    ("shaker", "moving_mass", -0.25, "a finite number in (0, 25] [kg]"),
+    ("shaker", "amplifier_noise", -0.001, "a finite number in [0, 10] [V rms]"),
+    ("shaker", "suspension_stiffness", "stiff", "a finite number in [0, 1e+06] [N/m]"),
+    ("shaker", "stroke", True, "a finite number in (0, 1.27] [m]"),
     ("shaker", "accelerometer_highpass", 400.0, "a finite number in [0, 250)"),
     ("shock-absorber", "valve_noise", 1.5, "a finite number in [0, 1]"),
-    ("elastomeric-damper", "load_noise", math.inf, "a finite number >= 0 [N rms]"),
+    ("elastomeric-damper", "load_noise", math.inf, "a finite number in [0, 25000] [N rms]"),
+    ("elastomeric-damper", "load_noise", 1e300, "a finite number in [0, 25000] [N rms]"),
+    ("shock-absorber", "damping", 1e300, "a finite number in [0, 1.2e+06] [N s/m]"),
 ]
 
 

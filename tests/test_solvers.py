@@ -100,6 +100,52 @@ def test_columns_far_apart_in_scale_are_solved_accurately(rng):
         np.testing.assert_allclose(SOLVERS[name](X, X @ theta), theta, rtol=1e-9)
 
 
+@pytest.mark.parametrize("name", ALL)
+@pytest.mark.parametrize("scale", [1e160, 1e-170])
+def test_columns_whose_squares_overflow_or_underflow_are_solved(name, scale, rng):
+    """Issue 25: column norms were sqrt(sum x^2): entries of 1e160 overflowed (inf norms, then
+    SciPy's 'A has a NaN entry'), entries of 1e-170 underflowed (a live column taken for zero).
+    Least squares is scale-invariant: scaling a column by s scales its coefficient by 1/s."""
+    X = rng.standard_normal((200, 5))
+    theta = rng.standard_normal(5)
+    s = np.array([scale, 1.0, scale, 1.0, scale])
+    coef = SOLVERS[name](X * s, X @ theta)
+    np.testing.assert_allclose(coef * s, theta, rtol=1e-9)
+
+
+@pytest.mark.parametrize("scale", [1e100, 1e-100])
+def test_a_narx_fit_is_scale_invariant(scale):
+    """``Narx(2, 2).fit(u * 1e100, y * 1e100)`` raised SciPy's 'A has a NaN entry' (issue 25).
+    The records of y[t] = 0.6 y[t-1] + 0.5 u[t-1] + 0.3 u[t-1]^2 + e[t], scaled by s, are
+    those of the same structure with the quadratic coefficient 0.3 / s: least squares on them
+    is the scaled problem, so the one-step prediction (divided by s) is the unscaled fit's, and
+    its residual is at most the innovation e (the generating model's own residual)."""
+    from identification import Narx
+
+    rng = np.random.default_rng(3)
+    u, e = rng.standard_normal(600), 0.01 * rng.standard_normal(600)
+    y = np.zeros(600)
+    for t in range(1, 600):
+        y[t] = 0.6 * y[t - 1] + 0.5 * u[t - 1] + 0.3 * u[t - 1] ** 2 + e[t]
+    u, y = u[:, None], y[:, None]
+    unscaled = Narx(2, 2).fit(u, y).predict(u, y)
+    scaled = Narx(2, 2).fit(u * scale, y * scale).predict(u * scale, y * scale) / scale
+    np.testing.assert_allclose(scaled[2:], unscaled[2:], rtol=1e-9, atol=1e-12)
+    residual = np.sqrt(np.mean((y[2:] - scaled[2:]) ** 2))
+    assert residual <= np.sqrt(np.mean(e[2:] ** 2))
+
+
+def test_regression_terms_beyond_float64_are_a_clear_identification_error():
+    """Records of magnitude 1e300: their squares overflow float64 - no rescaling inside the
+    solver can help; the error says so and what to do (not 'X and Y must be finite')."""
+    from identification import Narx
+
+    u = np.random.default_rng(4).standard_normal((300, 1))
+    y = np.convolve(u[:, 0], [0.0, 0.5, 0.2])[:300, None]
+    with np.errstate(over="ignore"), pytest.raises(IdentificationError, match="overflows"):
+        Narx(2, 2).fit(u * 1e300, y * 1e300)
+
+
 def test_unknown_solver_is_rejected():
     with pytest.raises(IdentificationError, match="unknown solver 'lu'"):
         get_solver("lu")

@@ -74,7 +74,15 @@ from pathlib import Path
 
 import numpy as np
 
-from .field import TARGET_KINDS, default_band, desired_response, parse_target, pseudo_field
+from .field import (
+    TARGET_KINDS,
+    default_band,
+    default_split_hz,
+    desired_response,
+    parse_target,
+    pseudo_field,
+)
+from .files import file_kind, mount_points
 
 __all__ = ["EXIT_CODE_MEANINGS", "STOP_EXIT", "ExitCode", "main"]
 
@@ -654,9 +662,9 @@ def _method(args, band):
         return InverseNarx(order, degree, focus=focus), f"narx order {order} degree {degree}{fit}"
     if m == "split":
         lo, hi = band
-        split = args.split_hz
+        split = args.split_hz  # the side-car's when the user gave none (_defaults)
         if split is None:
-            split = float(np.sqrt(lo * hi)) if lo > 0 else hi / 4
+            split = default_split_hz(band)
         if not lo < split < hi:
             raise _UsageError(
                 f"--split-hz must lie inside the band {lo:g}-{hi:g} Hz, got {split:g}"
@@ -678,14 +686,40 @@ def _method(args, band):
 
 def _out_dir(out, default: str, overwrite: bool) -> Path:
     path = Path(out) if out else Path("results") / default
+    try:
+        _check_out_dir(path, overwrite)
+    except OSError as exc:  # e.g. a name too long for the file system: bad input, up front
+        raise _UsageError(f"--out {path}: {exc.strerror or exc}") from None
+    return path
+
+
+def _check_out_dir(path: Path, overwrite: bool) -> None:
+    """``--out`` before anything runs: a folder (or nothing yet), empty unless ``--overwrite``,
+    and one the save may replace: not the working directory or a folder holding it (the shell
+    would be left in a deleted directory), not a mount point and holding none (a mounted file
+    system would be emptied: :func:`vrig.files.mount_points`)."""
     if path.exists() and not path.is_dir():
         raise _UsageError(f"--out {path} is a file, not a folder")
-    if path.is_dir() and any(path.iterdir()) and not overwrite:
+    if not path.is_dir():
+        return
+    if any(path.iterdir()) and not overwrite:
         raise _UsageError(
             f"results folder {path} is not empty: pass --overwrite to replace its records, or "
             "choose another --out"
         )
-    return path
+    here, target = Path.cwd().resolve(), path.resolve()
+    if target == here or target in here.parents:
+        raise _UsageError(
+            f"--out {path} is the current directory or holds it: the results folder is replaced "
+            "as a whole, which would leave your shell in a deleted directory; choose a new "
+            "folder (e.g. --out results)"
+        )
+    mounted = mount_points(path)
+    if mounted:
+        raise _UsageError(
+            f"--out {path}: {mounted[0]} is a mount point; replacing the folder would empty a "
+            "mounted file system (or fail to move it): choose another --out"
+        )
 
 
 # ---------------------------------------------------------------------------------------------
@@ -781,9 +815,16 @@ def _check_reconstruct_args(args) -> None:
     ):
         raise _UsageError(f"--seconds must be 2..{_MAX_SECONDS:g}, got {args.seconds:g}")
     _check_seed(args.seed)
-    if args.desired is not None and not Path(args.desired).is_file():
-        what = "a folder, not a file" if Path(args.desired).is_dir() else "no file"
-        raise _UsageError(f"--desired: {what} {args.desired}")
+    if args.desired is not None:
+        try:
+            kind = file_kind(args.desired)
+        except OSError as exc:  # e.g. a name too long
+            raise _UsageError(f"--desired {args.desired}: {exc.strerror or exc}") from None
+        if kind in ("no file", "a folder"):
+            what = "no file" if kind == "no file" else "a folder, not a file"
+            raise _UsageError(f"--desired: {what} {args.desired}")
+        if kind is not None:  # a FIFO, a device...: never "no file" (issue 25)
+            raise _UsageError(f"--desired {args.desired} is not a regular file: it is {kind}")
 
 
 def _cmd_reconstruct(args) -> int:
@@ -827,7 +868,8 @@ def _cmd_reconstruct(args) -> int:
         best = result.best_iteration
         _say(
             "reconstruct",
-            f"stopped: {result.stopped} ({_advice(result.stop_kind, 'after IT00', args.gain)}); "
+            f"stopped: {result.stopped} "
+            f"({_advice(result.stop_kind, 'after IT00', args.gain, result.identification)}); "
             f"best IT{best:02d} kept as FINDRV01/FINRES01 in {out}/",
         )
     return code
@@ -856,7 +898,7 @@ def _reconstruct(rig, field, method, band, args, out: Path, save: dict, extra: d
         raise _UsageError(str(exc)) from exc
     except ReconstructionError as exc:  # nothing played: keep what was made, say what to change
         written = _save(exc.result, out, rig, args, save)
-        advice = _advice(exc.result.stop_kind, exc.stage, args.gain)
+        advice = _advice(exc.result.stop_kind, exc.stage, args.gain, exc.result.identification)
         raise _Failure(
             f"{exc} ({advice}); kept {', '.join(p.name for p in written)} in {out}/",
             ExitCode.FAILED_IT00,
@@ -883,6 +925,8 @@ def _print_result(result, args) -> None:
     if ident:
         level = ", ".join(f"{v:.3g}" for v in ident["rms_percent"])
         print(f"identification {ident['mode']}: {level} % of full scale rms; {ident['reason']}")
+        if ident.get("extrapolation"):
+            print(ident["extrapolation"])
 
 
 def _save(result, out: Path, rig, args, save: dict) -> list[Path]:
@@ -960,10 +1004,18 @@ _ADVICE = {
 }
 
 
-def _advice(kind: str, stage: str, gain: float) -> str:
+def _advice(kind: str, stage: str, gain: float, identification: dict | None = None) -> str:
     """What to change after a reconstruction that stopped (``stage`` ``"after IT00"``) or could
     not play any iteration (``stage`` ``"identification"``, ``"model"``, ``"IT00"``), by the
-    kind of stop (``result.stop_kind``)."""
+    kind of stop (``result.stop_kind``). A drive that overshot (refused, a trip, divergence)
+    from a polynomial inverse identified below the target's peak (``identification``'s
+    ``"extrapolation"`` note) is the identification's doing, not the gain's: ``--id-match``."""
+    overshoot = kind in ("refused", "interlock", "diverged") and stage in ("IT00", "after IT00")
+    if overshoot and (identification or {}).get("extrapolation"):
+        return (
+            "the polynomial inverse was identified below the target's peak and extrapolates "
+            "(the note above): --id-match identifies it over the target's range"
+        )
     text = _ADVICE.get((stage, kind)) or _ADVICE.get((stage, None))
     if text is None:
         return (

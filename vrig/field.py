@@ -14,7 +14,14 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["TARGET_KINDS", "default_band", "desired_response", "parse_target", "pseudo_field"]
+__all__ = [
+    "TARGET_KINDS",
+    "default_band",
+    "default_split_hz",
+    "desired_response",
+    "parse_target",
+    "pseudo_field",
+]
 
 TARGET_KINDS = ("pseudo-field", "field")
 """The generated target kinds: ``"pseudo-field"`` and ``"field:<scenario>"`` (``"field"`` alone:
@@ -39,6 +46,38 @@ def default_band(rig) -> tuple[float, float]:
     """
     band = getattr(getattr(rig, "defaults", None), "band", None)
     return tuple(rig.bandwidth if band is None else band)
+
+
+def default_split_hz(band: tuple[float, float], rig=None) -> float:
+    """The split frequency [Hz] of method ``"split"`` when the caller gives none.
+
+    The one rule of ``vrig reconstruct``, :func:`vrig.reconstruct` and the gym envs: the rig
+    side-car's ``reconstruction.methods.split.split_hz`` when it names one (a frequency chosen
+    below the rig's first resonance in the band, as the reference text's §3.2.1 splits the fuel
+    tank's 0-40 Hz at 12 Hz from its identification FRF); else, from the band alone (a user's own
+    rig, whose side-car has no ``"reconstruction"`` block), the band's geometric mean
+    ``sqrt(low * high)``, or a quarter of its upper edge ``high / 4`` for a band from 0 Hz (no
+    geometric mean: the two octaves below the upper edge go to the high band). Either way the
+    split lies inside the band (``low < split < high``) for any band ``0 <= low < high``.
+
+    Parameters
+    ----------
+    band : (float, float)
+        The simulation band ``(low, high)`` [Hz] of the reconstruction.
+    rig : Rig, optional
+        The rig; its ``defaults.method("split").split_hz`` wins when set. None: the band rule.
+
+    Returns
+    -------
+    float
+        The split frequency [Hz].
+    """
+    defaults = getattr(rig, "defaults", None)
+    split = None if defaults is None else defaults.method("split").split_hz
+    if split is not None:
+        return float(split)
+    lo, hi = (float(b) for b in band)
+    return float(np.sqrt(lo * hi)) if lo > 0 else hi / 4
 
 
 def pseudo_field(rig, band: tuple[float, float], seconds: float, *, seed: int = 0):

@@ -39,6 +39,7 @@ since it never imports vrig.)
 from __future__ import annotations
 
 import contextlib
+import errno
 import os
 import re
 import shutil
@@ -62,7 +63,9 @@ from .errors import FileFormatError
 __all__ = [
     "MAX_FILE_BYTES",
     "atomic_write",
+    "file_kind",
     "is_temporary",
+    "mount_points",
     "open_regular",
     "read_bytes",
     "read_npz",
@@ -148,6 +151,36 @@ def recover_directory(path) -> bool:
     return True
 
 
+def mount_points(path) -> list[Path]:
+    """The mount points inside folder ``path``, ``path`` itself included (symlinks not
+    followed); stops at the first one found below ``path``.
+
+    Replacing a folder deletes its old content: a mounted file system inside it (a USB disk, a
+    network share, a bind mount) would be emptied, and a folder that is itself a mount point
+    cannot be renamed aside. :func:`staged_directory` refuses both (``vrig reconstruct
+    --overwrite`` before anything is played).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        A folder (a path that is not a folder: none).
+
+    Returns
+    -------
+    list of Path
+    """
+    path = Path(path)
+    if not path.is_dir():
+        return []
+    if os.path.ismount(path):
+        return [path]
+    for top, dirs, _files in os.walk(path):
+        for name in dirs:
+            if os.path.ismount(os.path.join(top, name)):
+                return [Path(top, name)]
+    return []
+
+
 @contextlib.contextmanager
 def staged_directory(path, *, keep: Callable[[str], bool] | None = None) -> Iterator[Path]:
     """Build a folder beside ``path`` and swap it in when the ``with`` block ends without error.
@@ -173,12 +206,28 @@ def staged_directory(path, *, keep: Callable[[str], bool] | None = None) -> Iter
     ``.old-`` name that :func:`recover_directory` restores). An exception in the block deletes
     the new folder and leaves ``path`` untouched; a kill leaves the old folder whole: still at
     ``path``, or (between the two renames) set aside, where :func:`recover_directory` finds it.
+
+    Raises
+    ------
+    FileExistsError
+        ``path`` exists and is not a folder.
+    OSError
+        (``errno.EBUSY``) ``path`` is or holds a mount point (:func:`mount_points`): nothing
+        is written or deleted.
     """
     path = Path(os.path.realpath(path))
     recover_directory(path)
     _remove_debris(path)
     if os.path.lexists(path) and not path.is_dir():
         raise FileExistsError(f"{path} exists and is not a folder")
+    mounted = mount_points(path)
+    if mounted:
+        raise OSError(
+            errno.EBUSY,
+            f"{mounted[0]} is a mount point: replacing {path} would empty (or fail to move) a "
+            "mounted file system; choose another folder",
+            str(path),
+        )
     path.parent.mkdir(parents=True, exist_ok=True)
     while True:
         new = _sibling(path, "tmp")
@@ -249,6 +298,28 @@ def _remove_debris(path: Path) -> None:
 
 
 # ---------------------------------------------------------------------------------- reading
+def file_kind(path) -> str | None:
+    """What ``path`` is, in words, when it is not a regular file: ``"no file"`` (nothing
+    there), ``"a folder"``, ``"a FIFO (named pipe)"``, ``"a character device"``, ... (symlinks
+    followed); None for a regular file.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The path to look at.
+
+    Raises
+    ------
+    OSError
+        The path cannot be looked at (e.g. a name too long, no permission on a parent).
+    """
+    try:
+        mode = os.stat(path).st_mode
+    except (FileNotFoundError, NotADirectoryError):
+        return "no file"
+    return None if stat.S_ISREG(mode) else _kind(mode)
+
+
 def _kind(mode: int) -> str:
     for test, name in (
         (stat.S_ISDIR, "a folder"),

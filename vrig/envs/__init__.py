@@ -11,7 +11,11 @@ env itself never truncates; pass ``max_episode_steps`` to change it), and names
 plays the rig runs of the n sub-envs in one batch across threads (``vectorization_mode="sync"``
 or ``"async"`` for gymnasium's own; the results are the same bit for bit). The ``-v0`` ids are
 not registered any more: ``gymnasium.make("vrig/Shaker-v0")`` raises gymnasium's
-``DeprecatedEnv`` naming ``vrig/Shaker-v1``.
+``DeprecatedEnv`` naming ``vrig/Shaker-v1``. ``gymnasium.make(id)`` gives
+``TimeLimit<OrderEnforcing<ResetSafeEnvChecker<DriveIterationEnv>>>``: the entry point
+:func:`~vrig.envs.checker.make_checked` applies gymnasium's passive checker in a form that
+survives a reset that raises (:mod:`vrig.envs.checker`: the stock one is broken for good by a
+failed first reset), and the spec has ``disable_env_checker=True`` so the stock one is not added.
 
 **Rig defaults.** The env takes the rig's own defaults from its side-car, as ``vrig reconstruct``
 does, unless the caller passes them (:func:`vrig.envs.physics.rig_settings`): the band
@@ -108,6 +112,7 @@ from gymnasium.envs.registration import register, registry
 from ..errors import RigModelError
 from ..rigs import list_rigs, rig_path
 from ..rigs.spec import read_defaults
+from .checker import ResetSafeEnvChecker, make_checked
 from .drive_iteration import FALLBACK_TOLERANCE, ActionLayout, DriveIterationEnv
 from .physics import IterationPhysics, clear_model_cache
 from .task import IterationTask, band_edges, band_error_ratios
@@ -121,12 +126,14 @@ __all__ = [
     "DriveIterationVectorEnv",
     "IterationPhysics",
     "IterationTask",
+    "ResetSafeEnvChecker",
     "band_edges",
     "band_error_ratios",
     "clear_model_cache",
+    "make_checked",
 ]
 
-_ENTRY_POINT = "vrig.envs.drive_iteration:DriveIterationEnv"
+_ENTRY_POINT = "vrig.envs.checker:make_checked"
 _VECTOR_ENTRY_POINT = "vrig.envs.vector:DriveIterationVectorEnv"
 MAX_EPISODE_STEPS = 10
 _GENERIC_ID = "vrig/DriveIteration-v1"
@@ -162,5 +169,6 @@ for _id, _kwargs in ENV_IDS.items():
             entry_point=_ENTRY_POINT,
             vector_entry_point=_VECTOR_ENTRY_POINT,
             max_episode_steps=MAX_EPISODE_STEPS,
+            disable_env_checker=True,  # make_checked applies ResetSafeEnvChecker itself
             kwargs=dict(_kwargs),
         )

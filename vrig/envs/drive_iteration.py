@@ -6,6 +6,7 @@ See :class:`DriveIterationEnv` for the observation, action, reward and terminati
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from typing import ClassVar
@@ -191,6 +192,29 @@ def _check_env_options(render_mode, action_mode, max_iterations, gain_range, pha
     return lo, hi
 
 
+_RESET_OPTIONS = ("desired", "field_seed", "run_seed")
+
+
+def _check_reset_options(options) -> dict:
+    """The reset ``options`` as a dict, checked: only :data:`_RESET_OPTIONS`, the seeds
+    integers >= 0 (``1.5`` is not the seed 1)."""
+    if options is not None and not isinstance(options, Mapping):
+        raise TypeError(f"options must be a dict or None, got {type(options).__name__}")
+    options = dict(options or {})
+    unknown = set(options) - set(_RESET_OPTIONS)
+    if unknown:
+        raise ValueError(
+            f"unknown reset option(s) {sorted(unknown)}; use desired, field_seed, run_seed"
+        )
+    for key in ("field_seed", "run_seed"):
+        if key in options:
+            value = options[key]
+            if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 0:
+                raise ValueError(f"reset option {key} must be an integer >= 0, got {value!r}")
+            options[key] = int(value)
+    return options
+
+
 def _tolerance(rig, tolerance) -> float:
     """The η0 tolerance [%]: ``tolerance``, else the rig's side-car one, else the fallback."""
     if tolerance is None:
@@ -278,7 +302,8 @@ class DriveIterationEnv(gym.Env):
     (:func:`vrig.processing.band_gains`: ``phi > 0`` a phase lead, ``phi < 0`` a delay; phases 0
     are the ``"bands"`` update bit for bit). Any mode may end with the re-identify flag
     (``reidentify_action=True``). Values out of bounds are clipped (``info["action_clipped"]``);
-    a wrong shape or a non-finite value raises ``ValueError``.
+    a wrong shape or a non-finite value raises ``ValueError``, a complex (or other non-real)
+    action ``TypeError`` (its imaginary part is never dropped: a phase is ``"complex"`` mode's).
 
     **Spaces by rig size** (default ``n_bands=4``; ``n_inputs x n_outputs``; the flat
     observation is ``gymnasium.wrappers.FlattenObservation``'s length,
@@ -536,7 +561,14 @@ class DriveIterationEnv(gym.Env):
         """The checked action: (gains, re-identify flag, whether a value was clipped); gains are
         real (n_inputs, n_bands) / (n_inputs,) / (1,), or complex (n_inputs, n_bands) in
         ``"complex"`` mode when a phase is not 0 (all phases 0: the real magnitudes)."""
-        a = np.asarray(action, dtype=float)
+        a = np.asarray(action)
+        if a.dtype.kind not in "biuf":  # complex (its imaginary part), object, str...
+            raise TypeError(
+                f"action must be real numbers, got dtype {a.dtype}"
+                + (" (a complex gain is a magnitude and a phase: action_mode='complex')"
+                   if a.dtype.kind == "c" else "")
+            )  # fmt: skip
+        a = a.astype(float)
         lay = self.layout
         if a.shape == () and lay.size == 1:
             a = a.reshape(1)
@@ -616,8 +648,10 @@ class DriveIterationEnv(gym.Env):
         """Start an episode: draw a desired response, compute IT00DRV and play it.
 
         As :meth:`gymnasium.Env.reset` (``prepare_reset``, play, ``finish_reset`` until it
-        returns the observation); a reset that raises leaves no episode (``step`` then raises
-        until a reset succeeds).
+        returns the observation). A reset that raises leaves the env as before any reset: no
+        episode, no engine (``step`` raises ``RuntimeError`` until a reset succeeds), and the next
+        reset works as on a new env (with ``gymnasium.make``'s checker too:
+        :mod:`vrig.envs.checker`). Reset options are checked before anything changes.
 
         Parameters
         ----------
@@ -628,9 +662,10 @@ class DriveIterationEnv(gym.Env):
         options : dict, optional
             ``"desired"``: the desired response of this episode (a TimeHistory or a file, one
             column per rig output at the rig's fs); ``"field_seed"``: the seed of the target's
-            record (pseudo-field drive or road; or the index, modulo its length, into the env's ``desired`` set); ``"run_seed"``: the
-            run seed (rig noise of the iteration runs: ``run_seed + 1 + n``). Any other key is a
-            ``ValueError``.
+            record (pseudo-field drive or road; or the index, modulo its length, into the env's
+            ``desired`` set); ``"run_seed"``: the run seed (rig noise of the iteration runs:
+            ``run_seed + 1 + n``). The seeds are integers >= 0 (``1.5`` is a ``ValueError``, not
+            the seed 1). Any other key is a ``ValueError``.
 
         Returns
         -------
@@ -647,13 +682,15 @@ class DriveIterationEnv(gym.Env):
         RigLimitError
             The IT00 drive of an explicit ``desired``/``field_seed``, of the ``desired`` set or
             of the last of :data:`FIELD_REDRAWS` redrawn targets exceeds a limit.
+        ValueError
+            An unknown option, or a seed that is not an integer >= 0.
         """
         drive, n = self.prepare_reset(seed=seed, options=options)
         while True:
             try:
                 done = self.finish_reset(self._play(drive, n))
             except BaseException:
-                self._pending = None
+                self._abandon()
                 raise
             if done is not None:
                 return done
@@ -678,20 +715,25 @@ class DriveIterationEnv(gym.Env):
         """
         # the episode is over until this reset succeeds: a reset that raises leaves no episode
         # for ``step`` to continue (it would mix the old drive with the new target)
-        self._done = True
-        self._pending = None
+        self._abandon()
+        options = _check_reset_options(options)  # a refused reset changes nothing else
         super().reset(seed=seed)
-        options = dict(options or {})
-        unknown = set(options) - {"desired", "field_seed", "run_seed"}
-        if unknown:
-            raise ValueError(
-                f"unknown reset option(s) {sorted(unknown)}; use desired, field_seed, run_seed"
-            )
         draw = self.np_random.integers(0, 2**31 - 1, size=2)
         self.field_seed = int(options.get("field_seed", draw[0]))
         self.run_seed = int(options.get("run_seed", draw[1]))
         drawn = not ("desired" in options or "field_seed" in options or self.desired_set)
-        return self._start_target(options, drawn, 0)
+        try:
+            return self._start_target(options, drawn, 0)
+        except BaseException:
+            self._abandon()
+            raise
+
+    def _abandon(self) -> None:
+        """No episode: the state before any reset (no engine, nothing pending, ``step``
+        refused), as a reset or finish that raises leaves the env."""
+        self.engine = None
+        self._pending = None
+        self._done = True
 
     def _start_target(self, options: dict, drawn: bool, attempt: int):
         """The engine and IT00 drive of this reset's target (attempt ``attempt``)."""
@@ -737,6 +779,14 @@ class DriveIterationEnv(gym.Env):
             raised as it is.
         """
         pending = self._take_pending("reset")
+        try:
+            return self._finish_reset(pending, outcome)
+        except BaseException:
+            self._abandon()
+            raise
+
+    def _finish_reset(self, pending: dict, outcome):
+        """:meth:`finish_reset`'s body (``pending``: the taken reset)."""
         if isinstance(outcome, BaseException):
             # IT00 cannot be refused quietly: there is no previous drive to fall back on. A
             # drawn pseudo-field target the linear inverse cannot start on (its IT00 drive trips
@@ -772,7 +822,8 @@ class DriveIterationEnv(gym.Env):
         action : array_like
             The flat action of :class:`ActionLayout` (``self.layout``), shape
             ``self.action_space.shape``; gains (and phases) outside their bounds are clipped, a
-            wrong shape or a non-finite value is a ``ValueError``.
+            wrong shape or a non-finite value is a ``ValueError``, a complex action a
+            ``TypeError``.
 
         Returns
         -------
@@ -827,6 +878,8 @@ class DriveIterationEnv(gym.Env):
             No episode in progress, or a prepared step or reset not finished yet.
         ValueError
             A wrong shape or a non-finite action (nothing changes).
+        TypeError
+            A complex (or other non-real) action (nothing changes).
         """
         if self._done:
             raise RuntimeError(
@@ -916,6 +969,4 @@ class DriveIterationEnv(gym.Env):
     def close(self):
         """End the episode and drop the engine (the rig and the cached inverse model stay);
         ``reset`` starts a new episode."""
-        self.engine = None
-        self._pending = None
-        self._done = True
+        self._abandon()

@@ -22,7 +22,7 @@ import numpy as np
 from identification.errors import SimulationDivergedError
 
 from ..errors import RigLimitError, SimulationInstabilityError
-from ..field import default_band, desired_response, parse_target
+from ..field import default_band, default_split_hz, desired_response, parse_target
 from ..reconstruction import DriveIteration, InverseArx, InverseNarx, IterationSettings
 from ..reconstruction.settings import cache_key
 from ..rigs import load_rig
@@ -44,8 +44,7 @@ def _method_options(name: str, m, band) -> dict:
     """The side-car's :class:`~vrig.rigs.spec.MethodDefaults` ``m`` of method ``name`` as
     keyword arguments of :func:`~vrig.reconstruction.methods.make_method`, built as
     ``vrig reconstruct`` builds the method (``order``, ``degree``, ``focus``, ``split_hz``;
-    ``split`` without a side-car split: the command's default, the geometric mean of the band
-    [Hz], or a quarter of its upper edge when it starts at 0 Hz)."""
+    ``split`` without a side-car split: :func:`vrig.field.default_split_hz`'s band rule)."""
     if name == "arx":
         return {"order": m.order} if m.order is not None else {}
     if name in ("narx", "error-signal"):
@@ -54,7 +53,7 @@ def _method_options(name: str, m, band) -> dict:
         return {k: v for k, v in given.items() if v is not None}
     if name == "split":
         lo, hi = band
-        split = m.split_hz if m.split_hz is not None else (np.sqrt(lo * hi) if lo > 0 else hi / 4)
+        split = m.split_hz if m.split_hz is not None else default_split_hz((lo, hi))
         out = {"split_hz": float(split)}
         if m.order is not None or m.degree is not None:
             order = 4 if m.order is None else m.order

@@ -44,15 +44,20 @@ from typing import NamedTuple
 import numpy as np
 
 from ..errors import FileFormatError
-from ..files import atomic_write, read_bytes
+from ..files import MAX_FILE_BYTES, atomic_write, read_bytes
 from ..timehistory import TimeHistory
 from ._common import _check_history, _history
 
-__all__ = ["RPC3_SUFFIXES", "read_rpc3", "read_rpc3_header", "write_rpc3"]
+__all__ = ["DELTA_T_RANGE", "RPC3_SUFFIXES", "read_rpc3", "read_rpc3_header", "write_rpc3"]
 
 RPC3_SUFFIXES = (".rsp", ".drv", ".tim")
 """File suffixes handled as RPC III time histories by :func:`vrig.io.read` and
 :func:`vrig.io.write`."""
+
+DELTA_T_RANGE = (1e-9, 86400.0)
+"""The time steps [s] :func:`read_rpc3` and :func:`write_rpc3` accept: sample rates from one a
+day (1.16e-5 Hz) to 1 GHz. A test-rig time history outside is not physical (a corrupt or
+mis-scaled DELTA_T, e.g. 1e-300 s) and is refused instead of becoming fs = 1e300 Hz."""
 
 _RPC3 = "RPC III"  # format name in error messages
 _BLOCK = 512
@@ -311,14 +316,19 @@ def _rpc3_layout(header: dict[str, str], src: str) -> _Layout:
     if "DELTA_T" not in header:
         raise FileFormatError(src, _RPC3, "header keyword DELTA_T is missing")
     dt = _parse_float(header["DELTA_T"], "DELTA_T", src)
-    if dt <= 0 or not math.isfinite(1.0 / dt):
+    lo, hi = DELTA_T_RANGE
+    if not lo <= dt <= hi:
         raise FileFormatError(
-            src, _RPC3, f"DELTA_T must be a positive time step, got {header['DELTA_T']!r}"
+            src,
+            _RPC3,
+            f"DELTA_T = {header['DELTA_T']!r} s is not a time step of a rig record: it must lie "
+            f"in {lo:g}..{hi:g} s (sample rates {1 / hi:.3g} Hz to {1 / lo:.3g} Hz)",
         )
     n_chan = _required_int(header, "CHANNELS", src, 1)
     per_frame = _required_int(header, "PTS_PER_FRAME", src, 1)
     per_group = _required_int(header, "PTS_PER_GROUP", src, 1)
     frames = _required_int(header, "FRAMES", src, 1)
+    _check_sizes(header, n_chan, per_group, frames * per_frame, src)
     n_points = frames * per_frame  # points in the frames (per channel)
     n_samples = n_points
     if "SAMPLES" in header:
@@ -330,6 +340,27 @@ def _rpc3_layout(header: dict[str, str], src: str) -> _Layout:
                 f"SAMPLES = {n_samples} must lie between 1 and FRAMES * PTS_PER_FRAME = {n_points}",
             )
     return _Layout(dtype, data_type, dt, n_chan, per_frame, per_group, frames, n_samples)
+
+
+def _check_sizes(header, n_chan: int, per_group: int, n_points: int, src: str) -> None:
+    """What the header's sizes claim, in exact integers, before any array is made: one group
+    and the whole record must each fit in :data:`~vrig.files.MAX_FILE_BYTES` (no readable
+    file holds more; numpy would refuse the arrays with a bare ValueError, or try to allocate
+    them)."""
+    item = int(np.dtype(_DATA_TYPES[header.get("DATA_TYPE", "SHORT_INTEGER").upper()]).itemsize)
+    for what, dims in (
+        ("one group of PTS_PER_GROUP x CHANNELS", (per_group, n_chan)),
+        ("a record of FRAMES x PTS_PER_FRAME x CHANNELS", (n_points, n_chan)),
+    ):
+        n_bytes = math.prod(dims) * item
+        if n_bytes > MAX_FILE_BYTES:
+            raise FileFormatError(
+                src,
+                _RPC3,
+                f"the header claims {what} = {' x '.join(map(str, dims))} points of {item} "
+                f"bytes ({n_bytes:.3g} bytes), more than any readable file holds "
+                f"({MAX_FILE_BYTES} bytes, vrig.files.MAX_FILE_BYTES): a corrupt header",
+            )
 
 
 def _channel_labels(header: dict[str, str], n_chan: int) -> tuple[list[str], list[str]]:
@@ -440,7 +471,9 @@ def read_rpc3(path) -> TimeHistory:
         (a ValueError) If the file is not a readable RPC III time history: first three records
         not ``FORMAT``, ``NUM_HEADER_BLOCKS``, ``NUM_PARAMS``; ``ASCII`` or unknown ``FORMAT``; a
         missing or non-numeric ``CHANNELS``, ``DELTA_T``, ``PTS_PER_FRAME``, ``PTS_PER_GROUP``,
-        ``FRAMES`` or (integer data) ``SCALE.CHAN_n``; a data section whose size does not match
+        ``FRAMES`` or (integer data) ``SCALE.CHAN_n``; a ``DELTA_T`` outside
+        :data:`DELTA_T_RANGE`; a group or record larger than any readable file (checked before
+        anything is allocated); a data section whose size does not match
         the header (truncated file, wrong ``CHANNELS``...); non-finite samples; not a regular
         file (FIFO, device...) or larger than :data:`vrig.files.MAX_FILE_BYTES`.
     FileNotFoundError
@@ -499,6 +532,17 @@ class _WriteOptions(NamedTuple):
     pts_per_frame: int
     per_group: int  # points per group (per channel)
     byte_order: str  # "little" or "big"
+
+
+def _check_rate(fs: float) -> None:
+    """A sample rate whose DELTA_T lies in :data:`DELTA_T_RANGE` (ValueError otherwise: the
+    file would not read back)."""
+    lo, hi = DELTA_T_RANGE
+    if not lo <= 1.0 / fs <= hi:
+        raise ValueError(
+            f"an RPC III file holds time steps of {lo:g}..{hi:g} s (DELTA_T_RANGE); the record's "
+            f"fs = {fs:g} Hz is outside ({1 / hi:.3g} Hz to {1 / lo:.3g} Hz)"
+        )
 
 
 def _write_options(
@@ -728,6 +772,12 @@ def write_rpc3(
     Path
         The written file.
 
+    Raises
+    ------
+    ValueError
+        Among others: a sample rate whose time step lies outside :data:`DELTA_T_RANGE` (the
+        file would not read back).
+
     Notes
     -----
     The header starts ``FORMAT, NUM_HEADER_BLOCKS, NUM_PARAMS`` and holds ``FILE_TYPE =
@@ -742,6 +792,7 @@ def write_rpc3(
     and the file is zero-padded to a whole number of 512-byte blocks.
     """
     _check_history(history)
+    _check_rate(history.fs)
     path = Path(path)
     opts = _write_options(data_type, time_type, pts_per_frame, frames_per_group, byte_order)
     scales, values = _stored_values(history, opts.data_type, full_scale)

@@ -15,7 +15,7 @@ from scipy.signal import windows
 from identification.errors import SimulationDivergedError
 
 from ..errors import RigLimitError, SimulationInstabilityError
-from ..field import default_band
+from ..field import default_band, default_split_hz
 from ..processing import band_gains, decimate, gprepro, identification_band
 from ..progress import status
 from ..rigs.limits import check_drive_limits
@@ -92,6 +92,30 @@ def _describe(method) -> str:
     return f"{name}({order}" + (f", degree {degree}" if degree else "") + ")"
 
 
+def _is_polynomial(method) -> bool:
+    """Whether ``method`` (or a band of a split) is a polynomial inverse (degree >= 2)."""
+    parts = [getattr(method, "low", None), getattr(method, "high", None), method]
+    return any((getattr(p, "degree", None) or 1) > 1 for p in parts if p is not None)
+
+
+def _extrapolation_note(method, peak_ratio, names) -> str | None:
+    """The note of a polynomial inverse identified on responses that peak below DESRES's:
+    the inverse is then evaluated outside the amplitude range it was fitted on, where its
+    polynomial terms extrapolate (a quadratic term at 3x the range is 9x), and its drive can
+    overshoot - the user's-rig NARX of issue 25 stopped at IT01 on a drive beyond full scale
+    for it, where the linear inverses ran (their extrapolation is linear). None otherwise."""
+    ratio = np.asarray(peak_ratio, dtype=float)
+    if not _is_polynomial(method) or not np.all(np.isfinite(ratio)) or ratio.min() >= 1.0:
+        return None
+    k = int(np.argmin(ratio))
+    return (
+        f"note: the polynomial inverse ({_describe(method)}) is identified on responses that "
+        f"peak at {100 * ratio[k]:.0f} % of the desired response's peak ({names[k]}): beyond "
+        "that its polynomial extrapolates and its drive may overshoot; identify matched to the "
+        "target (id_match=True, vrig reconstruct --id-match) or at a higher id_rms"
+    )
+
+
 class DriveIteration:
     """One reconstruction, step by step: the engine of :func:`reconstruct` and of the gymnasium
     environments (so a policy's fixed gain reproduces ``reconstruct`` exactly).
@@ -117,6 +141,8 @@ class DriveIteration:
     settings : IterationSettings, optional
         The iteration's settings (default: the defaults); the engine uses the identification
         ones and ``id_seed`` / ``run_seed``, the loop's (gain, iterations, ...) are the caller's.
+        Method ``"split"`` without a ``split_hz`` option splits at
+        :func:`vrig.field.default_split_hz` (the rig side-car's split, else the band's rule).
     **options
         Settings by name applied on top of ``settings`` (see :meth:`IterationSettings.build`).
     """
@@ -141,7 +167,10 @@ class DriveIteration:
         band = s.bandwidth if s.bandwidth is not None else default_band(rig)  # side-car's
         self.band = _check_band(band, rig.fs)
         self.id_band = identification_band(self.band, fs=rig.fs)
-        self.method = make_method(s.method, **s.method_options)
+        options = dict(s.method_options)
+        if s.method == "split" and "split_hz" not in options:  # the rig's, else the band's
+            options["split_hz"] = default_split_hz(self.band, rig)
+        self.method = make_method(s.method, **options)
         self.decimation = (
             max(1, int(rig.fs // (8 * self.id_band[1]))) if s.decimation is None else s.decimation
         )
@@ -155,6 +184,7 @@ class DriveIteration:
         self._desired = desired
         self.n = self.desres.n_samples
         self.names = [c.name for c in rig.inputs]
+        self.names_out = [c.name for c in rig.outputs]
         self.units = [c.unit for c in rig.inputs]
         self.id_drive: TimeHistory | None = None
         self.id_response: TimeHistory | None = None
@@ -195,14 +225,17 @@ class DriveIteration:
         return signal.resample_poly(x, self.decimation, 1, axis=0)[: self.n]
 
     def identify(self) -> None:
-        """IDDRV -> IDRES -> inverse model.
+        """IDDRV -> IDRES -> inverse model (after :meth:`check_length`).
 
         Default: IDDRV from ``id_psd`` (triangular over the identification band) at ``id_rms``
         (5 % of full scale), the RMS halved (up to three times) while the rig refuses or trips
         on it. With ``id_match`` the drive is matched to DESRES's spectrum and amplitude range
         (:func:`~vrig.reconstruction.matching.identify_matched`; what it did is kept in
         ``id_matching``). Either way ``id_report`` says which level was used and why, and how
-        the identification response's RMS and peak compare with DESRES's."""
+        the identification response's RMS and peak compare with DESRES's; a default
+        identification of a polynomial inverse whose responses peak below DESRES's adds an
+        ``"extrapolation"`` note (the inverse will be used beyond its fitted range)."""
+        self.check_length()
         if self.settings.id_match:
             iddrv, idres, self.id_matching = identify_matched(self)
             self.id_report = self.id_matching.summary()
@@ -252,6 +285,10 @@ class DriveIteration:
         }
         if attempt:
             self.id_report["reason"] += f", halved {attempt}x after interlock trips ({last_trip})"
+        note = _extrapolation_note(self.method, self.id_report["peak_ratio"], self.names_out)
+        if note:
+            self.id_report["extrapolation"] = note
+            status(note)
         return iddrv, idres
 
     def reidentify(self, drive: TimeHistory, raw: TimeHistory) -> None:
@@ -328,9 +365,43 @@ class DriveIteration:
     def check_desired(self) -> None:
         """Raise ``ValueError`` when a desired channel has nothing to reproduce in the band
         (constant, a pure trend or out of band): its η0 would be a ratio of round-off
-        (2.3e14 % for a constant record). Called by :meth:`first_drive` and, before the
+        (2.3e14 % for a constant record), or when the identification record is too short for
+        the method (:meth:`check_length`). Called by :meth:`first_drive` and, before the
         identification, by :func:`reconstruct`; identifying alone needs no desired content."""
+        self.check_length()
         _check_content(self._desired, self.desres, self.band)
+
+    def check_length(self) -> None:
+        """Raise ``ValueError`` before anything is played when the identification record is
+        shorter than the method needs.
+
+        The rule: the identification record (``id_duration``, by default the desired record's
+        length) at the model rate ``fs / decimation`` must hold the method's ``min_samples``
+        (a method without one: no check): a time-domain inverse needs its delay estimate
+        (``max_lead +`` :data:`~vrig.reconstruction.methods.DELAY_SAMPLES`, 128 samples at the
+        default lead search) and one sample per term of its largest channel after its lags;
+        the H1 inverse :data:`~vrig.reconstruction.methods.FRF_MIN_SAMPLES`; split spectra the
+        larger of its two bands'. The model's own fit checks the rest (e.g. a term selection).
+        """
+        need_fn = getattr(self.method, "min_samples", None)
+        if need_fn is None:
+            return
+        need = int(need_fn(self.n_inputs, len(self.rig.outputs)))
+        have = -(-self.id_samples // self.decimation)
+        if have >= need:
+            return
+        fs_model = self.rig.fs / self.decimation
+        where = (
+            f"id_duration {self.settings.id_duration:g} s"
+            if self.settings.id_duration is not None
+            else f"the desired record's {self._desired.duration:g} s"
+        )
+        raise ValueError(
+            f"the identification record ({where}) is {have} samples at the model rate "
+            f"{fs_model:g} Hz, but the {_describe(self.method)} inverse needs at least {need} "
+            f"({need / fs_model:.3g} s): give a longer desired record (or id_duration), a "
+            "lower order, or a method needing fewer samples (frf)"
+        )
 
     def first_drive(self) -> np.ndarray:
         """IT00DRV = inverse(DESRES), band-limited and tapered (:meth:`shape`), at the rig rate."""

@@ -85,7 +85,9 @@ def reconstruct(
     Raises
     ------
     ValueError
-        Bad arguments (before anything is played).
+        Bad arguments (before anything is played), among them an identification record (by
+        default the desired record) too short for the method
+        (:meth:`~vrig.reconstruction.DriveIteration.check_length` states the rule).
     ReconstructionError
         Nothing could be played: the identification drive tripped the rig even at 1/8 of its
         amplitude, the inverse model could not be fitted or diverged on DESRES, or IT00DRV was

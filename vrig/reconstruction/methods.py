@@ -35,6 +35,8 @@ from ..timehistory import TimeHistory
 from .protocol import InverseModelMethod, SavableMethod, SizedMethod
 
 __all__ = [
+    "DELAY_SAMPLES",
+    "FRF_MIN_SAMPLES",
     "METHODS",
     "InverseArx",
     "InverseErrorSignal",
@@ -44,6 +46,29 @@ __all__ = [
     "cross_spectra",
     "make_method",
 ]
+
+
+DELAY_SAMPLES = 96
+"""Samples (model rate) :func:`identification.estimate_delay` needs beyond ``max_lead``: it fits
+ARX(4) models at every candidate delay and needs more than ``max_lead + 4 + 1 + 10 (2 x 4 + 1)``
+samples."""
+
+FRF_MIN_SAMPLES = 32
+"""Samples (model rate) the H1 estimate of :class:`InverseFrf` needs at least: four Welch
+segments of at least 8 samples."""
+
+
+def _structure_samples(model, n_outputs: int, n_inputs: int, lead: int = 0) -> int:
+    """The samples a least-squares fit of ``model`` (an Arx / Narx, or an ErrorSignalModel's
+    two parts) needs at ``lead``: one per term of its largest channel after the lead and the
+    largest lag (:meth:`identification.Narx.term_count`, before any term selection)."""
+    parts = [model.linear, model.nonlinear] if isinstance(model, ErrorSignalModel) else [model]
+    if isinstance(model, NarxSearch):
+        parts = [model.lead_model()]  # the candidates check their own sizes
+    return max(
+        lead + p.max_lag(n_outputs, n_inputs) + int(np.max(p.term_count(n_outputs, n_inputs)))
+        for p in parts
+    )
 
 
 class _InverseTimeDomain:
@@ -94,6 +119,24 @@ class _InverseTimeDomain:
         """The lead [samples] the last :meth:`identify` chose; None before one."""
         inverse = getattr(self, "inverse", None)
         return None if inverse is None else int(inverse.lead_)
+
+    def min_samples(self, n_drives: int, n_responses: int) -> int:
+        """The shortest identification record [samples at the model rate] this inverse can be
+        identified from: with ``lead="auto"`` the delay estimate's ``max_lead +``
+        :data:`DELAY_SAMPLES`, and (any lead) one sample per term of the inverse's largest drive
+        channel after its largest lag and the lead (for ``"auto"``: lead 0, the shortest tried).
+
+        Parameters
+        ----------
+        n_drives, n_responses : int
+            Numbers of drive and response channels of the rig (the inverse maps responses to
+            drives; ``responses`` restricts the latter).
+        """
+        n_in = n_responses if self.responses is None else len(self.responses)
+        if self.lead == "auto":
+            need = self.max_lead + DELAY_SAMPLES
+            return max(need, _structure_samples(self._model(), n_drives, n_in))
+        return max(2 * self.lead + 1, _structure_samples(self._model(), n_drives, n_in, self.lead))
 
     def set_lead(self, lead) -> None:
         """Fix the lead for the next :meth:`identify`: samples >= 0 (0: a causal model, no lead
@@ -456,6 +499,22 @@ class SplitSpectra:
             if isinstance(band, InverseModelMethod):
                 band.set_lead(value)
 
+    def min_samples(self, n_drives: int, n_responses: int) -> int:
+        """The shortest identification record [samples at the model rate]: the larger of the
+        two band methods' (a band method without ``min_samples``: 0).
+
+        Parameters
+        ----------
+        n_drives, n_responses : int
+            Numbers of drive and response channels of the rig.
+        """
+        need = 0
+        for band, names in ((self.low, self.low_responses), (self.high, self.high_responses)):
+            if hasattr(band, "min_samples"):
+                n_resp = n_responses if names is None else len(names)
+                need = max(need, band.min_samples(n_drives, n_resp))
+        return need
+
     def model_size(self) -> int | None:
         """Sum of the bands' model sizes; None if either band's is unknown."""
         sizes = [
@@ -561,6 +620,17 @@ class InverseFrf:
             / np.maximum(np.real(np.einsum("fii->fi", syy)), 1e-300)
         )
         self.fs = fs
+
+    def min_samples(self, n_drives: int, n_responses: int) -> int:
+        """The shortest identification record [samples at the model rate]:
+        :data:`FRF_MIN_SAMPLES` (four Welch segments of 8 samples).
+
+        Parameters
+        ----------
+        n_drives, n_responses : int
+            Numbers of drive and response channels of the rig (not used).
+        """
+        return FRF_MIN_SAMPLES
 
     def drive(self, response: TimeHistory) -> np.ndarray:
         """Drive for a response: the record is zero-padded to twice its length (no circular
@@ -672,6 +742,13 @@ def make_method(method, **options):
                 f"method {method!r} takes no option {', '.join(map(repr, unknown))}; its options: "
                 f"{', '.join(takes) or 'none'}"
             )
+    missing = [
+        n for n, p in params.items()
+        if p.default is p.empty and p.kind in (p.POSITIONAL_OR_KEYWORD, p.KEYWORD_ONLY)
+        and n not in options
+    ]  # fmt: skip
+    if missing:  # e.g. split without split_hz (vrig.reconstruct fills it from the rig's band)
+        raise ValueError(f"method {method!r} needs the option(s) {', '.join(missing)}")
     try:
         return cls(**options)
     except TypeError as exc:  # an option the class's base does not take either

@@ -160,9 +160,14 @@ class IterationSettings:
                 f"tolerance must be a finite η0 > 0 [%] (or None: no tolerance stop), got {tol!r}"
             )
         try:
-            gain = np.asarray(self.gain, dtype=float)
+            gain = np.asarray(self.gain)
+            if gain.dtype.kind == "c":  # never drop an imaginary part silently
+                raise TypeError
+            gain = gain.astype(float)
         except (TypeError, ValueError):
-            raise ValueError(f"gain must be a number or one per drive channel, got {self.gain!r}") from None
+            raise ValueError(
+                f"gain must be a real number or one per drive channel, got {self.gain!r}"
+            ) from None
         if gain.ndim > 1 or np.any(~np.isfinite(gain)) or np.any(gain <= 0) or np.any(gain > 2):
             raise ValueError(f"gain must lie in (0, 2], got {gain}")
         d = self.decimation
