@@ -1,0 +1,147 @@
+"""Compiled free run of a *subset* of a channel's candidate terms, read from the term table.
+
+Free-run selection (:mod:`identification.free_run_selection`) scores thousands of candidate
+term subsets of one output channel, each with its own least-squares coefficients. Compiling a
+:class:`~identification.simulation.SimulationPlan` per subset costs more than the free run
+itself, so these kernels evaluate the subset directly from tables built once per selection:
+
+* every candidate term is ``b_j(t) * prod_f g_f(y(t - lag_f))``: an input-only factor ``b_j``
+  (a column of the regression matrix ``X`` for a term without output factors, else a column of
+  ``Q``, the distinct input-only parts of the output-dependent terms, ``Q[:, 0] = 1``) times its
+  factors in the channel's own past outputs, passed through their static functions;
+* the recursion computes the fed-back regressors ``g_r(y(t - lag_r))`` once per sample, then
+  ``y(t) = sum_i coef_i * b_{j_i}(t) * prod z[factors of j_i]`` over the subset's terms.
+
+A run stops early (returns ``inf``) when its output leaves ``bound`` or is not finite (as
+:func:`~identification._kernels.free_run` reports divergence) or when its running sum of squared
+errors exceeds ``cap``: a run abandoned that way cannot be the best of a forward step nor an
+accepted pruning, since the sum only grows.
+
+Internal module: callers validate inputs. Arrays are contiguous (``X``, ``Q`` Fortran-ordered);
+integer tables are int64.
+"""
+
+from __future__ import annotations
+
+import numba as nb
+import numpy as np
+
+from ._transforms import apply
+
+__all__ = ["score_subsets", "subset_free_run"]
+
+
+_BLOCK = 256  # samples whose input-only sum is computed (vectorised) ahead of the recursion
+
+
+@nb.njit(cache=True, nogil=True)
+def subset_free_run(
+    y, start, X, Q, src, nfac, fac, lag, fun, bp, sel, coef, target, bound, cap
+):  # pragma: no cover - compiled
+    """Free run of the terms ``sel`` (coefficients ``coef``) over rows ``start ..`` of ``y``.
+
+    ``y`` (N,): rows ``< start`` hold the measured past, rows ``start .. N-1`` are overwritten
+    with the free run. ``X`` (N - start, M) and ``Q`` (N - start, nq) hold the input-only
+    factors of row ``t`` at ``t - start``; term ``j``'s is ``X[:, src[j]]`` when ``src[j] >= 0``
+    (a term without output factors) and ``Q[:, -1 - src[j]]`` otherwise; its output factors are
+    the regressors ``fac[j, :nfac[j]]``, regressor ``r`` being ``g(y(t - lag[r]))`` with ``g``
+    the function ``fun[r]`` (breakpoint ``bp[r]``). ``target`` (N - start,) is the measured
+    output. The terms without output factors are summed ahead, a block of samples at a time;
+    the recursion adds the others.
+
+    Returns the sum of squared errors against ``target``, or ``inf`` when the run left
+    ``bound`` (or became non-finite) or its running sum exceeded ``cap``.
+    """
+    n = y.shape[0] - start
+    R = lag.shape[0]
+    plain = True
+    for r in range(R):
+        if fun[r] != 0:
+            plain = False
+    K = sel.shape[0]
+    D = fac.shape[1]
+    n_in = 0
+    for m in range(K):
+        if nfac[sel[m]] == 0:
+            n_in += 1
+    n_out = K - n_in
+    in_col = np.empty(n_in, dtype=np.int64)
+    in_w = np.empty(n_in)
+    out_col = np.empty(n_out, dtype=np.int64)
+    out_w = np.empty(n_out)
+    out_nf = np.empty(n_out, dtype=np.int64)
+    out_f = np.empty((n_out, D), dtype=np.int64)
+    a = 0
+    b = 0
+    for m in range(K):
+        j = sel[m]
+        if nfac[j] == 0:
+            in_col[a] = src[j]
+            in_w[a] = coef[m]
+            a += 1
+        else:
+            out_col[b] = -1 - src[j]
+            out_w[b] = coef[m]
+            out_nf[b] = nfac[j]
+            for f in range(D):
+                out_f[b, f] = fac[j, f]
+            b += 1
+    z = np.empty(max(R, 1))
+    c = np.empty(_BLOCK)
+    sse = 0.0
+    for b0 in range(0, n, _BLOCK):
+        b1 = min(b0 + _BLOCK, n)
+        c[: b1 - b0] = 0.0
+        for m in range(n_in):
+            w = in_w[m]
+            col = in_col[m]
+            for i in range(b0, b1):
+                c[i - b0] += w * X[i, col]
+        for i in range(b0, b1):
+            t = start + i
+            for r in range(R):
+                v = y[t - lag[r]]
+                z[r] = v if plain else apply(fun[r], bp[r], v)
+            acc = c[i - b0]
+            for m in range(n_out):
+                v = Q[i, out_col[m]]
+                for f in range(out_nf[m]):
+                    v *= z[out_f[m, f]]
+                acc += out_w[m] * v
+            y[t] = acc
+            mag = abs(acc)
+            if not (mag <= bound) or mag == np.inf:  # also catches nan
+                return np.inf
+            e = target[i] - acc
+            sse += e * e
+            if sse > cap:
+                return np.inf
+    return sse
+
+
+@nb.njit(cache=True, nogil=True)
+def score_subsets(
+    y0, start, X, Q, src, nfac, fac, lag, fun, bp, sets, coefs, sizes, order, target, bound,
+    best, out,
+):  # pragma: no cover - compiled
+    """Sum of squared free-run errors of the subsets ``order`` (indices into ``sets``).
+
+    Subset ``c`` is the terms ``sets[c, :sizes[c]]`` with coefficients ``coefs[c, :sizes[c]]``;
+    each run starts from the measured past ``y0[:start]`` (see :func:`subset_free_run`). Runs
+    whose sum exceeds ``best[0]`` are abandoned (``out[c] = inf``); a finished run lowers
+    ``best[0]`` to its sum. ``best`` may be shared by concurrent calls (threads scoring other
+    subsets): every value written to it is a finished run's sum, so it is always an upper bound
+    of the smallest sum, and the smallest sum's run is never abandoned.
+    """
+    y = np.empty(y0.shape[0])
+    for r in range(start):
+        y[r] = y0[r]
+    for c in order:
+        k = sizes[c]
+        v = subset_free_run(
+            y, start, X, Q, src, nfac, fac, lag, fun, bp, sets[c, :k], coefs[c, :k], target,
+            bound, best[0],
+        )
+        out[c] = v
+        if v < best[0]:
+            best[0] = v
