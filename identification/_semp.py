@@ -36,10 +36,16 @@ import os
 from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
-from scipy import linalg
 
 from ._kernels import expand_terms
-from ._semp_kernels import score_subsets, subset_free_run
+from ._semp_kernels import (
+    cholesky,
+    gram_row,
+    score_subsets,
+    solve_lower,
+    solve_upper_t,
+    subset_free_run,
+)
 from .budget import check_allocation, product
 from .regression import lagged_regressors
 from .structure import ChannelStructure
@@ -57,10 +63,11 @@ PIVOT_TOL = 1e-8
 """Smallest relative pivot (energy of a scaled column left after projecting it on the selected
 ones) solved through the Gram matrix; below it ``lstsq`` is used."""
 
-TERM_RATE = 2e8
+TERM_RATE = 4e8
 """Nominal operations per second of one core in the compiled free run (a term of a subset at
-one sample costs a multiply-add plus one multiplication per output factor), on the 2-core
-development box; turns the size estimate into seconds."""
+one sample costs a multiply-add plus one multiplication per output factor). The kernel ran at
+0.6e9 to 1.2e9 per second on the loaded 2-core development box: the estimate is an upper bound
+(before early abandonment, and before the scoring threads share the work)."""
 
 _SLACK = 1e-9  # relative margin on an abandonment cap: rounding never abandons a tie
 
@@ -126,6 +133,14 @@ def scaled_lstsq(A: np.ndarray, b: np.ndarray) -> np.ndarray:
     norm[norm == 0] = 1.0
     coef, *_ = np.linalg.lstsq(A / norm, b, rcond=None)
     return coef / norm
+
+
+def _cho_solve(L: np.ndarray, B: np.ndarray) -> np.ndarray:
+    """``(L L')^-1 B`` for a lower Cholesky factor ``L`` (a new array)."""
+    out = np.array(B, dtype=np.float64, order="C")
+    solve_lower(L, out)
+    solve_upper_t(L, out)
+    return out
 
 
 def _term_tables(siso: ChannelStructure, inputs, yk, start: int):
@@ -217,7 +232,8 @@ class CompiledScorer:
         """Row j of the scaled Gram matrix (computed once)."""
         row = self._rows.get(j)
         if row is None:
-            row = self.scale * (self.X.T @ self.X[:, j]) * self.scale[j]
+            row = np.empty(self.M)
+            gram_row(self.X, j, self.scale, row)
             self._rows[j] = row
         return row
 
@@ -225,11 +241,8 @@ class CompiledScorer:
         """Lower Cholesky factor of the scaled ``G[cols, cols]``; None when a pivot is below
         :data:`PIVOT_TOL` (ill-conditioned: use lstsq)."""
         G = np.array([self._row(j)[cols] for j in cols])
-        try:
-            L = linalg.cholesky(G, lower=True, check_finite=False)
-        except linalg.LinAlgError:
-            return None
-        return L if np.min(np.diag(L)) ** 2 >= PIVOT_TOL else None
+        L = np.empty_like(G)
+        return L if cholesky(G, L) >= PIVOT_TOL else None
 
     def _lstsq(self, cols) -> np.ndarray:
         return scaled_lstsq(self.X[:, cols], self.target)
@@ -240,8 +253,7 @@ class CompiledScorer:
         L = self._factor(cols)
         if L is None:
             return self._lstsq(cols)
-        theta = linalg.cho_solve((L, True), self.b[cols], check_finite=False)
-        return theta * self.scale[cols]
+        return _cho_solve(L, self.b[cols][:, None])[:, 0] * self.scale[cols]
 
     def _removals(self, selected: list, drop: list) -> np.ndarray:
         """Coefficients (len(drop), k - 1) of the models ``selected`` without each term of
@@ -251,8 +263,8 @@ class CompiledScorer:
         L = self._factor(S)
         if L is None:
             return np.array([self.solve([c for c in selected if c != i]) for i in drop])
-        P = linalg.cho_solve((L, True), np.eye(S.size), check_finite=False)
-        theta = P @ self.b[S]
+        P = _cho_solve(L, np.eye(S.size))
+        theta = np.einsum("ij,j->i", P, self.b[S])
         out = np.empty((len(drop), S.size - 1))
         for r, i in enumerate(drop):
             a = selected.index(i)
@@ -274,15 +286,18 @@ class CompiledScorer:
             for c, j in enumerate(cand):
                 coefs[c] = self._lstsq(np.append(S, j))
             return coefs, np.zeros(cand.size)
-        GS = np.array([self._row(i)[cand] for i in S])  # (k, C)
-        W = linalg.solve_triangular(L, GS, lower=True, check_finite=False)
-        z = linalg.solve_triangular(L, self.b[S], lower=True, check_finite=False)
+        W = np.array([self._row(i)[cand] for i in S])  # G[S, cand]: (k, C)
+        solve_lower(L, W)
+        z = self.b[S][:, None].copy()
+        solve_lower(L, z)
         d2 = 1.0 - np.einsum("ij,ij->j", W, W)
-        num = self.b[cand] - W.T @ z
+        num = self.b[cand] - np.einsum("ij,i->j", W, z[:, 0])
         good = d2 >= PIVOT_TOL
         theta_j = np.where(good, num / np.where(good, d2, 1.0), 0.0)
-        V = linalg.solve_triangular(L.T, W, lower=False, check_finite=False)
-        theta0 = linalg.solve_triangular(L.T, z, lower=False, check_finite=False)
+        V = W.copy()
+        solve_upper_t(L, V)
+        solve_upper_t(L, z)
+        theta0 = z[:, 0]
         coefs[:, :k] = (theta0[:, None] - V * theta_j).T * self.scale[S]
         coefs[:, k] = theta_j * self.scale[cand]
         for c in np.flatnonzero(~good):  # nearly collinear with S: as the reference solves it

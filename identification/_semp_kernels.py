@@ -17,6 +17,11 @@ A run stops early (returns ``inf``) when its output leaves ``bound`` or is not f
 errors exceeds ``cap``: a run abandoned that way cannot be the best of a forward step nor an
 accepted pruning, since the sum only grows.
 
+The free run and the Gram row are compiled with ``fastmath={"reassoc", "contract"}``: sums may
+be reordered and fused into multiply-adds (the rounding differs from
+:func:`~identification.simulation.simulate_plan`'s by a few units in the last place; the
+divergence test on ``nan``/``inf`` is unaffected: no ``nnan``/``ninf`` assumption).
+
 Internal module: callers validate inputs. Arrays are contiguous (``X``, ``Q`` Fortran-ordered);
 integer tables are int64.
 """
@@ -28,13 +33,20 @@ import numpy as np
 
 from ._transforms import apply
 
-__all__ = ["score_subsets", "subset_free_run"]
+__all__ = [
+    "cholesky",
+    "gram_row",
+    "score_subsets",
+    "solve_lower",
+    "solve_upper_t",
+    "subset_free_run",
+]
 
 
 _BLOCK = 256  # samples whose input-only sum is computed (vectorised) ahead of the recursion
 
 
-@nb.njit(cache=True, nogil=True)
+@nb.njit(cache=True, nogil=True, fastmath={"reassoc", "contract"})
 def subset_free_run(
     y, start, X, Q, src, nfac, fac, lag, fun, bp, sel, coef, target, bound, cap
 ):  # pragma: no cover - compiled
@@ -145,3 +157,68 @@ def score_subsets(
         out[c] = v
         if v < best[0]:
             best[0] = v
+
+
+# Small dense linear algebra of the scorer's least squares, compiled: the matrices are k x k
+# (k <= the path length) and k x C; a multithreaded BLAS spends more time starting its
+# threads than computing them, and competes with the scoring threads.
+@nb.njit(cache=True, nogil=True, fastmath={"reassoc", "contract"})
+def gram_row(X, j, scale, out):  # pragma: no cover - compiled
+    """``out[c] = scale[c] * scale[j] * (X[:, c] . X[:, j])`` (``X`` Fortran-ordered)."""
+    n, M = X.shape
+    for c in range(M):
+        acc = 0.0
+        for i in range(n):
+            acc += X[i, c] * X[i, j]
+        out[c] = acc * scale[c] * scale[j]
+
+
+@nb.njit(cache=True, nogil=True)
+def cholesky(A, L):  # pragma: no cover - compiled
+    """Lower Cholesky factor of the symmetric ``A`` (k, k) into ``L``; returns the smallest
+    squared pivot ``L[i, i]^2`` (<= 0: not positive definite, ``L`` incomplete)."""
+    k = A.shape[0]
+    L[:, :] = 0.0
+    smallest = np.inf
+    for j in range(k):
+        d = A[j, j]
+        for p in range(j):
+            d -= L[j, p] * L[j, p]
+        smallest = min(smallest, d)
+        if not d > 0.0:
+            return d
+        L[j, j] = np.sqrt(d)
+        for i in range(j + 1, k):
+            s = A[i, j]
+            for p in range(j):
+                s -= L[i, p] * L[j, p]
+            L[i, j] = s / L[j, j]
+    return smallest
+
+
+@nb.njit(cache=True, nogil=True)
+def solve_lower(L, B):  # pragma: no cover - compiled
+    """``B <- L^-1 B`` in place (``L`` lower triangular (k, k), ``B`` (k, C))."""
+    k, C = B.shape
+    for i in range(k):
+        for p in range(i):
+            w = L[i, p]
+            for c in range(C):
+                B[i, c] -= w * B[p, c]
+        inv = 1.0 / L[i, i]
+        for c in range(C):
+            B[i, c] *= inv
+
+
+@nb.njit(cache=True, nogil=True)
+def solve_upper_t(L, B):  # pragma: no cover - compiled
+    """``B <- L^-T B`` in place (``L`` lower triangular (k, k), ``B`` (k, C))."""
+    k, C = B.shape
+    for i in range(k - 1, -1, -1):
+        for p in range(i + 1, k):
+            w = L[p, i]
+            for c in range(C):
+                B[i, c] -= w * B[p, c]
+        inv = 1.0 / L[i, i]
+        for c in range(C):
+            B[i, c] *= inv
