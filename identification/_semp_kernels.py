@@ -46,6 +46,58 @@ __all__ = [
 _BLOCK = 256  # samples whose input-only sum is computed (vectorised) ahead of the recursion
 
 
+@nb.njit(cache=True, nogil=True)
+def _program(src, nfac, fac, R, sel, coef):  # pragma: no cover - compiled
+    """The subset split for :func:`subset_free_run`: the input-only terms (column of ``X``,
+    coefficient), the output-dependent ones (column of ``Q``, coefficient, factor count,
+    factors as indices into ``used``) and ``used``, the fed-back regressors they need."""
+    K = sel.shape[0]
+    D = fac.shape[1]
+    n_in = 0
+    need = np.zeros(R, dtype=np.bool_)
+    for m in range(K):
+        j = sel[m]
+        if nfac[j] == 0:
+            n_in += 1
+        for f in range(nfac[j]):
+            need[fac[j, f]] = True
+    used = np.flatnonzero(need)
+    local = np.zeros(R, dtype=np.int64)
+    for r in range(used.shape[0]):
+        local[used[r]] = r
+    n_out = K - n_in
+    in_col, in_w = np.empty(n_in, dtype=np.int64), np.empty(n_in)
+    out_col, out_w = np.empty(n_out, dtype=np.int64), np.empty(n_out)
+    out_nf, out_f = np.empty(n_out, dtype=np.int64), np.zeros((n_out, D), dtype=np.int64)
+    a = 0
+    for m in range(K):
+        j = sel[m]
+        if nfac[j] == 0:
+            in_col[a], in_w[a] = src[j], coef[m]
+            a += 1
+        else:
+            b = m - a
+            out_col[b], out_w[b], out_nf[b] = -1 - src[j], coef[m], nfac[j]
+            for f in range(nfac[j]):
+                out_f[b, f] = local[fac[j, f]]
+    return in_col, in_w, out_col, out_w, out_nf, out_f, used
+
+
+@nb.njit(cache=True, nogil=True, fastmath={"reassoc", "contract"})
+def _input_only_block(y, t0, c, target, bound):  # pragma: no cover - compiled
+    """A block of a subset without output-dependent terms: ``y[t0 : t0 + len(c)] = c`` (no
+    recursion); returns the block's squared error, ``inf`` if it leaves ``bound``."""
+    bad = False
+    sse = 0.0
+    for i in range(c.shape[0]):
+        mag = abs(c[i])
+        bad |= not (mag <= bound) or mag == np.inf
+        y[t0 + i] = c[i]
+        e = target[i] - c[i]
+        sse += e * e
+    return np.inf if bad else sse
+
+
 @nb.njit(cache=True, nogil=True, fastmath={"reassoc", "contract"})
 def subset_free_run(
     y, start, X, Q, src, nfac, fac, lag, fun, bp, sel, coef, target, bound, cap
@@ -59,63 +111,40 @@ def subset_free_run(
     the regressors ``fac[j, :nfac[j]]``, regressor ``r`` being ``g(y(t - lag[r]))`` with ``g``
     the function ``fun[r]`` (breakpoint ``bp[r]``). ``target`` (N - start,) is the measured
     output. The terms without output factors are summed ahead, a block of samples at a time;
-    the recursion adds the others.
+    the recursion adds the others (and evaluates only the regressors they use).
 
     Returns the sum of squared errors against ``target``, or ``inf`` when the run left
     ``bound`` (or became non-finite) or its running sum exceeded ``cap``.
     """
     n = y.shape[0] - start
-    R = lag.shape[0]
+    in_col, in_w, out_col, out_w, out_nf, out_f, used = _program(
+        src, nfac, fac, lag.shape[0], sel, coef
+    )
     plain = True
-    for r in range(R):
-        if fun[r] != 0:
-            plain = False
-    K = sel.shape[0]
-    D = fac.shape[1]
-    n_in = 0
-    for m in range(K):
-        if nfac[sel[m]] == 0:
-            n_in += 1
-    n_out = K - n_in
-    in_col = np.empty(n_in, dtype=np.int64)
-    in_w = np.empty(n_in)
-    out_col = np.empty(n_out, dtype=np.int64)
-    out_w = np.empty(n_out)
-    out_nf = np.empty(n_out, dtype=np.int64)
-    out_f = np.empty((n_out, D), dtype=np.int64)
-    a = 0
-    b = 0
-    for m in range(K):
-        j = sel[m]
-        if nfac[j] == 0:
-            in_col[a] = src[j]
-            in_w[a] = coef[m]
-            a += 1
-        else:
-            out_col[b] = -1 - src[j]
-            out_w[b] = coef[m]
-            out_nf[b] = nfac[j]
-            for f in range(D):
-                out_f[b, f] = fac[j, f]
-            b += 1
-    z = np.empty(max(R, 1))
+    for r in used:
+        plain &= fun[r] == 0
+    z = np.empty(max(used.shape[0], 1))
     c = np.empty(_BLOCK)
     sse = 0.0
     for b0 in range(0, n, _BLOCK):
         b1 = min(b0 + _BLOCK, n)
         c[: b1 - b0] = 0.0
-        for m in range(n_in):
-            w = in_w[m]
-            col = in_col[m]
+        for m in range(in_col.shape[0]):
+            w, col = in_w[m], in_col[m]
             for i in range(b0, b1):
                 c[i - b0] += w * X[i, col]
+        if out_col.shape[0] == 0:
+            sse += _input_only_block(y, start + b0, c[: b1 - b0], target[b0:b1], bound)
+            if sse > cap:  # also inf: left the bound
+                return np.inf
+            continue
         for i in range(b0, b1):
             t = start + i
-            for r in range(R):
-                v = y[t - lag[r]]
-                z[r] = v if plain else apply(fun[r], bp[r], v)
+            for r in range(used.shape[0]):
+                v = y[t - lag[used[r]]]
+                z[r] = v if plain else apply(fun[used[r]], bp[used[r]], v)
             acc = c[i - b0]
-            for m in range(n_out):
+            for m in range(out_col.shape[0]):
                 v = Q[i, out_col[m]]
                 for f in range(out_nf[m]):
                     v *= z[out_f[m, f]]
@@ -222,3 +251,4 @@ def solve_upper_t(L, B):  # pragma: no cover - compiled
         inv = 1.0 / L[i, i]
         for c in range(C):
             B[i, c] *= inv
+
