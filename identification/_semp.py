@@ -16,13 +16,15 @@ the reference scorer (``lstsq`` + :func:`~identification.simulation.compile_plan
   the selected terms: the normal equations would lose accuracy), or a step whose ``G[S, S]``
   has such a pivot, is solved by ``numpy.linalg.lstsq`` on ``X`` as the reference does.
 * **Free run.** :mod:`identification._semp_kernels` evaluates the subset from the term table
-  (input-only factors precomputed once), with the same start, bound and divergence rule. A run
-  is abandoned once its running squared error exceeds the best finished one of the step (or the
-  score that would end the path): it could not be chosen. Candidates are run in the order of
-  their one-step error-reduction ratio (orthogonalised against the selected terms, as FROLS
-  computes it) so that good runs finish first, split over ``workers`` threads (the kernels
-  release the GIL). The chosen candidate, its score and every pruning decision are those of an
-  exhaustive scoring, up to rounding (sums in another order).
+  (input-only factors precomputed once), with the same start, bound and divergence rule. The
+  candidates of a forward step run in lockstep groups of :data:`GROUP` (in the order of their
+  one-step error-reduction ratio, orthogonalised against the selected terms as FROLS computes
+  it, so that good runs finish first), the removals of a pruning likewise (a removal is the
+  selected model with that coefficient 0); groups are split over ``workers`` threads (the
+  kernels release the GIL). A run is abandoned once its running squared error exceeds the
+  best finished one of the step (or the score that would end the path; for a removal, the
+  current score): it could not be chosen. The chosen candidate, its score and every pruning
+  decision are those of an exhaustive scoring, up to rounding (sums in another order).
 * **Shortlist** (only when asked, or when the size estimate exceeds the budget): a forward step
   scores by free run only the ``shortlist`` candidates of largest one-step error-reduction ratio.
 
@@ -41,7 +43,7 @@ from ._kernels import expand_terms
 from ._semp_kernels import (
     cholesky,
     gram_row,
-    score_subsets,
+    score_groups,
     solve_lower,
     solve_upper_t,
     subset_free_run,
@@ -68,6 +70,10 @@ TERM_RATE = 4e8
 one sample costs a multiply-add plus one multiplication per output factor). The kernel ran at
 0.6e9 to 1.2e9 per second on the loaded 2-core development box: the estimate is an upper bound
 (before early abandonment, and before the scoring threads share the work)."""
+
+GROUP = 16
+"""Subsets run in lockstep: consecutive candidates of a forward step (in the order of their
+one-step error-reduction ratio), or removals of a pruning."""
 
 _SLACK = 1e-9  # relative margin on an abandonment cap: rounding never abandons a tie
 
@@ -306,28 +312,25 @@ class CompiledScorer:
         return coefs, err
 
     # ------------------------------------------------------------------ free runs
-    def _run_all(self, sets, coefs, sizes, order, cap: float, shared: bool) -> np.ndarray:
-        """Sums of squared errors of the subsets (inf: diverged or above the cap)."""
-        out = np.full(sets.shape[0], np.inf)
-        tables = self.tables
-        args = (self.y0, self.start, self.X, tables[6], *tables[:3], *tables[3:6])
+    def _run_groups(self, S, terms, coefs, ptr, cap: float, lower: bool) -> np.ndarray:
+        """Sums of squared errors of the rows of ``terms``/``coefs`` (see
+        :func:`~identification._semp_kernels.score_groups`), groups split over the threads."""
+        out = np.full(terms.shape[0], np.inf)
+        t = self.tables
+        best = np.array([cap])
 
-        def run(part, best):
-            score_subsets(*args, sets, coefs, sizes, part, self.target, self.bound, best, out)
+        def run(part):
+            score_groups(self.y0, self.start, self.X, t[6], *t[:6], S, terms, coefs, ptr, part,
+                         self.target, self.bound, best, lower, out)  # fmt: skip
 
-        caps = [np.array([cap])]
-        if self.workers == 1 or order.size < 2 * self.workers:
-            run(order, caps[0])
+        groups = np.arange(ptr.size - 1, dtype=np.int64)
+        if self.workers == 1 or groups.size < 2:
+            run(groups)
             return out
         if self._pool is None:
             self._pool = ThreadPoolExecutor(self.workers, thread_name_prefix="semp")
-        parts = [order[w :: self.workers] for w in range(self.workers)]
-        if not shared:  # independent caps: no run lowers another's
-            caps = [np.array([cap]) for _ in parts]
-        futures = [
-            self._pool.submit(run, p, caps[0 if shared else w]) for w, p in enumerate(parts)
-        ]
-        for f in futures:
+        parts = [groups[w :: self.workers] for w in range(self.workers)]
+        for f in [self._pool.submit(run, p) for p in parts if p.size]:
             f.result()
         return out
 
@@ -345,12 +348,13 @@ class CompiledScorer:
         order = np.argsort(-err, kind="stable")
         if self.shortlist is not None:
             order = order[: self.shortlist]
-        sets = np.empty((cand.size, S.size + 1), dtype=np.int64)
-        sets[:, : S.size] = S
-        sets[:, S.size] = cand
-        sizes = np.full(cand.size, S.size + 1, dtype=np.int64)
+        ptr = np.append(np.arange(0, order.size, GROUP), order.size).astype(np.int64)
+        rows = order
         sse_cap = cap * self.n * (1.0 + _SLACK) if math.isfinite(cap) else np.inf
-        sse = self._run_all(sets, coefs, sizes, order.astype(np.int64), sse_cap, True)
+        sse = np.full(cand.size, np.inf)
+        sse[rows] = self._run_groups(
+            S, cand[rows], np.ascontiguousarray(coefs[rows]), ptr, sse_cap, True
+        )
         c = int(np.argmin(sse))
         if not np.isfinite(sse[c]):
             return -1, np.inf
@@ -358,22 +362,25 @@ class CompiledScorer:
 
     def prune(self, selected: list, current: float):
         """SEMP pruning: for each term but the last (in order), drop it when the model without
-        it has a free-run MSE at most ``current``; returns ``(selected, current)``."""
+        it has a free-run MSE at most ``current``; returns ``(selected, current)``. The models
+        without a term run as the selected model with that term's coefficient 0."""
         pending = list(selected[:-1])
         while pending:
-            rests = [[c for c in selected if c != i] for i in pending]
-            k = len(selected) - 1
-            sets = np.array(rests, dtype=np.int64).reshape(len(rests), k)
-            coefs = self._removals(selected, pending)
-            sizes = np.full(len(rests), k, dtype=np.int64)
-            order = np.arange(len(rests), dtype=np.int64)
-            sse = self._run_all(sets, coefs, sizes, order, current * self.n * (1 + _SLACK), False)
+            S = np.asarray(selected, dtype=np.int64)
+            coefs = np.zeros((len(pending), S.size))
+            rest = self._removals(selected, pending)
+            for r, i in enumerate(pending):
+                keep = S != i
+                coefs[r, keep] = rest[r]
+            ptr = np.append(np.arange(0, len(pending), GROUP), len(pending)).astype(np.int64)
+            terms = np.full(len(pending), -1, dtype=np.int64)
+            sse = self._run_groups(S, terms, coefs, ptr, current * self.n * (1 + _SLACK), False)
             mse = sse / self.n
             accepted = np.flatnonzero(mse <= current)
             if accepted.size == 0:
                 break
             a = int(accepted[0])
-            selected, current = rests[a], float(mse[a])
+            selected, current = [c for c in selected if c != pending[a]], float(mse[a])
             pending = pending[a + 1 :]
         return selected, current
 

@@ -9,7 +9,7 @@ import pytest
 import identification.free_run_selection as frs
 from identification import IdentificationError, Narx, band_limited_noise, regression_matrix
 from identification._semp import _term_tables
-from identification._semp_kernels import subset_free_run
+from identification._semp_kernels import score_groups, subset_free_run
 from identification.free_run_selection import (
     MIN_SHORTLIST,
     screening,
@@ -188,6 +188,32 @@ def test_the_term_table_free_run_matches_the_compiled_plan():
     )
     np.testing.assert_allclose(y, ref, rtol=0, atol=1e-12 * np.max(np.abs(ref)))
     assert sse == pytest.approx(float(np.sum((target - ref[start:]) ** 2)), rel=1e-10)
+
+
+def test_lockstep_groups_score_every_subset_as_its_own_free_run():
+    siso = _structure_with_functions()
+    rng = np.random.default_rng(8)
+    n, start = 2000, siso.max_lag
+    inputs = band_limited_noise(n, 2, cutoff=0.4, seed=rng)
+    yk = rng.standard_normal(n)
+    X = regression_matrix(inputs, yk[:, None], siso, start)
+    tables = _term_tables(siso, inputs, yk, start)
+    run = (yk, start, X, tables[6], *tables[:6])
+    S = np.array([0, 3, 8], dtype=np.int64)  # y(t-1), u1(t), y(t-1)*u1(t-1)*dz(u1(t-1))
+    own = np.array([t for t in range(siso.n_terms) if t not in S] * 2, dtype=np.int64)
+    coefs = 0.15 * rng.uniform(-1.0, 1.0, (own.size, S.size + 1))  # 24 subsets: 16 + 8
+    ptr = np.array([0, 16, own.size], dtype=np.int64)
+    for terms in (own, np.full(own.size, -1, dtype=np.int64)):  # forward step, pruning
+        out = np.full(own.size, np.nan)
+        groups = np.arange(2, dtype=np.int64)
+        score_groups(*run, S, terms, coefs, ptr, groups, yk[start:], 1e6, np.array([np.inf]),
+                     False, out)  # fmt: skip
+        for c in range(own.size):
+            sel = np.append(S, terms[c]) if terms[c] >= 0 else S
+            alone = subset_free_run(yk.copy(), *run[1:], sel, coefs[c, : sel.size], yk[start:],
+                                    1e6, np.inf)  # fmt: skip
+            assert np.isfinite(alone)
+            assert out[c] == pytest.approx(alone, rel=1e-12)
 
 
 def test_the_term_table_free_run_stops_at_the_bound_and_at_the_cap():
