@@ -42,6 +42,7 @@ import numpy as np
 from ._kernels import expand_terms
 from ._semp_kernels import (
     cholesky,
+    column_dots,
     gram_row,
     score_groups,
     solve_lower,
@@ -220,7 +221,9 @@ class CompiledScorer:
         norm2 = np.einsum("ij,ij->j", self.X, self.X)
         self.usable = norm2 > 0
         self.scale = np.where(self.usable, 1.0 / np.sqrt(np.where(self.usable, norm2, 1.0)), 0.0)
-        self.b = self.scale * (self.X.T @ self.target)
+        self.b = np.empty(self.M)
+        column_dots(self.X, self.target, self.b)  # X' y (no BLAS threads: see the kernels)
+        self.b *= self.scale
         self.yy = float(self.target @ self.target)
         self._rows: dict[int, np.ndarray] = {}
         self.shortlist = shortlist

@@ -36,6 +36,7 @@ from ._transforms import apply
 
 __all__ = [
     "cholesky",
+    "column_dots",
     "gram_row",
     "score_groups",
     "solve_lower",
@@ -173,6 +174,17 @@ def gram_row(X, j, scale, out):  # pragma: no cover - compiled
         for i in range(n):
             acc += X[i, c] * X[i, j]
         out[c] = acc * scale[c] * scale[j]
+
+
+@nb.njit(cache=True, nogil=True, fastmath={"reassoc", "contract"})
+def column_dots(X, v, out):  # pragma: no cover - compiled
+    """``out[c] = X[:, c] . v`` (``X`` Fortran-ordered): ``X' v`` without a BLAS call."""
+    n, M = X.shape
+    for c in range(M):
+        acc = 0.0
+        for i in range(n):
+            acc += X[i, c] * v[i]
+        out[c] = acc
 
 
 @nb.njit(cache=True, nogil=True)
