@@ -105,7 +105,10 @@ def estimate_seconds(
     n_samples: int, n_candidates: int, n_steps: int, cost: float, shortlist: int | None = None
 ) -> float:
     """Single-core seconds of a SEMP path by the compiled scorer, at :data:`TERM_RATE`: an upper
-    bound (no run abandoned early, every step scored, the longest path).
+    bound (no run abandoned early, every step scored, the longest path). The free runs cost
+    ``n_samples * cost * path_work(...)`` operations; the least squares ``(n_steps + 2) *
+    n_samples * n_candidates`` (a Gram row per selected term, the column norms and ``X' y``),
+    which no shortlist reduces.
 
     Parameters
     ----------
@@ -120,7 +123,9 @@ def estimate_seconds(
     shortlist : int, optional
         Candidates scored per forward step (default: all that are left).
     """
-    return n_samples * cost * path_work(n_candidates, n_steps, shortlist) / TERM_RATE
+    runs = n_samples * cost * path_work(n_candidates, n_steps, shortlist)
+    gram = (n_steps + 2) * n_samples * n_candidates
+    return (runs + gram) / TERM_RATE
 
 
 def scaled_lstsq(A: np.ndarray, b: np.ndarray) -> np.ndarray:
