@@ -159,9 +159,9 @@ def selection_estimate(
     An upper bound of the compiled scorer's work: every forward step k = 1 .. ``n_steps``
     scores each candidate left (or ``shortlist`` of them) by a free run of ``n_samples``
     samples with k terms, and each pruning k - 1 runs of k - 1 terms; a term costs ``cost``
-    operations per sample; the least squares ``n_steps + 2`` passes over the regression matrix
-    (``n_samples x n_candidates``); :data:`identification._semp.TERM_RATE` operations per
-    second.
+    operations per sample, at :data:`identification._semp.TERM_RATE` operations per second;
+    the least squares ``n_steps + 2`` passes over the regression matrix (``n_samples x
+    n_candidates`` multiply-adds each, at :data:`identification._semp.GRAM_RATE`).
 
     Parameters
     ----------
@@ -202,7 +202,7 @@ def _shortlist(screen, scorer, k: int, n_max: int, budget, ny: int) -> int | Non
     else:
         m = int(screen)
     if est(m) > share:
-        ops = n * cost * path_work(M, n_max) + (n_max + 2) * n * M
+        ops = n * cost * path_work(M, n_max) + (n_max + 2) * n * M  # runs + least squares
         raise IdentificationError(
             f"free-run selection of output channel {k}: about {est(None):,.0f} s of single-core "
             f"work estimated ({n:,} samples x {M:,} candidate terms x up to {n_max} steps: "

@@ -235,12 +235,12 @@ def test_the_estimate_counts_the_forward_runs_the_pruning_runs_and_the_gram_rows
     # M = 3 candidates, 2 steps: step 1 scores 3 one-term models, no pruning (3); step 2 scores
     # 2 two-term models and prunes one one-term model (2 * 2 + 1): 8 subset-terms per sample;
     # the least squares read the 1000 x 3 matrix 2 + 2 times (2 Gram rows, norms, X'y)
-    from identification._semp import TERM_RATE
+    from identification._semp import GRAM_RATE, TERM_RATE
 
-    gram = 4 * 1000 * 3
-    assert selection_estimate(1000, 3, 2, cost=1.0) == pytest.approx((8 * 1000 + gram) / TERM_RATE)
+    gram = 4 * 1000 * 3 / GRAM_RATE
+    assert selection_estimate(1000, 3, 2, cost=1.0) == pytest.approx(8 * 1000 / TERM_RATE + gram)
     assert selection_estimate(1000, 3, 2, cost=2.0, shortlist=1) == pytest.approx(
-        (2.0 * 1000 * (1 + 2 + 1) + gram) / TERM_RATE
+        2.0 * 1000 * (1 + 2 + 1) / TERM_RATE + gram
     )
 
 
