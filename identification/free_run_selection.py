@@ -204,9 +204,9 @@ def _shortlist(screen, scorer, k: int, n_max: int, budget, ny: int) -> int | Non
     if est(m) > share:
         ops = n * cost * path_work(M, n_max) + (n_max + 2) * n * M  # runs + least squares
         raise IdentificationError(
-            f"free-run selection of output channel {k}: about {est(None):,.0f} s of single-core "
-            f"work estimated ({n:,} samples x {M:,} candidate terms x up to {n_max} steps: "
-            f"~{ops:.2g} operations), {est(m):,.0f} s with {m} candidates per step, "
+            f"free-run selection of output channel {k}: about {est(None):,.3g} s of "
+            f"single-core work estimated ({n:,} samples x {M:,} candidate terms x up to {n_max} "
+            f"steps: ~{ops:.2g} operations), {est(m):,.3g} s with {m} candidates per step, "
             f"beyond the budget of {share:.3g} s per channel ({budget:g} s for {ny} "
             "channel(s)): use fewer samples (a shorter or decimated record), a smaller "
             "n_terms, a lower order or degree, or selection='frols'; or raise "

@@ -272,6 +272,22 @@ def test_past_the_budget_the_forward_steps_are_screened_to_a_shortlist_that_fits
     assert A_TERMS <= {_A_NAMES[int(i)] for i in path.selected}
 
 
+def test_the_output_channels_share_the_budget():
+    u, y = _system_2x1(2000, seed=11)
+    ch = _candidates_2x1()
+    start = ch.max_lag
+    X = regression_matrix(u, y, ch, start)
+    n, M = X.shape
+    own = np.concatenate([[False], ch.regressors[:, 0] == 0])  # channel 1's own output lags
+    cost = 1.0 + float(np.mean(own[ch.terms].sum(axis=1)))
+    full = selection_estimate(n, M, min(M, 40), cost)
+    least = selection_estimate(n, M, min(M, 40), cost, MIN_SHORTLIST)
+    budget = full + least  # the whole path fits it, but not half of it: channel 1's share
+    path = simulation_selection(X, ch, 0, u, y, start, budget=budget)
+    assert path.screened is not None
+    assert selection_estimate(n, M, min(M, 40), cost, path.screened) <= budget / 2
+
+
 def test_a_seven_by_seven_order_five_selection_is_beyond_the_default_budget():
     # 7 outputs x lags 1..5 and 7 inputs x lags 0..5: 77 regressors, quadratic with constant:
     # C(79, 2) = 3081 candidates per channel; 20,000 samples, a 40-term path
