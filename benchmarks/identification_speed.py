@@ -2,8 +2,9 @@
 
 Run from the repository root::
 
-    python -m benchmarks.identification_speed            # problems A, B and C
-    python -m benchmarks.identification_speed --quick    # problems A and C, fewer repetitions
+    python -m benchmarks.identification_speed            # problems A, B, C and S
+    python -m benchmarks.identification_speed --quick    # problems A, C and S, fewer repetitions
+    python -m benchmarks.identification_speed --problems S   # only problem S
 
 Problem A (SISO cubic NARX, the classic SysIdentPy example)
     ``y(t) = 0.2 y(t-1) + 0.1 y(t-1) x(t-1) + 0.9 x(t-2) + e(t)``, ``x ~ U(-1, 1)``,
@@ -33,6 +34,24 @@ Problem C (simulation-accurate NARX: output-error refinement and free-run select
     on the same data: its FROLS + least-squares model of the same 220 terms, and its FROLS
     with BIC order selection.
 
+Problem S (fast free-run selection: SEMP, old vs new in the same run)
+    ``selection="simulation"`` scored by the exhaustive reference scorer (old: ``lstsq``,
+    ``compile_plan`` and ``simulate_plan`` per candidate subset,
+    ``identification.free_run_selection.screening(None)``) and by the compiled scorer (new, the
+    default), one after the other on the same data: (1) problem C's 220-candidate selection;
+    (2) the inverse of the elastomeric-damper quick benchmark record (the runner's ``narx-sim``
+    method, ``InverseNarx(4, 2, kind="full", focus="simulation", selection="simulation")``,
+    fitted to the identification records the quick record's reconstruction fits: rig
+    ``elastomeric-damper`` at ``fidelity="fast"``, seed 0, the quick settings' 12 s pseudo-field
+    target); (3) a 2-input order-3 cubic ``Narx(order=3, degree=3)`` (363 candidates) on 5,000
+    samples of a Wiener-Hammerstein system with a slowly varying second input that scales its
+    gain (not in the model class: the path is long), 5 % output noise. Figures: wall time of
+    the selections (every ``simulation_selection`` call of the fit, lead search included), of
+    the whole fit, the speed-up, and the free-run error of the selected model. The new scorer's
+    figures are the minimum of ``--repeats`` fits; the old one's of as many on (1) and of one
+    fit on (2) and (3) (minutes), which ``--quick`` leaves out. The old scorer's time depends strongly on the BLAS threads
+    (many small ``lstsq`` calls): see ``thread_env`` in the JSON file.
+
 Both libraries see the same data in the same process. Each time is the minimum wall-clock
 time of at least ``--repeats`` calls (more for sub-second operations, until 2 s have been spent),
 after a warm-up call that loads the compiled numba kernels. The table is printed and written as
@@ -42,6 +61,7 @@ JSON to ``results/identification_speed.json``.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import datetime
 import json
 import math
@@ -60,6 +80,7 @@ import numpy as np
 import scipy
 
 from identification import Narx, band_limited_noise, metrics, random_narx, regression_matrix
+from identification.free_run_selection import screening
 from identification.solvers import SOLVERS
 from vrig.files import atomic_write
 
@@ -87,6 +108,12 @@ C_INV_ORDER, C_INV_DEGREE, C_INV_TERMS = 4, 2, 54
 TARGET_C_REFINE_S = 3.0
 TARGET_C_INVERSE_S = 1.0
 TARGET_C_SELECT_S = 10.0
+
+# Problem S: fast free-run selection, old (exhaustive reference scorer) vs new
+S_DAMPER_RIG, S_DAMPER_METHOD = "elastomeric-damper", "narx-sim"
+S_CUBIC_N, S_CUBIC_N_VAL, S_CUBIC_SEED = 5_000, 3_000, 3
+TARGET_S_SPEEDUP = 10.0
+TARGET_S_CUBIC_S = 30.0
 
 # Targets, and SysIdentPy's earlier figures on the reference machine
 TARGET_SPEEDUP = 20.0
@@ -560,6 +587,200 @@ def _problem_c_inverse(report: Report, repeats: int) -> None:
     )
 
 
+# ---------------------------------------------------------------------------------- problem S
+@contextlib.contextmanager
+def selection_timer():
+    """Wall time and count of every free-run selection (``simulation_selection``, one call per
+    output channel and fit) that ``Narx.fit`` makes inside the block: ``{"s": ..., "calls": ...}``.
+    """
+    from identification import models
+
+    inner = models.simulation_selection
+    spent = {"s": 0.0, "calls": 0}
+
+    def timed(*args: Any, **kwargs: Any) -> Any:
+        t0 = time.perf_counter()
+        try:
+            return inner(*args, **kwargs)
+        finally:
+            spent["s"] += time.perf_counter() - t0
+            spent["calls"] += 1
+
+    models.simulation_selection = timed
+    try:
+        yield spent
+    finally:
+        models.simulation_selection = inner
+
+
+@dataclass
+class OldNew:
+    """One SEMP problem fitted by the old (exhaustive) and the new (compiled) scorer."""
+
+    fit_s: dict[str, float]  # "old"/"new": wall time of the whole fit
+    select_s: dict[str, float]  # "old"/"new": wall time of its selections
+    models: dict[str, Any]
+    calls: int
+
+
+def old_and_new(fit: Callable[[], T], repeats: int, *, old_repeats: int = 1) -> OldNew:
+    """``fit()`` with the compiled scorer (``repeats`` calls), then with the exhaustive
+    reference (``old_repeats`` calls; 0: not at all); each figure is the minimum over the calls.
+    """
+    out = OldNew({}, {}, {}, 0)
+    for name, screen, calls in (("new", "auto", repeats), ("old", None, old_repeats)):
+        for _ in range(calls):
+            progress(f"problem S: {name} scorer")
+            with warnings.catch_warnings(), screening(screen), selection_timer() as spent:
+                warnings.simplefilter("ignore")
+                t0 = time.perf_counter()
+                out.models[name] = fit()
+                elapsed = time.perf_counter() - t0
+            if spent["calls"] == 0:
+                raise RuntimeError("no free-run selection was timed: Narx.fit no longer calls it")
+            out.fit_s[name] = min(out.fit_s.get(name, math.inf), elapsed)
+            out.select_s[name] = min(out.select_s.get(name, math.inf), spent["s"])
+            out.calls = spent["calls"]
+    return out
+
+
+def _report_old_new(
+    report: Report, key: str, what: str, r: OldNew, *, at_most: float | None = None
+) -> None:
+    note = f"{r.calls} selection(s)"
+    report.add("S", f"{key}.new_s", f"{what}: SEMP, new (compiled scorer)", r.select_s["new"],
+               "s", at_most=at_most, note=f"{note}; whole fit {r.fit_s['new']:.2f} s")  # fmt: skip
+    if "old" not in r.select_s:
+        report.skip("S", f"{key}.old_s", f"  {what}: old scorer (full run only)")
+        return
+    report.add("S", f"{key}.old_s", "  the same, old (exhaustive reference scorer)",
+               r.select_s["old"], "s", note=f"whole fit {r.fit_s['old']:.2f} s")  # fmt: skip
+    report.add("S", f"{key}.speedup", "  speed-up of the selections, old / new",
+               r.select_s["old"] / r.select_s["new"], "x", at_least=TARGET_S_SPEEDUP)  # fmt: skip
+    report.add("S", f"{key}.speedup_fit", "  speed-up of the whole fit, old / new",
+               r.fit_s["old"] / r.fit_s["new"], "x")  # fmt: skip
+
+
+def _same_terms(r: OldNew, names: Callable[[Any], list]) -> str:
+    if "old" not in r.models:
+        return ""
+    same = names(r.models["old"]) == names(r.models["new"])
+    return "the same terms as old" if same else "terms differ from old"
+
+
+def problem_s(report: Report, repeats: int, quick: bool) -> None:
+    """Fast free-run selection, old vs new in the same run (see the module docstring)."""
+    progress("problem S: warm-up (compiled scorer)")
+    u, clean, noisy = output_noise_data(A_SEED)
+    u_id, y_id, u_val, y_val = u[:A_N_ID], noisy[:A_N_ID], u[A_N_ID:], clean[A_N_ID:]
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        vrig_model(selection="simulation").fit(u_id[:1000], y_id[:1000])
+    progress(f"problem S: SEMP over {A_N_TERMS} candidates")
+    r = old_and_new(lambda: vrig_model(selection="simulation").fit(u_id, y_id), repeats,
+                    old_repeats=repeats)  # fmt: skip
+    what = f"{A_N_TERMS} candidates, {A_N_ID:,} samples"
+    _report_old_new(report, "semp220", what, r)
+    same = _same_terms(r, lambda m: m.term_names())
+    for name, m in r.models.items():
+        report.add("S", f"semp220.rrse.{name}", f"  free-run RRSE vs noise-free validation, {name}",
+                   _rrse_clean(m, u_val, y_val), "", note=same if name == "new" else "")  # fmt: skip
+    _problem_s_damper(report, repeats, quick)
+    _problem_s_cubic(report, repeats, quick)
+
+
+def damper_records():
+    """The identification records (IDDRV, IDRES at the model rate) the inverse of the quick
+    benchmark's elastomeric-damper record is fitted to, made as the runner makes them."""
+    from benchmarks.runner.cli import QUICK
+    from benchmarks.runner.record import _load_rig, _target
+    from vrig.reconstruction.engine import DriveIteration
+
+    class Captured(Exception):
+        pass
+
+    class Capture:  # a method that keeps the records it is identified from, then stops
+        def identify(self, iddrv, idres):
+            self.records = (iddrv, idres)
+            raise Captured
+
+        def drive(self, response):  # pragma: no cover - never reached
+            raise Captured
+
+    band, desired, _ = _target(S_DAMPER_RIG, QUICK.fidelity, QUICK.seconds, 0, None,
+                               "pseudo-field")  # fmt: skip
+    rig = _load_rig(S_DAMPER_RIG, 0, QUICK.fidelity, None)
+    capture = Capture()
+    try:
+        DriveIteration(rig, desired, QUICK.iteration(capture, band, 0)).identify()
+    except Captured:
+        pass
+    return rig, band, capture.records
+
+
+def _problem_s_damper(report: Report, repeats: int, quick: bool) -> None:
+    from benchmarks.runner.registry import get_method
+
+    progress("problem S: damper quick record's identification records")
+    rig, band, (iddrv, idres) = damper_records()
+
+    def fit():
+        method = get_method(S_DAMPER_METHOD).make(rig, band)
+        method.identify(iddrv, idres)
+        return method
+
+    r = old_and_new(fit, repeats, old_repeats=0 if quick else 1)
+    what = f"damper quick record's inverse ({S_DAMPER_METHOD}, {iddrv.n_samples:,} samples)"
+    _report_old_new(report, "damper", what, r)
+    same = _same_terms(r, lambda m: (m.fitted_lead(), m.inverse.model.term_names()))
+    for name, m in r.models.items():
+        pred = np.asarray(m.drive(idres), dtype=float).reshape(iddrv.data.shape)
+        eta0 = float(np.mean(metrics.qantim_fit_dc(iddrv.data, pred)))
+        report.add("S", f"damper.eta0.{name}", f"  free-run drive error eta0 % (in-sample), {name}",
+                   eta0, "", note=(same + "; " if name == "new" and same else "")
+                   + m.describe())  # fmt: skip
+
+
+def two_input_cubic_data(n: int, seed: int) -> tuple[np.ndarray, np.ndarray]:
+    """Inputs (n, 2) and noise-free output (n, 1) of problem S's 2-input system.
+
+    ``u1`` band-limited noise (cutoff 0.2 of Nyquist), ``u2`` a slow low-pass of another
+    (gain 5); ``v = H1(u1)``, ``w = tanh(1.5 v) (1 + 0.4 tanh(u2))``, ``y = H2(w)`` with
+    ``H1 = (0.5 + 0.3 q^-1) / (1 - 0.6 q^-1)`` and ``H2 = (0.4 + 0.2 q^-1) / (1 - 0.9 q^-1 +
+    0.3 q^-2)``: a Wiener-Hammerstein system whose gain the second input scales.
+    """
+    from scipy import signal
+
+    rng = np.random.default_rng(seed)
+    u = band_limited_noise(n, 2, cutoff=0.2, seed=rng)
+    u[:, 1] = 5.0 * signal.lfilter([0.02], [1.0, -0.98], u[:, 1])
+    v = signal.lfilter([0.5, 0.3], [1.0, -0.6], u[:, 0])
+    w = np.tanh(1.5 * v) * (1.0 + 0.4 * np.tanh(u[:, 1]))
+    return u, signal.lfilter([0.4, 0.2], [1.0, -0.9, 0.3], w)[:, None]
+
+
+def _problem_s_cubic(report: Report, repeats: int, quick: bool) -> None:
+    progress(f"problem S: 2-input order-3 cubic, {S_CUBIC_N:,} samples")
+    u, clean = two_input_cubic_data(S_CUBIC_N + S_CUBIC_N_VAL, S_CUBIC_SEED)
+    rng = np.random.default_rng(S_CUBIC_SEED + 1)
+    noisy = clean + C_OUTPUT_NOISE * clean.std() * rng.standard_normal(clean.shape)
+    u_id, y_id = u[:S_CUBIC_N], noisy[:S_CUBIC_N]
+    u_val, y_val = u[S_CUBIC_N:], clean[S_CUBIC_N:]
+    r = old_and_new(lambda: Narx(order=3, degree=3, selection="simulation").fit(u_id, y_id),
+                    repeats, old_repeats=0 if quick else 1)  # fmt: skip
+    what = f"2-input order-3 cubic, {S_CUBIC_N:,} samples"
+    _report_old_new(report, "cubic2", what, r, at_most=TARGET_S_CUBIC_S)
+    same = _same_terms(r, lambda m: m.term_names())
+    for name, m in r.models.items():
+        path = m.selection_paths_[0]
+        note = f"{int(m.n_terms_[0])} of 363 terms, path of {len(path.steps)} steps"
+        report.add("S", f"cubic2.rrse_id.{name}", f"  free-run RRSE, identification record, {name}",
+                   _rrse_clean(m, u_id, y_id), "", note=note)  # fmt: skip
+        report.add("S", f"cubic2.rrse_val.{name}", f"  free-run RRSE vs noise-free validation, "
+                   f"{name}", _rrse_clean(m, u_val, y_val), "",
+                   note=same if name == "new" else "")  # fmt: skip
+
+
 # ---------------------------------------------------------------------------------- output
 def format_value(value: float | None, unit: str) -> str:
     if value is None:
@@ -619,7 +840,10 @@ def environment(sip: SysIdentPy | None) -> dict[str, Any]:
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=(__doc__ or "").splitlines()[0])
-    parser.add_argument("--quick", action="store_true", help="problems A and C, 2 repetitions")
+    parser.add_argument("--quick", action="store_true", help="problems A, C, S, 2 repetitions")
+    parser.add_argument(
+        "--problems", default="ABCS", help="which problems to run, e.g. 'S' (default: all)"
+    )
     parser.add_argument("--repeats", type=int, help="repetitions per timing (default 3, quick 2)")
     parser.add_argument("--output", type=Path, default=RESULTS_PATH, help="JSON results file")
     parser.add_argument("--strict", action="store_true", help="exit with status 1 on a MISS")
@@ -629,10 +853,15 @@ def main(argv: list[str] | None = None) -> int:
     sip = SysIdentPy.load()
     report = Report()
     started = time.perf_counter()
-    problem_a(report, repeats, sip)
-    problem_c(report, repeats, sip)
-    if not args.quick:
+    wanted = args.problems.upper()
+    if "A" in wanted:
+        problem_a(report, repeats, sip)
+    if "C" in wanted:
+        problem_c(report, repeats, sip)
+    if "B" in wanted and not args.quick:
         problem_b(report, repeats)
+    if "S" in wanted:
+        problem_s(report, repeats, args.quick)
     elapsed = time.perf_counter() - started
 
     print_table(report.figures)
