@@ -34,7 +34,12 @@ from .errors import (
     StabilityWarning,
     UnstableModelError,
 )
-from .free_run_selection import check_criterion, criterion_path, simulation_selection
+from .free_run_selection import (
+    SELECTION_BUDGET_S,
+    check_criterion,
+    criterion_path,
+    simulation_selection,
+)
 from .output_error import FlatModel, check_refinement_budget, refine
 from .regression import regression_matrix
 from .selection import forward_regression
@@ -634,8 +639,10 @@ class Narx:
         deadline : float, optional
             A ``time.perf_counter()`` value after which the iterative stages stop early and keep
             the best reached so far: the simulation-error refinement (and the stability remedy's
-            refinements) start no further iteration, and free-run term selection (SEMP) adds no
-            further term. ``timed_out_`` says whether it happened. The least-squares fit and the
+            refinements) start no further iteration, and free-run term selection (SEMP) plans
+            for the time left (its size estimate then shortlists the candidates per step, or
+            refuses: see :mod:`~identification.free_run_selection`). ``timed_out_`` says
+            whether the deadline passed. The least-squares fit and the
             stability contract always run to the end. Default: no deadline.
         """
         t0 = time.perf_counter()
@@ -755,6 +762,7 @@ class Narx:
                 n_terms=self.n_terms,
                 criterion=self.criterion or "bic",
                 bound=float(self.bound_[k]),
+                budget=self._selection_budget(),
             )
             return path.selected, None, path
         target = y[start:, k]
@@ -764,6 +772,15 @@ class Narx:
             n = criterion_path(X, target, idx, err, self.criterion)
             idx, err = idx[:n], err[:n]
         return idx, err, None
+
+    def _selection_budget(self) -> float | None:
+        """Seconds free-run selection may plan for: the time left before the fit's deadline (at
+        most the default budget), None (the default budget) without one."""
+        deadline = getattr(self, "_deadline", None)
+        if deadline is None:
+            return None
+        left = deadline - time.perf_counter()
+        return max(min(left, SELECTION_BUDGET_S), 1e-3)
 
     def _install(self, channels, coefs, errs="keep"):
         """Set the fitted structure and coefficients; the free-run plan is compiled now."""

@@ -84,10 +84,10 @@ FOCUSES = ("prediction", "simulation")
 _PRIOR_RATE = {
     ("prediction", "all"): 1.0,
     ("prediction", "frols"): 3.0,
-    ("prediction", "simulation"): 150.0,
+    ("prediction", "simulation"): 20.0,
     ("simulation", "all"): 40.0,
     ("simulation", "frols"): 40.0,
-    ("simulation", "simulation"): 200.0,
+    ("simulation", "simulation"): 40.0,
 }
 #: relative score difference treated as a tie: below the validation's resolution on records of a
 #: few thousand samples; ties go to fewer terms, then least squares before simulation focus and
