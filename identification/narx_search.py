@@ -36,12 +36,15 @@ Search order and time budget
     it can explain) — and stage 2 spends the rest of the budget on the expensive options
     (``focus="simulation"``, ``selection="simulation"``), best-ranked structure first (each
     option class first on the smallest structure, which calibrates its fit-time rate cheaply).
-    Before each candidate its fit time is predicted (``rate x work``, work = rows x terms x
-    (terms + 30); the rate of its option class measured on the candidates already fitted, the
-    largest seen, extrapolated conservatively to larger candidates) and it is skipped when the
-    prediction exceeds the time left less a reserve for the final refit. The budget bounds the wall time of :meth:`NarxSearch.fit` (within the error of these
-    predictions); ``budget=None`` tries every candidate. Given the candidates tried, everything is
-    deterministic under ``seed``.
+    Before each candidate its fit time is predicted (``rate x work``, work = rows x (k (k + 30) +
+    30 M) for M candidate terms of which k are fitted; the median rate of its option class measured on the candidates already
+    fitted, extrapolated conservatively to larger candidates) and it is skipped when the
+    prediction exceeds the time left less a reserve for the final refit; a candidate that runs
+    longer than predicted is held to the budget by its fit's deadline (``Narx.fit(deadline=...)``:
+    the refinement stops iterating, free-run selection plans for the time left). The budget
+    bounds the wall time of :meth:`NarxSearch.fit`; ``budget=None`` tries every candidate to
+    the end. With ``budget=None`` everything is deterministic under ``seed``; with a budget, the
+    candidates tried (and a fit cut short) depend on the machine's speed.
 
 Refit
     The best candidate (ties within 1 %: fewer terms, then the simpler fit — least squares before
@@ -482,6 +485,7 @@ class NarxSearch:
         _warm_up(u, y)
         self.results_ = []
         self._rates: dict[tuple, list[tuple[float, float]]] = {}
+        self._kept: dict[tuple, int] = {}
         self._models: dict[SearchCandidate, Narx] = {}
         with warnings.catch_warnings():
             for w in (StabilityWarning, RankDeficiencyWarning, RuntimeWarning):
@@ -551,8 +555,9 @@ class NarxSearch:
             self._try(c)
 
     def _stage2(self) -> None:
-        """The expensive options on the ranked structures, best first; each option class is
-        first tried on the smallest structure, which calibrates its rate cheaply."""
+        """The expensive options on the ranked structures, best first, each structure's
+        options cheapest first; each option class is first tried on the smallest structure,
+        which calibrates its rate cheaply."""
         options = self._stage2_options()
         ranked = self._ranked_structures()
         if not options or not ranked:
@@ -561,9 +566,15 @@ class NarxSearch:
         size = {s: self._terms(SearchCandidate(*s, "prediction", "all", lags)) for s in ranked}
         smallest = min(ranked, key=lambda s: (size[s], ranked.index(s)))
         first = [SearchCandidate(*smallest, *o, lags) for o in options]
-        rest = [SearchCandidate(*s, *o, lags) for s in ranked for o in options]
-        for c in dict.fromkeys(first + rest):
+        for c in first:
             self._try(c)
+        for s in ranked:  # each structure's options cheapest first (as predicted now)
+            cands = [SearchCandidate(*s, *o, lags) for o in options]
+            cands = [c for c in cands if c not in first]
+            if self.budget is not None:  # without a budget the order is fixed (deterministic)
+                cands.sort(key=lambda c: self._predicted(c, size[c.structure]))
+            for c in cands:
+                self._try(c)
 
     def _ranked_structures(self) -> list[tuple]:
         """Structures in the order stage 2 refines them: the best by stage-1 validation score
@@ -592,25 +603,30 @@ class NarxSearch:
         except IdentificationError:
             return 10**12
 
-    def _work(self, terms: int) -> float:
-        """Work units of one candidate: rows x terms x (terms + 30) per fold (the QR's
-        rows x terms^2, the regression matrix and the free runs' rows x terms)."""
-        return self._rows * float(terms) * (terms + 30.0) * self.folds
+    def _work(self, c: SearchCandidate, terms: int) -> float:
+        """Work units of one candidate, per fold: rows x k x (k + 30) for the fit of its k terms
+        (a QR's rows x k^2; the refinement's Jacobian; the free runs' rows x k) plus rows x 30 x
+        terms for building and screening its ``terms`` candidates. k is ``terms`` with all
+        terms; with FROLS or SEMP the number FROLS kept for the structure in stage 1 (the
+        selections size by the same criterion), else ``terms``."""
+        k = terms if c.selection == "all" else self._kept.get(c.structure, terms)
+        return self._rows * (float(k) * (k + 30.0) + 30.0 * terms) * self.folds
 
     def _predicted(self, c: SearchCandidate, terms: int) -> float:
-        """Predicted seconds, conservatively: the largest rate (seconds per work unit) of the
-        candidates of the same option class fitted so far (least squares' times
-        :data:`_PRIOR_RATE` before one), times the work, times ``sqrt(work / largest work
-        seen)`` when extrapolating to a larger candidate (costs grow faster than the work
-        units for the iterative options)."""
-        work = self._work(terms)
+        """Predicted seconds: the median rate (seconds per work unit) of the candidates of the
+        same option class fitted so far (least squares' times :data:`_PRIOR_RATE` before one),
+        times the work, times ``sqrt(work / largest work seen)`` when extrapolating to a larger
+        candidate (costs grow faster than the work units for the iterative options). A
+        candidate slower than predicted is still held to the budget: its fit gets the search's
+        deadline (``Narx.fit(deadline=...)``)."""
+        work = self._work(c, terms)
         seen = self._rates.get(c.options)
         if seen:
-            rate = max(r for _, r in seen)
+            rate = float(np.median([r for _, r in seen]))
             largest = max(w for w, _ in seen)
         else:
             base = self._rates.get(("prediction", "all"), [(work, 1e-9)])
-            rate = max(r for _, r in base) * _PRIOR_RATE[c.options]
+            rate = float(np.median([r for _, r in base])) * _PRIOR_RATE[c.options]
             largest = max(w for w, _ in base)
         return rate * work * math.sqrt(max(1.0, work / largest))
 
@@ -632,8 +648,10 @@ class NarxSearch:
         self._evaluate(c, result)
         result.fit_time = time.perf_counter() - t
         if result.status != "failed" or result.n_terms:
-            work = self._work(terms)
+            work = self._work(c, terms)
             self._rates.setdefault(c.options, []).append((work, result.fit_time / work))
+            if c.options == ("prediction", "frols") and result.n_terms:
+                self._kept[c.structure] = max(1, result.n_terms // self._y.shape[1])
         return self._record(result)
 
     def _too_big(self, c: SearchCandidate, terms: int) -> str:
@@ -841,18 +859,19 @@ class NarxSearch:
 
 
 def _warm_up(u, y) -> None:
-    """Load the compiled kernels (free run, prediction, refinement) on a tiny problem, so that
+    """Load the compiled kernels (free run, prediction, refinement, SEMP) on a tiny problem, so that
     the first candidate's fit time (which sets the rates the budget is planned with) is not the
     kernels' load time."""
     n = min(u.shape[0], 200)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        try:
-            model = Narx(order=1, degree=2, focus="simulation", max_iter=1).fit(u[:n], y[:n])
-            model.simulate(u[:n])
-            model.predict(u[:n], y[:n])
-        except (IdentificationError, np.linalg.LinAlgError, FloatingPointError):
-            pass
+        for kw in ({"focus": "simulation", "max_iter": 1}, {"selection": "simulation"}):
+            try:
+                model = Narx(order=1, degree=2, **kw).fit(u[:n], y[:n])
+                model.simulate(u[:n])
+                model.predict(u[:n], y[:n])
+            except (IdentificationError, np.linalg.LinAlgError, FloatingPointError):
+                pass
 
 
 def _simplicity(c: SearchCandidate) -> tuple[int, int]:
