@@ -127,9 +127,10 @@ def test_write_rpc3_stores_a_unit_latin1_cannot_hold(tmp_path):
 
 @pytest.mark.parametrize("fmt", ["rsp", "csv"])
 def test_a_test_folder_gives_back_labels_its_files_cannot_hold(result, field, tmp_path, fmt):
-    """FIELD01 with a non-latin-1 name, a 120-character unit (RPC III holds 95 bytes) and a
-    unit with brackets (a CSV header cannot hold them): saved, and read back as given."""
-    units = ["µε [peak] " + "x" * 110]
+    """FIELD01 with a non-latin-1 name, a 120-character unit (RPC III holds 95 bytes) with
+    brackets (a CSV header cannot hold them) and a lone surrogate (UTF-8 cannot: an ``.npz``
+    can): saved, and read back as given."""
+    units = ["µε [peak] \udc80" + "x" * 110]
     odd = vrig.TimeHistory(field.data, field.fs, ["load→cell\nB"], units)
     folder = TestFolder(tmp_path / "run")
     folder.save(result, field=odd, fmt=fmt)

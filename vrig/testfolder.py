@@ -226,8 +226,8 @@ def _storable(th: TimeHistory, fmt: str) -> tuple[TimeHistory, tuple[list, list]
         names = [io.rpc3.rpc3_text(n)[:95] for n in th.names]
         units = [io.rpc3.rpc3_text(u)[:95] for u in th.units]
     elif fmt == "csv":
-        names = [" ".join(n.splitlines()) for n in th.names]
-        units = [" ".join(u.splitlines()).replace("[", "(").replace("]", ")") for u in th.units]
+        names = [_utf8(" ".join(n.splitlines())) for n in th.names]
+        units = [_utf8(" ".join(u.splitlines())).replace("[", "(").replace("]", ")") for u in th.units]
     else:
         return th, None
     names = _distinct(names)
@@ -235,6 +235,22 @@ def _storable(th: TimeHistory, fmt: str) -> tuple[TimeHistory, tuple[list, list]
     if names != list(th.names) or units != list(th.units):
         out = TimeHistory(th.data, th.fs, names, units)
     return out, (io.rpc3.rpc3_labels(out) if fmt == "rsp" else (names, units))
+
+
+def _utf8(text: str) -> str:
+    """``text`` as UTF-8 can hold it (a lone surrogate, e.g. from an ``.npz``, as ``\\udxxx``)."""
+    return text.encode("utf-8", "backslashreplace").decode("utf-8")
+
+
+def _summary_text(summary: dict) -> str:
+    """``summary.json``'s text: UTF-8 as it reads, or all escaped when a label holds a lone
+    surrogate UTF-8 cannot encode (``json`` reads either back to the same strings)."""
+    text = json.dumps(summary, indent=2, ensure_ascii=False) + "\n"
+    try:
+        text.encode("utf-8")
+    except UnicodeEncodeError:
+        text = json.dumps(summary, indent=2) + "\n"
+    return text
 
 
 def _distinct(names: list[str]) -> list[str]:
@@ -529,7 +545,7 @@ class TestFolder:
                 summary["plots"] = drawn
                 summary.update(_extra_entries(summary, summary_extra))
                 with atomic_write(staging / SUMMARY, "w", encoding="utf-8") as f:
-                    f.write(json.dumps(summary, indent=2, ensure_ascii=False) + "\n")
+                    f.write(_summary_text(summary))
         names = [*files.values(), *(m["file"] for m in models.values()), *drawn, SUMMARY]
         return [self.path / n for n in names]
 
