@@ -895,9 +895,12 @@ def _hold_out(hold: contextlib.ExitStack, out: Path) -> None:
         hold.enter_context(folder_lock(out, timeout=0))
     except FolderLockedError as exc:
         raise _UsageError(f"--out: {exc}") from None
-    except OSError as exc:
+    except OSError as exc:  # the lock file, like the swap, lives in the parent folder
         why = exc.strerror or str(exc)
-        raise _UsageError(f"--out {out}: cannot write there ({why})") from None
+        raise _UsageError(
+            f"--out {out}: cannot write in its parent folder {out.absolute().parent} ({why}); "
+            "the results folder is replaced in one swap, made beside it"
+        ) from None
 
 
 def _remove_empty(folders: list[Path]) -> None:
