@@ -918,7 +918,8 @@ def _check_space(out: Path, field, rig, args) -> None:
     n_in, n_out = len(rig.inputs), len(rig.outputs)
     per_iteration = n_in + 2 * n_out
     channels = 2 * n_in + 3 * n_out + (args.iterations + 2) * per_iteration
-    need = field.n_samples * channels * _RECORD_BYTES[args.fmt] + 4 * 1024**2  # + plots
+    samples = getattr(field, "n_samples", 0)  # (the identification is as long as the record)
+    need = samples * channels * _RECORD_BYTES[args.fmt] + 4 * 1024**2  # + the plots
     where = next(p for p in [out.absolute(), *out.absolute().parents] if p.exists())
     try:
         free = shutil.disk_usage(where).free
