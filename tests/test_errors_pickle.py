@@ -22,6 +22,8 @@ CASES = [
         "failed before IT00", result={"it": 0}, cause=ValueError("why"), stage="identification"
     ),
     ve.FileFormatError("a.rsp", "RPC III", "truncated"),
+    ve.FolderLockedError("results/run is being written", path="results/run", pid=1234),
+    ve.ReconstructionInterrupted("interrupted at IT02", result={"it": 2}),
     ie.IdentificationError("plain"),
     ie.InsufficientDataError("too short"),
     ie.ModelFileError("m.npz", "no coefficients"),
@@ -53,7 +55,9 @@ def test_every_exception_class_is_covered():
         return {
             c
             for c in vars(module).values()
-            if isinstance(c, type) and issubclass(c, Exception) and c.__module__ == module.__name__
+            if isinstance(c, type)
+            and issubclass(c, (Exception, KeyboardInterrupt))
+            and c.__module__ == module.__name__
         }
 
     covered = {type(e) for e in CASES}

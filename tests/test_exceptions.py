@@ -36,6 +36,10 @@ FORMER_BASES = {
     "identification.errors.SimulationDivergedError": ArithmeticError,
 }
 
+# interrupts, not errors: a KeyboardInterrupt only (never an Exception, so ``except Exception`` and
+# ``except ERRORS`` never swallow a Ctrl-C), with what was done attached
+INTERRUPTS = {"vrig.errors.ReconstructionInterrupted": KeyboardInterrupt}
+
 # built-in exception types a package class may take as its second base
 _BUILTIN_BASES = tuple(
     t
@@ -76,13 +80,16 @@ def test_the_search_finds_every_class_that_existed_before_the_roots():
 @pytest.mark.parametrize("qualname", sorted(EXCEPTIONS))
 def test_every_exception_derives_from_its_package_root(qualname):
     cls = EXCEPTIONS[qualname]
+    if qualname in INTERRUPTS:
+        assert issubclass(cls, INTERRUPTS[qualname]) and not issubclass(cls, Exception)
+        return
     assert issubclass(cls, ROOTS[cls.__module__.split(".")[0]]), qualname
 
 
 @pytest.mark.parametrize("qualname", sorted(EXCEPTIONS))
 def test_every_exception_keeps_a_built_in_base(qualname):
     cls = EXCEPTIONS[qualname]
-    if cls is VrigError:  # the root itself is a plain Exception
+    if cls is VrigError or qualname in INTERRUPTS:  # the root is a plain Exception
         return
     assert issubclass(cls, _BUILTIN_BASES), f"{qualname} has no built-in base: {cls.__mro__}"
     if qualname in FORMER_BASES:
@@ -123,12 +130,14 @@ def test_identification_does_not_need_vrig_for_its_root():
 
 @pytest.mark.parametrize("qualname", sorted(EXCEPTIONS))
 def test_cli_maps_every_exception_to_exit_1_or_2_never_to_a_bug(qualname, monkeypatch, capsys):
-    """A rig description error is bad input (2); every other vrig or identification error is a
-    failed run (1) with the usual hint; none is reported as an unexpected error (3)."""
+    """A rig description error or a results folder another writer holds is bad input (2); every
+    other vrig or identification error is a failed run (1) with the usual hint; none is
+    reported as an unexpected error (3); an interrupt is one line and 130."""
     from vrig import cli
 
     cls = EXCEPTIONS[qualname]
     exc = cls.__new__(cls, "boom")  # bypass each class's own constructor arguments
+    exc.args = ("boom",)  # (OSError subclasses with their own __init__ leave it to __init__)
 
     def command(args):
         raise exc
@@ -136,7 +145,9 @@ def test_cli_maps_every_exception_to_exit_1_or_2_never_to_a_bug(qualname, monkey
     monkeypatch.setitem(cli._COMMANDS, "rigs", command)
     code = cli.main(["rigs"])
     err = capsys.readouterr().err
-    if issubclass(cls, vrig.RigModelError):
+    if qualname in INTERRUPTS:
+        assert (code, err) == (130, "vrig rigs: interrupted\n")
+    elif issubclass(cls, (vrig.RigModelError, vrig.FolderLockedError)):
         assert (code, err) == (2, "vrig rigs: boom\n")
     else:
         hint = " (try a narrower --band, a lower --order or --gain, or a smaller desired response)"

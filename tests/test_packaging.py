@@ -172,7 +172,7 @@ def test_ci_runs_the_wheel_check():
 def _copy_sources(dest: Path) -> Path:
     """The files a build reads, copied (an in-tree build leaves build/ and *.egg-info)."""
     dest.mkdir()
-    for name in ("pyproject.toml", "README.md", "LICENSE"):
+    for name in ("pyproject.toml", "README.md", "LICENSE", "vrig_console.py"):
         shutil.copy2(ROOT / name, dest / name)
     ignore = shutil.ignore_patterns("__pycache__", "*.pyc")
     for folder in ("vrig", "identification", "models"):
@@ -210,4 +210,5 @@ def test_built_wheel_contents_and_metadata(tmp_path):
     assert "\nLicense-Expression: MIT\n" in metadata
     assert "\nLicense-File: LICENSE\n" in metadata
     entry_points = zipfile.ZipFile(wheel).read(f"{info}/entry_points.txt").decode()
-    assert "vrig = vrig.cli:main" in entry_points
+    assert "vrig = vrig_console:main" in entry_points
+    assert "vrig_console.py" in names

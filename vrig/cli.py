@@ -54,8 +54,20 @@ kinds ``summary.json``'s ``stop_kind``):
 7      ``vrig reconstruct`` failed before any iteration was played: the identification drive,
        the inverse model or IT00DRV (the identification records, model and refused drive are
        kept)
-130    interrupted (Ctrl-C)
+130    interrupted (Ctrl-C); ``vrig reconstruct`` keeps the iterations played in ``--out`` (stop
+       kind interrupted)
 =====  ========================================================================================
+
+Ctrl-C at any moment is one line on stderr and exit code 130, never a traceback and never exit
+code 0 (also during the start-up import and after the command's work, through the console
+script :mod:`vrig_console`). In ``vrig reconstruct`` it stops the run where it is and saves what
+was played (every whole iteration, the identification records, the desired response) in
+``--out`` as after any other stop; a Ctrl-C while the results are being written waits until they
+are written whole (seconds). ``vrig reconstruct`` holds the lock of ``--out``
+(:func:`vrig.files.folder_lock`) from its argument checks to the end: a second run on the same
+folder is refused (exit code 2) before it plays anything. The test folder and the plots are
+written in one swap: a full disk or a kill leaves the previous folder (or none), never new
+records beside old plots.
 """
 
 from __future__ import annotations
@@ -63,7 +75,9 @@ from __future__ import annotations
 import argparse
 import contextlib
 import enum
+import errno
 import os
+import shutil
 import signal
 import subprocess
 import sys
@@ -120,6 +134,7 @@ STOP_EXIT = {
     "unstable": ExitCode.STOPPED_UNSTABLE,
     "model": ExitCode.STOPPED_UNSTABLE,
     "failed": ExitCode.FAILED,
+    "interrupted": ExitCode.INTERRUPTED,
 }
 """``vrig reconstruct``'s exit code for each ``result.stop_kind`` of a reconstruction that played
 IT00 (one that did not exits :attr:`ExitCode.FAILED_IT00`)."""
@@ -828,6 +843,13 @@ def _check_reconstruct_args(args) -> None:
 
 
 def _cmd_reconstruct(args) -> int:
+    with contextlib.ExitStack() as hold:  # the results folder's lock, held to the end
+        return _reconstruct_holding(args, hold)
+
+
+def _reconstruct_holding(args, hold: contextlib.ExitStack) -> int:
+    """``vrig reconstruct``; ``hold`` keeps the results folder's lock (:func:`_hold_out`)."""
+    from .errors import ReconstructionInterrupted
     from .progress import status
 
     t_start = time.perf_counter()
@@ -841,8 +863,11 @@ def _cmd_reconstruct(args) -> int:
     if args.desired is not None:  # a file: read and check it first
         field, source, records = _read_field(args, rig, band)
     _check_writable(out)  # before the run, not after it
+    _hold_out(hold, out)  # one writer per folder, from here to the end of the save
+    out = _out_dir(args.out, f"{Path(rig.name).stem}-{args.method}", args.overwrite)  # locked
     if args.desired is None:  # a pseudo-field response: a rig run
         field, source, records = _read_field(args, rig, band)
+    _check_space(out, field, rig, args)
     print(f"rig       {rig.name} (variant {rig.variant}): {rig.description.title}")
     print(f"method    {method_text}, gain {args.gain:g}, {args.iterations} iterations")
     print(f"band      {band[0]:g}-{band[1]:g} Hz (simulation bandwidth)")
@@ -859,10 +884,18 @@ def _cmd_reconstruct(args) -> int:
         **{k: v for k, v in extra.items() if k != "id_rms"},
     }
     save = {"field": field, "records": records, "settings": settings}
-    result = _reconstruct(rig, field, method, band, args, out, save, extra)
-    _print_result(result, args)
-    _save(result, out, rig, args, save)
+    try:
+        result = _reconstruct(rig, field, method, band, args, out, save, extra)
+    except ReconstructionInterrupted as exc:  # Ctrl-C: keep what was played
+        result = exc.result
+    with _SIGINT.deferred():  # from here on a Ctrl-C waits until the results are written
+        if result.drives:
+            _print_result(result, args)
+        _save(result, out, rig, args, save)
     print(f"time       {time.perf_counter() - t_start:.1f} s")
+    if result.stop_kind == "interrupted" or _SIGINT.seen:
+        _say("reconstruct", _interrupted_line(result, out))
+        return ExitCode.INTERRUPTED
     code = STOP_EXIT.get(result.stop_kind, ExitCode.FAILED)
     if code != ExitCode.OK:  # a script reads the code; a person reads this line
         best = result.best_iteration
@@ -873,6 +906,72 @@ def _cmd_reconstruct(args) -> int:
             f"best IT{best:02d} kept as FINDRV01/FINRES01 in {out}/",
         )
     return code
+
+
+def _interrupted_line(result, out: Path) -> str:
+    """The one line of a reconstruction Ctrl-C stopped (its results saved in ``out``)."""
+    n = len(result.drives)
+    if result.stop_kind != "interrupted":  # Ctrl-C came after the run, during the save
+        return f"interrupted while the results were saved: saved whole in {out}/"
+    where = result.stopped.split(":", 1)[0]
+    if not n:
+        return f"interrupted ({where}): no iteration played; kept what was made in {out}/"
+    best = result.best_iteration
+    played = "IT00" if n == 1 else f"IT00-IT{n - 1:02d}"
+    return (
+        f"interrupted at {where}: kept the {n} iteration(s) played ({played}; best IT{best:02d} "
+        f"as FINDRV01/FINRES01) in {out}/"
+    )
+
+
+def _hold_out(hold: contextlib.ExitStack, out: Path) -> None:
+    """Take the lock of the results folder ``out`` (:func:`vrig.files.folder_lock`) for the
+    rest of the command: a second run on the folder is refused here, before it plays anything.
+    Folders made for the lock file are removed again when the command saves nothing."""
+    from .errors import FolderLockedError
+    from .files import folder_lock
+
+    missing = [p for p in out.absolute().parents if not p.exists()]  # deepest first
+    hold.callback(_remove_empty, missing)  # after the lock's release (last in, first out)
+    try:
+        hold.enter_context(folder_lock(out, timeout=0))
+    except FolderLockedError as exc:
+        raise _UsageError(f"--out: {exc}") from None
+    except OSError as exc:  # the lock file, like the swap, lives in the parent folder
+        why = exc.strerror or str(exc)
+        raise _UsageError(
+            f"--out {out}: cannot write in its parent folder {out.absolute().parent} ({why}); "
+            "the results folder is replaced in one swap, made beside it"
+        ) from None
+
+
+def _remove_empty(folders: list[Path]) -> None:
+    for p in folders:
+        with contextlib.suppress(OSError):
+            p.rmdir()
+
+
+_RECORD_BYTES = {"rsp": 4, "npz": 8, "mat": 8, "csv": 25}  # per sample and channel, about
+
+
+def _check_space(out: Path, field, rig, args) -> None:
+    """Before the run: the disk holding ``out`` has room for the records (identification,
+    desired, three per iteration, final) and the plots, or the run is refused."""
+    n_in, n_out = len(rig.inputs), len(rig.outputs)
+    per_iteration = n_in + 2 * n_out
+    channels = 2 * n_in + 3 * n_out + (args.iterations + 2) * per_iteration
+    samples = getattr(field, "n_samples", 0)  # (the identification is as long as the record)
+    need = samples * channels * _RECORD_BYTES[args.fmt] + 4 * 1024**2  # + the plots
+    where = next(p for p in [out.absolute(), *out.absolute().parents] if p.exists())
+    try:
+        free = shutil.disk_usage(where).free
+    except OSError:
+        return
+    if free < need:
+        raise _UsageError(
+            f"--out {out}: the results need about {need / 1e6:.0f} MB and the disk holding it "
+            f"has {free / 1e6:.0f} MB free: free some space or choose another --out"
+        )
 
 
 def _reconstruct(rig, field, method, band, args, out: Path, save: dict, extra: dict):
@@ -897,8 +996,13 @@ def _reconstruct(rig, field, method, band, args, out: Path, save: dict, extra: d
     except ValueError as exc:  # e.g. a desired record too short for the model: bad input
         raise _UsageError(str(exc)) from exc
     except ReconstructionError as exc:  # nothing played: keep what was made, say what to change
-        written = _save(exc.result, out, rig, args, save)
         advice = _advice(exc.result.stop_kind, exc.stage, args.gain, exc.result.identification)
+        try:
+            written = _save(exc.result, out, rig, args, save)
+        except _Failure as failed:
+            raise _Failure(f"{exc} ({advice}); {failed}", ExitCode.FAILED_IT00) from exc
+        if _SIGINT.seen:  # Ctrl-C while it was saved: saved whole, then the interrupt
+            raise KeyboardInterrupt from exc
         raise _Failure(
             f"{exc} ({advice}); kept {', '.join(p.name for p in written)} in {out}/",
             ExitCode.FAILED_IT00,
@@ -930,24 +1034,55 @@ def _print_result(result, args) -> None:
 
 
 def _save(result, out: Path, rig, args, save: dict) -> list[Path]:
-    """Write the test folder and the plots of a result (also one with no iteration played)."""
-    from .plots import save_reconstruction_plots
+    """Write the test folder and the plots of a result (also one with no iteration played), in
+    one swap (:meth:`TestFolder.save` with ``plots=True``). Ctrl-C waits until the save is
+    done (it is noted in ``_SIGINT``). A disk that fills up: saved again without the plots;
+    when that fails too, :class:`_Failure` says that nothing was saved."""
     from .progress import status
+
+    with _SIGINT.deferred():
+        status("checking the target's reachability (the identification records: no rig run) ...")
+        check = {"target_check": _target_check(rig, result)}
+        status(f"writing the test folder {out}/ ...")
+        try:
+            written = _write_folder(result, out, rig, args, save, check, plots=True)
+        except OSError as exc:
+            if exc.errno not in _DISK_FULL:
+                raise _Failure(_nothing_saved(out, exc)) from exc
+            try:  # the records matter, the plots can be drawn again from them
+                written = _write_folder(result, out, rig, args, save, check, plots=False)
+            except OSError as again:
+                raise _Failure(_nothing_saved(out, again)) from again
+            _say("reconstruct", f"warning: {exc.strerror or exc}: saved the records and "
+                 f"summary in {out}/ without the plots")  # fmt: skip
+    plots = [p for p in written if p.suffix == ".png"]
+    records = [p for p in written if p.suffix != ".png"]
+    names = [p.name for p in records]
+    shown = names if len(names) <= 11 else [*names[:6], "...", *names[-5:]]
+    print(f"\ntest folder {out}/ ({len(records)} files: {', '.join(shown)})")
+    print("plots      " + (", ".join(str(p) for p in plots) or "none"))
+    return written
+
+
+_DISK_FULL = {errno.ENOSPC, getattr(errno, "EDQUOT", errno.ENOSPC), errno.EFBIG}
+
+
+def _write_folder(result, out: Path, rig, args, save: dict, check: dict, *, plots: bool):
     from .testfolder import TestFolder
 
-    status("checking the target's reachability (the identification records: no rig run) ...")
-    check = {"target_check": _target_check(rig, result)}
-    status(f"writing the test folder {out}/ ...")
-    written = TestFolder(out).save(
-        result, fmt=args.fmt, rig=rig, overwrite=args.overwrite, summary_extra=check, **save
+    return TestFolder(out).save(
+        result, fmt=args.fmt, rig=rig, overwrite=args.overwrite, summary_extra=check,
+        plots=plots, lock_timeout=0, **save,
+    )  # fmt: skip
+
+
+def _nothing_saved(out: Path, exc: OSError) -> str:
+    """The message of a save that failed: nothing was written (the save is one swap)."""
+    kept = "keeps its previous contents" if out.is_dir() else "was not created"
+    return (
+        f"the results could not be written ({exc.strerror or exc}): nothing was saved, {out}/ "
+        f"{kept}"
     )
-    status("drawing the plots (overlay, zoom, PSD, error per iteration, drive vs limits) ...")
-    plots = save_reconstruction_plots(result, out, rig=rig)
-    names = [p.name for p in written]
-    shown = names if len(names) <= 11 else [*names[:6], "...", *names[-5:]]
-    print(f"\ntest folder {out}/ ({len(written)} files: {', '.join(shown)})")
-    print("plots      " + ", ".join(str(p) for p in plots))
-    return written + plots
 
 
 def _target_check(rig, result) -> dict:
@@ -1228,6 +1363,46 @@ def _cmd_bench(argv: list[str]) -> int:
             signal.signal(signal.SIGINT, previous)
 
 
+class _Interrupts:
+    """Ctrl-C in ``vrig``: the ``SIGINT`` handler of :func:`main` notes every interrupt
+    (``seen``) and raises :class:`KeyboardInterrupt`, except inside :meth:`deferred` (the
+    results being written), where the interrupt waits for the block to end."""
+
+    def __init__(self):
+        self.seen = False
+        self._defer = 0
+
+    def _handler(self, signum, frame) -> None:
+        self.seen = True
+        if not self._defer:
+            raise KeyboardInterrupt
+
+    @contextlib.contextmanager
+    def deferred(self):
+        """Interrupts in the block are noted, not raised."""
+        self._defer += 1
+        try:
+            yield
+        finally:
+            self._defer -= 1
+
+    @contextlib.contextmanager
+    def installed(self):
+        """The handler, for one command (the main thread only: signals go there)."""
+        self.seen, self._defer = False, 0
+        if threading.current_thread() is not threading.main_thread():
+            yield
+            return
+        previous = signal.signal(signal.SIGINT, self._handler)
+        try:
+            yield
+        finally:
+            signal.signal(signal.SIGINT, previous)
+
+
+_SIGINT = _Interrupts()
+
+
 def _say(command: str, text: str) -> None:
     """One line on stderr: ``vrig COMMAND: text`` (newlines in messages are folded)."""
     print(f"vrig {command}: " + " ".join(str(text).split()), file=sys.stderr)
@@ -1241,13 +1416,13 @@ def _progress_mode() -> bool | None:
 
 def _run(command: str, func, arg) -> int:
     """Run a command; map every error to one line on stderr and an exit code (module doc)."""
-    from .errors import ERRORS, RigModelError
+    from .errors import ERRORS, FolderLockedError, RigModelError
     from .progress import enabled
 
     try:
         with enabled(_progress_mode()):
             return func(arg)
-    except (_UsageError, RigModelError) as exc:
+    except (_UsageError, RigModelError, FolderLockedError) as exc:  # (another writer's folder)
         _say(command, exc)
         return EXIT_USAGE
     except _Failure as exc:
@@ -1283,14 +1458,20 @@ def main(argv: list[str] | None = None) -> int:
     raw = list(sys.argv[1:] if argv is None else argv)
     command = raw[0] if raw else "vrig"
     try:
-        if raw[:1] == ["bench"]:
-            return _run("bench", _cmd_bench, raw[1:])
-        args = _parser().parse_args(raw)
-        args.argv = raw
-        return _run(args.command, _COMMANDS[args.command], args)
+        with _SIGINT.installed():
+            if raw[:1] == ["bench"]:
+                code = _run("bench", _cmd_bench, raw[1:])
+            else:
+                args = _parser().parse_args(raw)
+                args.argv = raw
+                code = _run(args.command, _COMMANDS[args.command], args)
     except KeyboardInterrupt:
         _say(command, "interrupted")
         return EXIT_INTERRUPTED
+    if _SIGINT.seen and code != EXIT_INTERRUPTED:  # an interrupt something swallowed
+        _say(command, "interrupted")
+        return EXIT_INTERRUPTED
+    return code
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -6,6 +6,8 @@ built-in it derived from before the root existed (``RuntimeError`` for a failed 
 working. Failures of the identification library propagate as
 :class:`identification.IdentificationError` (that package does not import vrig), so
 ``except ERRORS`` (``(VrigError, IdentificationError)``) catches anything either raised.
+The one exception to the root is :class:`ReconstructionInterrupted`: a Ctrl-C, not an error, it
+derives from :class:`KeyboardInterrupt` alone, so no ``except Exception`` swallows it.
 """
 
 from __future__ import annotations
@@ -15,7 +17,9 @@ from identification.errors import IdentificationError
 __all__ = [
     "ERRORS",
     "FileFormatError",
+    "FolderLockedError",
     "ReconstructionError",
+    "ReconstructionInterrupted",
     "RigLimitError",
     "RigModelError",
     "RigParameterError",
@@ -150,6 +154,56 @@ class ReconstructionError(VrigError, RuntimeError):
         return _rebuild_reconstruction_error, (type(self), str(self), self.__dict__)
 
 
+class ReconstructionInterrupted(KeyboardInterrupt):
+    """Ctrl-C (``SIGINT``) stopped a reconstruction: the :class:`KeyboardInterrupt`, with what was
+    played attached.
+
+    Raised by :func:`vrig.reconstruct` ``from`` the original interrupt, wherever it struck (the
+    identification, the fit, an iteration's rig run or its drive update). It derives from
+    :class:`KeyboardInterrupt` only (not from :class:`VrigError`, nor from :class:`Exception`),
+    so ``except Exception`` never swallows a Ctrl-C and ``except KeyboardInterrupt`` code keeps
+    working; ``exc.result`` can be saved like any other result (:meth:`vrig.TestFolder.save`).
+
+    Parameters
+    ----------
+    message : str
+        The error message.
+    result : ReconstructionResult
+        Every iteration played before the interrupt, whole (an iteration the interrupt cut
+        short is not in it), with ``stop_kind`` ``"interrupted"`` and ``stopped`` naming where;
+        with zero iterations (``best_iteration == -1``) when the interrupt came before IT00 was
+        played (the identification records when they were made).
+    """
+
+    def __init__(self, message: str, *, result):
+        super().__init__(message)
+        self.result = result
+
+    def __reduce__(self):  # picklable (worker processes): the keyword is not in ``args``
+        return _rebuild_reconstruction_error, (type(self), str(self), self.__dict__)
+
+
+class FolderLockedError(VrigError, OSError):
+    """Another writer holds the lock of a results folder (:func:`vrig.files.folder_lock`).
+
+    Parameters
+    ----------
+    message : str
+        The error message (names the folder and, when known, the process holding it).
+    path : str or Path
+        The folder.
+    pid : int or None
+        The process holding the lock, when its lock file says so.
+    """
+
+    def __init__(self, message: str, *, path, pid: int | None = None):
+        super().__init__(message)
+        self.path, self.pid = str(path), pid
+
+    def __reduce__(self):  # picklable (worker processes)
+        return _rebuild_reconstruction_error, (type(self), str(self), self.__dict__)
+
+
 class FileFormatError(VrigError, ValueError):
     """A file is not what its name or reader expects: truncated, corrupt, foreign, of another
     encoding or version, not a regular file, or too large.
@@ -179,6 +233,7 @@ class FileFormatError(VrigError, ValueError):
 
 
 def _rebuild_reconstruction_error(cls, message: str, state: dict):
-    """Unpickle a :class:`ReconstructionError` (``__reduce__``): its constructor takes
-    keywords, which ``pickle`` cannot pass."""
+    """Unpickle a :class:`ReconstructionError`, :class:`ReconstructionInterrupted` or
+    :class:`FolderLockedError` (``__reduce__``): their constructors take keywords, which
+    ``pickle`` cannot pass."""
     return cls(message, **state)

@@ -11,6 +11,26 @@ Every vrig writer goes through this module, so a kill (``kill -9``, power loss a
 * :func:`staged_directory` builds a whole folder beside the old one and swaps it in (old folder
   renamed aside, new folder renamed in, old folder deleted); :func:`recover_directory` puts the
   old folder back when a kill struck between the two renames.
+* :func:`folder_lock` is the one advisory lock of a folder: every :func:`staged_directory` swap
+  holds it, so two writers of one folder take turns (the second waits, bounded, or fails with
+  :class:`~vrig.errors.FolderLockedError` naming the holder) and :func:`recover_directory`
+  never puts an old folder back while a writer holds the lock (mid-swap, the old folder is set
+  aside on purpose). A long job (``vrig reconstruct``) takes it before it plays anything and
+  holds it to the end, so a second job on the same folder fails up front.
+
+Locks
+-----
+The lock of folder ``DIR/NAME`` is an ``flock`` (exclusive) on the file ``DIR/.NAME.vrig-lock``
+beside it (not inside: the folder is replaced by each swap). The kernel drops it the moment its
+holder dies, however it dies (``kill -9`` too), so a lock is never stale; the file holds the
+holder's pid, for the message, and is deleted on release (a process that then locks a deleted
+file sees that it is no longer the one at that name and tries again). The lock is re-entrant
+within a thread of a process; another thread of the same process waits like another process.
+It is advisory: only vrig's writers take it. Linux and other POSIX systems only: on Windows
+(no ``fcntl``), and on a file system without locks (``flock`` fails with ``ENOLCK``,
+``EOPNOTSUPP``), :func:`folder_lock` locks only between the threads of one process, so two
+processes writing one folder are not kept apart there (each swap is still atomic, but a reader's
+:func:`recover_directory` may put an old folder back mid-swap); run one writer per folder.
 
 Temporary names
 ---------------
@@ -20,10 +40,14 @@ whole: the old folder) and one being deleted after the swap ``.NAME.del-XXXXXXXX
 target's directory. Only a kill can leave one behind (a Python exception removes it). The leading
 dot hides them from ``ls``, and no vrig reader takes them for data: their names match no QanTiM
 record, model or summary name and end in no time-history suffix (:func:`is_temporary` recognises
-them). The next swap of the same target deletes its ``.del-`` folders, and its ``.old-`` folders
-when the target exists (the swap that set them aside was completed; when the target is missing,
-the ``.old-`` folder is put back instead); ``.tmp-`` files and folders, possibly being written by
-another process, are left alone: delete them by hand when no vrig process writes to the folder.
+them, and the lock file ``.NAME.vrig-lock``). The next swap of the same target, holding its
+lock, deletes what kills left beside it: its ``.del-`` folders, its ``.old-`` folders when the
+target exists (the swap that set them aside was completed; when the target is missing, the
+``.old-`` folder is put back instead) and its ``.tmp-`` folders and files (only the lock's holder
+makes them, so with the lock held every one but the swap's own is debris of a writer that
+died). Inside the folder, temporaries are never carried into the new folder. A temporary file of
+:func:`atomic_write` beside a single file (not a folder) is left alone: no lock says whether its
+writer still runs.
 
 Reading
 -------
@@ -44,6 +68,8 @@ import os
 import re
 import shutil
 import stat
+import threading
+import time
 from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import IO
@@ -58,12 +84,19 @@ from identification._files import (
 )
 from identification._files import read_npz as _guarded_npz
 
-from .errors import FileFormatError
+from .errors import FileFormatError, FolderLockedError
+
+try:
+    import fcntl
+except ImportError:  # Windows: no flock (see the module documentation)
+    fcntl = None
 
 __all__ = [
+    "LOCK_WAIT_S",
     "MAX_FILE_BYTES",
     "atomic_write",
     "file_kind",
+    "folder_lock",
     "is_temporary",
     "mount_points",
     "open_regular",
@@ -78,12 +111,18 @@ MAX_FILE_BYTES = 2 * 1024**3
 (a 70-hour, 1 kHz, 1-channel record) or 500 million RPC III float32 samples. Larger (or
 ever-growing) files raise :class:`~vrig.errors.FileFormatError` instead of exhausting memory."""
 
-_TEMP = re.compile(r"^\..+\.(tmp|old|del)-[0-9a-f]{8}$")
+LOCK_WAIT_S = 10.0
+"""Seconds a writer waits for the lock of a folder another writer holds (:func:`folder_lock`)
+before it gives up with :class:`~vrig.errors.FolderLockedError`: long enough for another
+process's save to finish, short enough to say so soon when a long job holds the folder."""
+
+_TEMP = re.compile(r"^\..+\.((tmp|old|del)-[0-9a-f]{8}|vrig-lock)$")
 
 
 def is_temporary(path) -> bool:
     """True for a name made by :func:`atomic_write` or :func:`staged_directory`
-    (``.NAME.tmp-XXXXXXXX``, ``.NAME.old-XXXXXXXX``, ``.NAME.del-XXXXXXXX``).
+    (``.NAME.tmp-XXXXXXXX``, ``.NAME.old-XXXXXXXX``, ``.NAME.del-XXXXXXXX``) or the lock file
+    of :func:`folder_lock` (``.NAME.vrig-lock``).
 
     Parameters
     ----------
@@ -91,6 +130,172 @@ def is_temporary(path) -> bool:
         A file or folder name (only its last component is looked at).
     """
     return bool(_TEMP.match(Path(path).name))
+
+
+# ---------------------------------------------------------------------------------- locks
+class _Held:
+    """This process's hold on one folder's lock: a re-entrant thread lock, the lock file's
+    descriptor (holding the ``flock``) and the nesting depth."""
+
+    def __init__(self):
+        self.thread_lock = threading.RLock()
+        self.fd: int | None = None
+        self.depth = 0
+
+
+_HELD: dict[str, _Held] = {}
+_NO_LOCKS = {
+    getattr(errno, name)
+    for name in ("ENOLCK", "EOPNOTSUPP", "ENOTSUP", "ENOSYS")
+    if hasattr(errno, name)
+}
+_HELD_GUARD = threading.Lock()
+
+
+def _forget_locks_in_child() -> None:
+    """After ``fork``: the child holds none of the parent's locks (its copies of the lock
+    files' descriptors would keep the parent's ``flock`` alive after the parent lets go)."""
+    global _HELD_GUARD
+    for held in _HELD.values():
+        if held.fd is not None:
+            with contextlib.suppress(OSError):
+                os.close(held.fd)
+    _HELD.clear()
+    _HELD_GUARD = threading.Lock()
+
+
+if hasattr(os, "register_at_fork"):
+    os.register_at_fork(after_in_child=_forget_locks_in_child)
+
+
+def _lock_file(path: Path) -> Path:
+    """``DIR/.NAME.vrig-lock`` of the folder ``DIR/NAME`` (``path`` already a real path)."""
+    return path.with_name(f".{path.name[:200]}.vrig-lock")
+
+
+def _holder(lock: Path) -> int | None:
+    """The pid written in a lock file (None when unreadable)."""
+    try:
+        text = lock.read_text(encoding="ascii").strip()
+    except (OSError, UnicodeDecodeError):
+        return None
+    return int(text) if text.isdigit() else None
+
+
+def _busy(path: Path, lock: Path, waited: float) -> FolderLockedError:
+    pid = _holder(lock)
+    who = "another vrig process" if pid is None else f"vrig process {pid}"
+    same = " (this process, in another thread)" if pid == os.getpid() else ""
+    after = f" (waited {waited:.1f} s)" if waited >= 0.05 else ""
+    return FolderLockedError(
+        f"results folder {path} is being written by {who}{same}{after}: wait until it has "
+        "finished, or write to another folder",
+        path=path,
+        pid=pid,
+    )
+
+
+def _same_file(fd: int, lock: Path) -> bool:
+    """Whether the open lock file ``fd`` is still the file at ``lock`` (a holder that lets go
+    deletes it: a lock on the deleted file locks nothing)."""
+    try:
+        now = os.stat(lock)
+    except FileNotFoundError:
+        return False
+    mine = os.fstat(fd)
+    return (now.st_dev, now.st_ino) == (mine.st_dev, mine.st_ino)
+
+
+def _flock(path: Path, lock: Path, deadline: float, waited_from: float) -> int:
+    """The descriptor of ``lock`` once this process holds its ``flock`` (FolderLockedError at
+    ``deadline``); the holder's pid written into it."""
+    flags = os.O_RDWR | os.O_CREAT | getattr(os, "O_CLOEXEC", 0)
+    while True:
+        fd = os.open(lock, flags, 0o644)
+        try:
+            while True:
+                try:
+                    fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+                    break
+                except OSError as exc:
+                    if exc.errno in _NO_LOCKS:  # a file system without locks: as on Windows
+                        return fd
+                    if not isinstance(exc, BlockingIOError):
+                        raise
+                    now = time.monotonic()
+                    if now >= deadline:
+                        raise _busy(path, lock, now - waited_from) from None
+                    time.sleep(min(0.02, deadline - now))
+            if _same_file(fd, lock):
+                os.ftruncate(fd, 0)
+                os.write(fd, f"{os.getpid()}\n".encode("ascii"))
+                return fd
+        except BaseException:
+            os.close(fd)
+            raise
+        os.close(fd)  # locked a file its holder deleted on release: take the new one
+
+
+def _release(lock: Path, held: _Held) -> None:
+    """Drop this process's ``flock`` (the lock file deleted first, while still held)."""
+    fd, held.fd = held.fd, None
+    if fd is None:
+        return
+    with contextlib.suppress(OSError):
+        if _same_file(fd, lock):
+            os.unlink(lock)
+    os.close(fd)  # closing the descriptor drops the flock
+
+
+@contextlib.contextmanager
+def folder_lock(path, *, timeout: float = LOCK_WAIT_S) -> Iterator[Path]:
+    """Hold the advisory lock of the folder ``path`` (see *Locks* in the module documentation).
+
+    Re-entrant in the thread that holds it (a :func:`staged_directory` swap inside a job that
+    holds the lock does not wait for itself). The folder's parent is created when missing (the
+    lock file lives there).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The folder (it need not exist yet; a symlink: the folder it points to).
+    timeout : float
+        Seconds to wait while another process or thread holds the lock; ``0``: fail at once.
+
+    Yields
+    ------
+    Path
+        The lock file, ``.NAME.vrig-lock`` beside the folder.
+
+    Raises
+    ------
+    FolderLockedError
+        When the lock is still held by another process (or thread) after ``timeout`` seconds;
+        the message names the holder's pid.
+    OSError
+        When the lock file cannot be created (a read-only parent folder...).
+    """
+    path = Path(os.path.realpath(path))
+    lock = _lock_file(path)
+    start = time.monotonic()
+    wait = max(float(timeout), 0.0)
+    with _HELD_GUARD:
+        held = _HELD.setdefault(str(path), _Held())
+    if not held.thread_lock.acquire(timeout=wait if wait > 0 else -1, blocking=wait > 0):
+        raise _busy(path, lock, time.monotonic() - start)
+    try:
+        if held.depth == 0 and fcntl is not None:
+            path.parent.mkdir(parents=True, exist_ok=True)
+            held.fd = _flock(path, lock, start + wait, start)
+        held.depth += 1
+        try:
+            yield lock
+        finally:
+            held.depth -= 1
+            if held.depth == 0:
+                _release(lock, held)
+    finally:
+        held.thread_lock.release()
 
 
 # ---------------------------------------------------------------------------------- folders
@@ -115,12 +320,27 @@ def _carry(old: Path, new: Path, keep: Callable[[str], bool]) -> None:
             _link_or_copy(entry.path, new / entry.name)
 
 
+def _set_aside(path: Path) -> list[Path]:
+    """The ``.NAME.old-XXXXXXXX`` folders beside ``path`` ([] when its parent is missing)."""
+    prefix = _prefix(path, "old")
+    try:
+        return [
+            Path(e.path)
+            for e in os.scandir(path.parent)
+            if e.name.startswith(prefix) and is_temporary(e.name) and e.is_dir()
+        ]
+    except OSError:  # no parent folder
+        return []
+
+
 def recover_directory(path) -> bool:
     """Put back a folder that a kill left set aside in the middle of a swap.
 
     When ``path`` does not exist but ``.NAME.old-XXXXXXXX`` (exactly one) does, the kill came
     between the two renames of :func:`staged_directory`: the set-aside folder is the old folder,
-    whole, and is renamed back to ``path``.
+    whole, and is renamed back to ``path``. Only when no other writer holds the folder's lock
+    (:func:`folder_lock`): a living writer between its two renames set the old folder aside on
+    purpose and is about to finish its swap.
 
     Parameters
     ----------
@@ -133,22 +353,19 @@ def recover_directory(path) -> bool:
         Whether a folder was put back.
     """
     path = Path(os.path.realpath(path))  # a symlink's folder, as staged_directory swaps it
-    if os.path.lexists(path):
+    if os.path.lexists(path) or not _set_aside(path):
         return False
-    prefix = _prefix(path, "old")
-    try:
-        aside = [
-            Path(e.path)
-            for e in os.scandir(path.parent)
-            if e.name.startswith(prefix) and is_temporary(e.name) and e.is_dir()
-        ]
-    except OSError:  # no parent folder
-        return False
-    if len(aside) != 1:
-        return False
-    os.rename(aside[0], path)
-    _fsync_dir(path.parent)
-    return True
+    with contextlib.ExitStack() as stack:
+        try:
+            stack.enter_context(folder_lock(path, timeout=0))
+        except OSError:  # FolderLockedError: a writer is mid-swap; or a read-only place
+            return False
+        aside = _set_aside(path)
+        if os.path.lexists(path) or len(aside) != 1:
+            return False
+        os.rename(aside[0], path)
+        _fsync_dir(path.parent)
+        return True
 
 
 def mount_points(path) -> list[Path]:
@@ -182,8 +399,13 @@ def mount_points(path) -> list[Path]:
 
 
 @contextlib.contextmanager
-def staged_directory(path, *, keep: Callable[[str], bool] | None = None) -> Iterator[Path]:
+def staged_directory(
+    path, *, keep: Callable[[str], bool] | None = None, timeout: float = LOCK_WAIT_S
+) -> Iterator[Path]:
     """Build a folder beside ``path`` and swap it in when the ``with`` block ends without error.
+
+    The whole build and swap hold the folder's lock (:func:`folder_lock`), and start by deleting
+    what killed writers left beside it (*Temporary names* in the module documentation).
 
     Parameters
     ----------
@@ -193,6 +415,8 @@ def staged_directory(path, *, keep: Callable[[str], bool] | None = None) -> Iter
         ``keep(name)`` is true for the entries of an existing folder that must survive the
         replacement (files the new content does not own); they are hard-linked (or copied) into
         the new folder before the swap. Default: keep nothing.
+    timeout : float
+        Seconds to wait for the folder's lock while another writer holds it.
 
     Yields
     ------
@@ -209,25 +433,35 @@ def staged_directory(path, *, keep: Callable[[str], bool] | None = None) -> Iter
 
     Raises
     ------
+    FolderLockedError
+        When another writer still holds the folder's lock after ``timeout`` seconds.
     FileExistsError
-        ``path`` exists and is not a folder.
+        When ``path`` exists and is not a folder.
     OSError
         (``errno.EBUSY``) ``path`` is or holds a mount point (:func:`mount_points`): nothing
         is written or deleted.
     """
     path = Path(os.path.realpath(path))
-    recover_directory(path)
-    _remove_debris(path)
-    if os.path.lexists(path) and not path.is_dir():
-        raise FileExistsError(f"{path} exists and is not a folder")
-    mounted = mount_points(path)
-    if mounted:
-        raise OSError(
-            errno.EBUSY,
-            f"{mounted[0]} is a mount point: replacing {path} would empty (or fail to move) a "
-            "mounted file system; choose another folder",
-            str(path),
-        )
+    with folder_lock(path, timeout=timeout):
+        recover_directory(path)
+        _remove_debris(path)
+        if os.path.lexists(path) and not path.is_dir():
+            raise FileExistsError(f"{path} exists and is not a folder")
+        mounted = mount_points(path)
+        if mounted:
+            raise OSError(
+                errno.EBUSY,
+                f"{mounted[0]} is a mount point: replacing {path} would empty (or fail to move) "
+                "a mounted file system; choose another folder",
+                str(path),
+            )
+        with _staging(path, keep) as new:
+            yield new
+
+
+@contextlib.contextmanager
+def _staging(path: Path, keep: Callable[[str], bool] | None) -> Iterator[Path]:
+    """The build and swap of :func:`staged_directory` (its lock held, debris removed)."""
     path.parent.mkdir(parents=True, exist_ok=True)
     while True:
         new = _sibling(path, "tmp")
@@ -286,15 +520,21 @@ def _swap(new: Path, path: Path) -> None:
 
 
 def _remove_debris(path: Path) -> None:
-    """Delete the ``.NAME.del-`` folders of ``path`` (old folders whose deletion a kill cut
-    short) and, when ``path`` exists, its ``.NAME.old-`` folders (left by a kill after a
-    completed swap)."""
-    kinds = ("del", "old") if path.is_dir() else ("del",)
+    """Delete what killed writers left beside ``path`` (its lock held): the ``.NAME.del-``
+    folders (old folders whose deletion a kill cut short), the ``.NAME.tmp-`` folders and files
+    (new folders a kill cut short: only the lock's holder makes them) and, when ``path``
+    exists, its ``.NAME.old-`` folders (left by a kill after a completed swap)."""
+    kinds = ("del", "tmp", "old") if path.is_dir() else ("del", "tmp")
     prefixes = tuple(_prefix(path, kind) for kind in kinds)
     with contextlib.suppress(OSError):
         for entry in os.scandir(path.parent):
-            if entry.name.startswith(prefixes) and is_temporary(entry.name) and entry.is_dir():
+            if not (entry.name.startswith(prefixes) and is_temporary(entry.name)):
+                continue
+            if entry.is_dir(follow_symlinks=False):
                 shutil.rmtree(entry.path, ignore_errors=True)
+            else:
+                with contextlib.suppress(OSError):
+                    os.unlink(entry.path)
 
 
 # ---------------------------------------------------------------------------------- reading

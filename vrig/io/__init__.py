@@ -32,15 +32,26 @@ byte-order mark is fine), MATLAB v7.3, or holding values a :class:`TimeHistory` 
 from .delimited import read_csv, write_csv
 from .dispatch import read, write
 from .mat import read_mat, write_mat
-from .rpc3 import RPC3_SUFFIXES, read_rpc3, read_rpc3_header, write_rpc3
+from .rpc3 import (
+    RPC3_SUFFIXES,
+    RPC3_TRANSLITERATION,
+    read_rpc3,
+    read_rpc3_header,
+    rpc3_labels,
+    rpc3_text,
+    write_rpc3,
+)
 
 __all__ = [
     "RPC3_SUFFIXES",
+    "RPC3_TRANSLITERATION",
     "read",
     "read_csv",
     "read_mat",
     "read_rpc3",
     "read_rpc3_header",
+    "rpc3_labels",
+    "rpc3_text",
     "write",
     "write_csv",
     "write_mat",

@@ -31,12 +31,33 @@ mean and rms agree with the 2048-sample record to 1e-6 relative but differ by up
 Data sections that hold exactly the whole groups (the standard), or whose last group holds only
 the points of its frames (as some writers produce), are accepted, each optionally followed by
 padding up to the next 512-byte block; any other size raises :class:`~vrig.FileFormatError`.
+
+Header text
+-----------
+A header value holds at most 95 bytes of latin-1 text (plus the NUL terminator). Channel names,
+units and other values are written by a fixed rule, :func:`rpc3_text`, so no character makes a
+write fail (a strain unit ``µε`` is everyday; latin-1 has ``µ`` but no ``ε``):
+
+1. text that latin-1 encodes, without control characters, is written as it is (``µm``, ``°C``);
+2. any other text is written in ASCII: each character of :data:`RPC3_TRANSLITERATION` by its
+   entry (``µ``/``μ`` -> ``u``, ``ε`` -> ``e``, ``Ω`` -> ``Ohm``, ``°`` -> ``deg``, the Greek
+   alphabet by ISO 843 but ``β`` -> ``b``), accented letters and compatibility forms by their
+   Unicode NFKD decomposition without the accents (``é`` -> ``e``, ``²`` -> ``2``), control
+   characters (NUL, tab, line breaks) by a space, anything else by ``?``: ``µε`` -> ``ue``.
+
+A value still longer than 95 bytes is refused (``ValueError``) by :func:`write_rpc3`.
+The rule is not invertible on its own (``ue`` could have been written ``ue``): the original is
+kept beside the file by whoever needs it (:class:`vrig.TestFolder` also cuts longer labels to
+95 bytes, and stores the original names and units in ``summary.json`` and gives them back when
+it reads the record). :func:`rpc3_labels` says what :func:`read_rpc3` will return for a
+record's channels once written.
 """
 
 from __future__ import annotations
 
 import datetime
 import math
+import unicodedata
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import NamedTuple
@@ -48,7 +69,16 @@ from ..files import MAX_FILE_BYTES, atomic_write, read_bytes
 from ..timehistory import TimeHistory
 from ._common import _check_history, _history
 
-__all__ = ["DELTA_T_RANGE", "RPC3_SUFFIXES", "read_rpc3", "read_rpc3_header", "write_rpc3"]
+__all__ = [
+    "DELTA_T_RANGE",
+    "RPC3_SUFFIXES",
+    "RPC3_TRANSLITERATION",
+    "read_rpc3",
+    "read_rpc3_header",
+    "rpc3_labels",
+    "rpc3_text",
+    "write_rpc3",
+]
 
 RPC3_SUFFIXES = (".rsp", ".drv", ".tim")
 """File suffixes handled as RPC III time histories by :func:`vrig.io.read` and
@@ -507,6 +537,119 @@ def _is_pow2(n) -> bool:
     return isinstance(n, (int, np.integer)) and n >= 1 and (int(n) & (int(n) - 1)) == 0
 
 
+RPC3_TRANSLITERATION: dict[str, str] = {
+    "\u00b5": "u",  # micro sign (latin-1, but written in ASCII with the rest of the text)
+    "\u03bc": "u",  # Greek mu, as the micro prefix (SI in ASCII: um, us, ue)
+    "\u2126": "Ohm",  # ohm sign
+    "\u03a9": "Ohm",  # capital omega, as the unit
+    "\u00b0": "deg",
+    "\u00b1": "+-",
+    "\u00d7": "x",
+    "\u00b7": ".",
+    "\u2212": "-",  # minus sign
+    "\u2013": "-",
+    "\u2014": "-",
+    "\u2030": "permille",
+    "\u221a": "sqrt",
+    **dict(
+        zip(
+            "\u03b1\u03b2\u03b3\u03b4\u03b5\u03b6\u03b7\u03b8\u03b9\u03ba\u03bb\u03bd"
+            "\u03be\u03bf\u03c0\u03c1\u03c3\u03c2\u03c4\u03c5\u03c6\u03c7\u03c8\u03c9",
+            "a b g d e z i th i k l n x o p r s s t y f ch ps o".split(),
+            strict=True,
+        )
+    ),
+    **dict(
+        zip(
+            "\u0391\u0392\u0393\u0394\u0395\u0396\u0397\u0398\u0399\u039a\u039b\u039c"
+            "\u039d\u039e\u039f\u03a0\u03a1\u03a3\u03a4\u03a5\u03a6\u03a7\u03a8",
+            "A B G D E Z I Th I K L M N X O P R S T Y F Ch Ps".split(),
+            strict=True,
+        )
+    ),
+}
+"""Characters :func:`rpc3_text` writes as an ASCII spelling in an RPC III header that latin-1
+cannot hold as it is: the micro sign and Greek mu as ``u`` (SI prefixes in ASCII: ``um``,
+``ue``), ohm as ``Ohm``, a few unit symbols, and the Greek alphabet by ISO 843 (but ``β`` ->
+``b``, ``μ`` -> ``u``, ``Ω`` -> ``Ohm``)."""
+
+
+def _ascii_char(ch: str) -> str:
+    """One character of a text that is written in ASCII (rule 2 of :func:`rpc3_text`)."""
+    if ch.isascii():
+        return " " if unicodedata.category(ch) == "Cc" else ch
+    if ch in RPC3_TRANSLITERATION:
+        return RPC3_TRANSLITERATION[ch]
+    if unicodedata.category(ch) == "Cc":
+        return " "
+    plain = "".join(
+        c for c in unicodedata.normalize("NFKD", ch) if not unicodedata.combining(c)
+    )
+    return plain if plain and plain.isascii() else "?"
+
+
+def rpc3_text(text: str) -> str:
+    """The text an RPC III header stores for ``text`` (a channel name, a unit, a value).
+
+    Text that latin-1 encodes, without control characters, is stored as it is; any other text by
+    the rule of the module documentation (*Header text*): in ASCII (:data:`RPC3_TRANSLITERATION`,
+    then Unicode NFKD without accents, control characters as spaces, anything else ``?``). The
+    length is not changed but by the ASCII spellings (a header value holds 95 bytes: longer text
+    is refused by :func:`write_rpc3`).
+
+    Parameters
+    ----------
+    text : str
+        The text to store.
+
+    Returns
+    -------
+    str
+        Latin-1 text (one byte a character) without control characters.
+
+    Examples
+    --------
+    >>> rpc3_text("µε"), rpc3_text("µm"), rpc3_text("N·m"), rpc3_text("kΩ")
+    ('ue', 'µm', 'N·m', 'kOhm')
+    """
+    text = str(text)
+    try:
+        text.encode("latin-1")
+        plain = not any(unicodedata.category(ch) == "Cc" for ch in text)
+    except UnicodeEncodeError:
+        plain = False
+    if not plain:
+        text = "".join(_ascii_char(ch) for ch in text)
+    return text
+
+
+def rpc3_labels(history: TimeHistory) -> tuple[list[str], list[str]]:
+    """The channel names and units :func:`read_rpc3` returns for ``history`` once written by
+    :func:`write_rpc3`: equal to ``history.names`` and ``history.units`` unless
+    :func:`rpc3_text` changed them or the reader's rules do (surrounding blanks and quotes
+    removed, an empty name read as ``ch<n>``, repeated names made unique).
+
+    Parameters
+    ----------
+    history : TimeHistory
+        The record.
+
+    Returns
+    -------
+    names, units : list of str
+
+    Raises
+    ------
+    ValueError
+        For a label longer than 95 bytes once stored (as :func:`write_rpc3`).
+    """
+    header = {}
+    for k, (name, unit) in enumerate(zip(history.names, history.units, strict=True), start=1):
+        header[f"DESC.CHAN_{k}"] = _text(_encode_field(rpc3_text(name), _VALUE_LEN, "name"))
+        header[f"UNITS.CHAN_{k}"] = _text(_encode_field(rpc3_text(unit), _VALUE_LEN, "unit"))
+    return _channel_labels(header, history.n_channels)
+
+
 def _encode_field(text: str, limit: int, what: str) -> bytes:
     try:
         raw = text.encode("latin-1")
@@ -651,8 +794,8 @@ def _header_records(history: TimeHistory, opts: _WriteOptions, scales) -> dict[s
     lo, hi = x.min(axis=0), x.max(axis=0)
     for c in range(n_chan):
         k = c + 1
-        records[f"DESC.CHAN_{k}"] = history.names[c]
-        records[f"UNITS.CHAN_{k}"] = history.units[c]
+        records[f"DESC.CHAN_{k}"] = rpc3_text(history.names[c])
+        records[f"UNITS.CHAN_{k}"] = rpc3_text(history.units[c])
         records[f"SCALE.CHAN_{k}"] = _fmt_e(scales[c])
         records[f"LOWER_LIMIT.CHAN_{k}"] = _fmt_e(lo[c])
         records[f"UPPER_LIMIT.CHAN_{k}"] = _fmt_e(hi[c])
@@ -674,7 +817,7 @@ def _add_extra_header(records: dict[str, str], extra_header, n_chan: int) -> Non
                 f"extra_header may not set {key_text}: it describes the data layout or a "
                 "channel and is written from the TimeHistory and the arguments"
             )
-        records[key_text] = str(value)
+        records[key_text] = rpc3_text(str(value))
 
 
 def _encode_header(records: dict[str, str], n_chan: int) -> bytes:
@@ -740,8 +883,10 @@ def write_rpc3(
     path : str or Path
         Output file (any suffix; ``.rsp`` response, ``.drv`` drive, ``.tim`` time history).
     history : TimeHistory
-        The record. Channel names become ``DESC.CHAN_n``, units ``UNITS.CHAN_n`` (latin-1, at
-        most 95 characters each).
+        The record. Channel names become ``DESC.CHAN_n``, units ``UNITS.CHAN_n``, as
+        :func:`rpc3_text` stores them (latin-1 text as it is, any other text transliterated to
+        ASCII: ``µε`` -> ``ue``; :func:`rpc3_labels` says what reads back), at most 95 bytes
+        each.
     data_type : {"FLOATING_POINT", "SHORT_INTEGER"}
         ``FLOATING_POINT`` stores float32 in engineering units (``SCALE`` = 1), exact for
         float32-representable data. ``SHORT_INTEGER`` (understood by every RPC III program)
@@ -762,7 +907,8 @@ def write_rpc3(
     byte_order : {"little", "big"}
         ``FORMAT = BINARY_IEEE_LITTLE_END`` or ``BINARY_IEEE_BIG_END``.
     extra_header : mapping, optional
-        Further keyword-value pairs (values converted with ``str``); they may replace the
+        Further keyword-value pairs (values converted with ``str`` and stored by
+        :func:`rpc3_text`); they may replace the
         informational defaults (``DATE``, ``OPERATION``, ``REPEATS``, ``BYPASS_FILTER``,
         ``LOWER_LIMIT.CHAN_n``, ``UPPER_LIMIT.CHAN_n``, ``MAP.CHAN_n``, ``PARTITIONS``...) but not
         keywords that describe the data layout or channel identity.

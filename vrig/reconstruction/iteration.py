@@ -14,6 +14,13 @@ it stopped (``result.stopped``, ``result.error``) and keeps the drive that was r
 raises :class:`~vrig.ReconstructionError` carrying the same kind of result with zero iterations
 (the identification records and model, when they were made).
 
+Ctrl-C (``SIGINT``, a :class:`KeyboardInterrupt`) is kept by the same rule, wherever it strikes
+(the identification, the fit, a rig run, a drive update, the bookkeeping): the result holds
+every iteration played whole (one the interrupt cut short is dropped), ``stop_kind`` is
+``"interrupted"``, and :func:`reconstruct` raises :class:`~vrig.ReconstructionInterrupted` (a
+:class:`KeyboardInterrupt`: a Ctrl-C is never swallowed) with that result attached, before or
+after IT00.
+
 The steps themselves are :class:`~vrig.reconstruction.DriveIteration`'s (:mod:`.engine`), the
 settings one :class:`~vrig.reconstruction.IterationSettings` (:mod:`.settings`), the result a
 :class:`~vrig.reconstruction.ReconstructionResult` (:mod:`.result`).
@@ -26,7 +33,12 @@ from tqdm.auto import tqdm
 
 from identification.errors import IdentificationError, SimulationDivergedError
 
-from ..errors import ReconstructionError, RigLimitError, SimulationInstabilityError
+from ..errors import (
+    ReconstructionError,
+    ReconstructionInterrupted,
+    RigLimitError,
+    SimulationInstabilityError,
+)
 from ..progress import enabled_if
 from ..timehistory import TimeHistory
 from .engine import DriveIteration
@@ -93,6 +105,9 @@ def reconstruct(
         amplitude, the inverse model could not be fitted or diverged on DESRES, or IT00DRV was
         refused or tripped. ``exc.result`` holds what was made (identification records, model,
         the rejected drive); ``exc.cause`` the original error.
+    ReconstructionInterrupted
+        Ctrl-C (a :class:`KeyboardInterrupt`): ``exc.result`` holds every iteration played
+        before it (``stop_kind`` ``"interrupted"``), or what was made before IT00.
     """
     with enabled_if(progress):  # status lines of the identification, rig run bars
         return _reconstruct(rig, desired, settings, progress, options)
@@ -120,19 +135,30 @@ def _reconstruct(rig, desired, settings, progress: bool, options) -> Reconstruct
         seed=settings.id_seed,
         settings=settings,
     )
-    drive = _first_drive(engine, result)
-    bar = tqdm(
-        total=settings.iterations + 1,
-        desc=f"{rig.name}: iterations",
-        disable=not progress,
-        leave=False,
-    )
+    bar = None
     try:
+        drive = _first_drive(engine, result)
+        bar = tqdm(
+            total=settings.iterations + 1,
+            desc=f"{rig.name}: iterations",
+            disable=not progress,
+            leave=False,
+        )
         _iterate(engine, result, drive, gain, bar)
+        if not result.stop_kind:  # a stop that set no kind is an error of some other sort
+            result.stop_kind = "failed" if result.stopped else "completed"
+    except ReconstructionInterrupted:
+        raise
+    except KeyboardInterrupt as exc:  # Ctrl-C: the iterations played are kept (module doc)
+        _whole_iterations(result)
+        _fail(result, engine, f"IT{len(result.drives):02d}", exc)
+        raise ReconstructionInterrupted(
+            f"interrupted: {result.stopped}; {len(result.drives)} iteration(s) played",
+            result=result,
+        ) from exc
     finally:
-        bar.close()
-    if not result.stop_kind:  # a stop that set no kind is an error of some other sort
-        result.stop_kind = "failed" if result.stopped else "completed"
+        if bar is not None:
+            bar.close()
     return result
 
 
@@ -150,8 +176,8 @@ def stop_kind(exc: BaseException) -> str:
     str
         ``"refused"`` (a drive beyond full scale, never sent), ``"interlock"`` (a rig trip),
         ``"unstable"`` (the simulation), ``"diverged"`` (an inverse model's free run),
-        ``"model"`` (any other identification error: the model could not be fitted) or
-        ``"failed"``.
+        ``"model"`` (any other identification error: the model could not be fitted),
+        ``"interrupted"`` (Ctrl-C: a :class:`KeyboardInterrupt`) or ``"failed"``.
     """
     if isinstance(exc, RigLimitError):
         return "refused" if exc.time != exc.time else "interlock"  # time NaN: never sent
@@ -161,12 +187,21 @@ def stop_kind(exc: BaseException) -> str:
         return "diverged"
     if isinstance(exc, IdentificationError):
         return "model"
+    if isinstance(exc, KeyboardInterrupt):
+        return "interrupted"
     return "failed"
 
 
-def _fail(result: ReconstructionResult, engine: DriveIteration, where: str, exc: Exception) -> None:
+def _fail(
+    result: ReconstructionResult, engine: DriveIteration, where: str, exc: BaseException
+) -> None:
     """Record in ``result`` why the loop stopped (and the drive refused or tripped, if any)."""
-    what = str(exc) if isinstance(exc, RigLimitError) else f"{type(exc).__name__}: {exc}"
+    if isinstance(exc, KeyboardInterrupt):
+        what = "interrupted (Ctrl-C)"
+    elif isinstance(exc, RigLimitError):
+        what = str(exc)
+    else:
+        what = f"{type(exc).__name__}: {exc}"
     result.stopped, result.error = f"{where}: {what}", exc
     result.stop_kind = stop_kind(exc)
     if engine.rejected is not None:
@@ -174,21 +209,44 @@ def _fail(result: ReconstructionResult, engine: DriveIteration, where: str, exc:
 
 
 def _first_drive(engine: DriveIteration, result: ReconstructionResult) -> np.ndarray:
-    """Identify and compute IT00DRV; any failure raises ReconstructionError with ``result``."""
+    """Identify and compute IT00DRV; any failure raises ReconstructionError with ``result``
+    (Ctrl-C: ReconstructionInterrupted with it)."""
     try:
         engine.identify()
         drive = engine.first_drive()
-    except Exception as exc:
+    except (Exception, KeyboardInterrupt) as exc:
         stage = "identification" if engine.id_response is None else "model"
         result.id_drive, result.id_response = engine.id_drive, engine.id_response
         result.identification = engine.id_report
         _fail(result, engine, stage, exc)
+        if isinstance(exc, KeyboardInterrupt):
+            raise ReconstructionInterrupted(
+                f"interrupted: {result.stopped}; no iteration played", result=result
+            ) from exc
         raise ReconstructionError(
             f"no iteration played: {result.stopped}", result=result, cause=exc, stage=stage
         ) from exc
     result.id_drive, result.id_response = engine.id_drive, engine.id_response
     result.identification = engine.id_report
     return drive
+
+
+def _whole_iterations(result: ReconstructionResult) -> None:
+    """Cut ``result`` back to the iterations it holds whole (records and scores), after an
+    interrupt that may have struck between appending an iteration's records and its scores."""
+    n = min(
+        len(result.drives),
+        len(result.raw_responses),
+        len(result.responses),
+        len(result.errors),
+        len(result.rms_errors),
+        len(result.damage_ratio),
+    )
+    del result.drives[n:], result.raw_responses[n:], result.responses[n:]
+    result.errors = np.asarray(result.errors)[:n]
+    result.rms_errors = np.asarray(result.rms_errors)[:n]
+    result.damage_ratio = np.asarray(result.damage_ratio)[:n]
+    result.best_iteration = best_iteration(result.errors)
 
 
 def _iterate(engine: DriveIteration, result, drive, gain, bar) -> None:

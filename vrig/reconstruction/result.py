@@ -20,6 +20,7 @@ STOP_KINDS = (
     "unstable",
     "model",
     "failed",
+    "interrupted",
 )
 """The values of :attr:`ReconstructionResult.stop_kind`, the machine-readable stop reason:
 
@@ -32,6 +33,8 @@ STOP_KINDS = (
 ``unstable``   the rig's simulation became unstable (a MuJoCo warning or a non-finite state)
 ``model``      the inverse model could not be (re-)fitted (e.g. an unstable model)
 ``failed``     any other error
+``interrupted`` Ctrl-C (``SIGINT``): :func:`vrig.reconstruct` raises
+               :class:`~vrig.ReconstructionInterrupted` with the iterations played
 
 ``""`` while a reconstruction is running.
 """
@@ -73,8 +76,9 @@ class ReconstructionResult:
         The same, machine-readable: one of :data:`STOP_KINDS` (``"completed"`` when it ran them
         all); for a failure before IT00 (:class:`~vrig.ReconstructionError`) the kind of the
         error that stopped the identification, the fit or IT00.
-    error : Exception or None
-        The exception that stopped the loop (None when it completed or diverged).
+    error : BaseException or None
+        The exception that stopped the loop (None when it completed or diverged; the
+        :class:`KeyboardInterrupt` of a Ctrl-C).
     rejected_name, rejected_drive : str, TimeHistory or None
         The drive that was refused before it was sent (``"REFUSEDxx"``, ``"REFUSEDID"`` for the
         identification drive) or that tripped the rig (``"TRIPPEDxx"``, ``"TRIPPEDID"``), when
@@ -110,7 +114,7 @@ class ReconstructionResult:
     strategy: str = "fixed"
     seed: int = 0
     settings: IterationSettings | None = None
-    error: Exception | None = None
+    error: BaseException | None = None
     rejected_name: str = ""
     rejected_drive: TimeHistory | None = None
     stop_kind: str = ""
