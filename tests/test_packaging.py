@@ -209,10 +209,13 @@ def _noise(output: str) -> list[str]:
 
 @pytest.mark.slow
 def test_editable_install_prints_no_setuptools_warning(tmp_path):
-    """`pip install -e .` (into a scratch prefix, isolated build: needs the package index)."""
+    """`pip install -e .` (into a scratch prefix, isolated build: needs the package index).
+    ``--ignore-installed``: without it pip uninstalls the vrig this interpreter runs from."""
     src = _copy_sources(tmp_path / "src")
-    out = _pip("install", "-e", str(src), "--no-deps", "--prefix", str(tmp_path / "prefix"))
+    prefix = str(tmp_path / "prefix")
+    out = _pip("install", "-e", str(src), "--no-deps", "--ignore-installed", "--prefix", prefix)
     assert "Successfully installed vrig" in out
+    assert "uninstall" not in out.lower(), "pip touched the running environment's vrig"
     assert not _noise(out), _noise(out)
 
 
