@@ -44,7 +44,9 @@ print(rig.describe().split("\n\n")[0])
 print(f"fs = {rig.fs:g} Hz, test band {rig.bandwidth} Hz, variant {rig.variant!r}")
 print(f"drive {rig.inputs[0].name} [{rig.inputs[0].unit}] ±{rig.inputs[0].full_scale:g}, "
       f"response {rig.outputs[0].name} [{rig.outputs[0].unit}] ±{rig.outputs[0].full_scale:g}")
-print("the rig's own defaults:", rig.defaults)
+d = rig.defaults  # the side-car's "reconstruction" block
+print(f"the rig's own defaults: iteration gain {d.gain:g}; its own settings for the methods "
+      f"{', '.join(sorted(d.methods))}; gym tolerance {d.tolerance:g} % η0")
 
 # %% [markdown]
 # `fidelity="fast"` takes a larger physics timestep, as far as the model's explicit-integration
@@ -69,7 +71,10 @@ desres = engine.desres
 print(field)
 print(f"simulation band {engine.band} Hz, identification band {engine.id_band} Hz")
 
-fig = plots.overlay(field, desres, title="FIELD01 (red) and DESRES01 (blue)")
+fig = plots.overlay(
+    field, desres, labels=("FIELD01 (the field record)", "DESRES01 (after GPREPRO)"),
+    title=f"The field record and the desired response: GPREPRO band-passes it to {band[0]:g}-{band[1]:g} Hz",
+)
 display(fig)
 
 # %% [markdown]
@@ -86,7 +91,7 @@ iddrv, idres = engine.id_drive, engine.id_response
 print(iddrv)
 print(f"IDDRV rms {iddrv.data.std() * 1e3:.3f} mm = "
       f"{iddrv.data.std() / rig.inputs[0].full_scale:.1%} of full scale")
-print("inverse model:", engine.method)
+print("inverse model:", engine.method.describe())
 
 
 def psd(th, nperseg=512):
@@ -195,8 +200,10 @@ for name, path in folder.files().items():
 # %%
 summary = folder.summary()
 print({k: summary[k] for k in ("method", "best_iteration", "bandwidth_hz") if k in summary})
-it3 = folder.load_iteration(3)
-print(it3)
+it3 = folder.load_iteration(3)  # IT03DRV, RIT03RES, IT03RES and the scores, read back
+print(f"IT03 from the folder: {it3.drive.names[0]} drive and {it3.response.names[0]} response, "
+      f"{it3.response.duration:g} s each; η0 {it3.eta0[0]:.2f} % (the table above: "
+      f"{result.errors[3, 0]:.2f} %)")
 
 # %%
 fig = plots.error_vs_iteration(result, title="η0 against the iteration")
