@@ -173,6 +173,20 @@ def test_every_time_figure_names_the_command_that_prints_it(page):
     assert not problems, "\n".join(problems)
 
 
+TUTORIALS = sorted((ROOT / "docs" / "tutorials").glob("*.py"))
+
+
+@pytest.mark.parametrize("path", TUTORIALS, ids=[p.stem for p in TUTORIALS])
+def test_every_time_figure_of_a_tutorials_text_names_its_source(path):
+    """The same rule for the prose (Markdown cells) of the executed tutorials; what their code
+    cells print is measured on every build."""
+    jupytext = pytest.importorskip("jupytext")  # the docs extra
+    notebook = jupytext.read(path)
+    prose = "\n\n".join(c.source for c in notebook.cells if c.cell_type == "markdown")
+    problems = unsourced_time_figures(prose)
+    assert not problems, "\n".join(problems)
+
+
 def test_readme_is_short_and_starts_with_the_two_commands():
     text = README.read_text(encoding="utf-8")
     lines = text.splitlines()
