@@ -32,6 +32,20 @@ def test_demo_identifies_and_reports(capsys):
         assert f"      {name}" in out
 
 
+def test_demo_reports_a_fit_warning_as_one_line_not_a_raw_warning(capsys):
+    """The default demo's cubic fit diverges at 1.5x its input (a StabilityWarning): the demo
+    says so in one line of its report, not as a raw warning with a source path on stderr."""
+    from vrig.demo import run_demo
+
+    figures = run_demo()
+    out, err = capsys.readouterr()
+    assert err == ""
+    notes = [ln for ln in out.splitlines() if ln.startswith("note:")]
+    assert notes and len(notes) == len(figures["warnings"])
+    assert "StabilityWarning: the fitted model's free run diverges at 1.5x" in notes[0]
+    assert ".py:" not in out
+
+
 def test_demo_rejects_bad_arguments(capsys):
     assert main(["demo", "--samples", "100"]) == 2
     assert "--samples must be >= 2000" in capsys.readouterr().err
@@ -255,8 +269,11 @@ def test_reconstruct_argument_syntax_errors_exit_2(capsys):
 # ---------------------------------------------------------------------------------------------
 def test_repeatability_prints_numbers_and_writes_the_plot(tmp_path, monkeypatch, capsys):
     monkeypatch.chdir(tmp_path)
+    monkeypatch.delenv("VRIG_PROGRESS", raising=False)  # the default: progress on a terminal only
     assert main(["repeatability", "--rig", "shock-absorber", "--runs", "2", "--seconds", "4"]) == 0
-    out = capsys.readouterr().out
+    out, err = capsys.readouterr()
+    # stderr is not a terminal here (captured, like `2> log`): no bar, no carriage return
+    assert "\r" not in err and "runs" not in err, err
     (line,) = [ln for ln in out.splitlines() if ln.startswith("damper_load")]
     assert "%" in line and "dB" in line
     assert float(line.split()[1].rstrip("%")) > 95.0
@@ -264,6 +281,28 @@ def test_repeatability_prints_numbers_and_writes_the_plot(tmp_path, monkeypatch,
     assert "Tables 3.1-3.3" in out and "drive band 0-10 Hz" in out
     png = tmp_path / "results" / "shock-absorber-repeatability" / "repeatability.png"
     assert png.read_bytes()[:4] == b"\x89PNG"
+
+
+def test_repeatability_bar_counts_every_run(tmp_path, monkeypatch, capsys):
+    """With progress on, the runs bar ends at N of N (the first run is made by the pseudo-field
+    generation before the loop: it counts as run 1)."""
+    import vrig.progress
+
+    seen = []
+    real_bar = vrig.progress.bar
+
+    def recording_bar(*args, **kwargs):
+        b = real_bar(*args, **kwargs)
+        seen.append(b)
+        return b
+
+    monkeypatch.setattr(vrig.progress, "bar", recording_bar)
+    monkeypatch.setenv("VRIG_PROGRESS", "1")
+    monkeypatch.chdir(tmp_path)
+    assert main(["repeatability", "--rig", "shaker", "--runs", "3", "--seconds", "2"]) == 0
+    (runs,) = [b for b in seen if b.desc.endswith("runs")]
+    assert (runs.n, runs.total) == (3, 3)  # (what it shows depends on tqdm's refresh interval)
+    assert "runs:" in capsys.readouterr().err  # shown: VRIG_PROGRESS=1
 
 
 def test_repeatability_rejects_bad_arguments(capsys):

@@ -137,14 +137,18 @@ def test_rig_verdicts(name, kw, verdict, tmp_path):
     assert png.read_bytes()[:4] == b"\x89PNG"
 
 
-def test_cli_prints_the_evidence_and_the_verdict_last(tmp_path, capsys):
+def test_cli_prints_the_evidence_and_the_verdict_last(tmp_path, monkeypatch, capsys):
     out = tmp_path / "lin"
+    monkeypatch.delenv("VRIG_PROGRESS", raising=False)  # the default: progress on a terminal only
     rc = main(
         ["check-linearity", "--rig", "elastomeric-damper", "--seconds", "3", "--plot", "--out",
          str(out)]
     )  # fmt: skip
     assert rc == 0
-    lines = capsys.readouterr().out.strip().splitlines()
+    stdout, err = capsys.readouterr()
+    # stderr is not a terminal here (captured, like `2> log`): no bar, no carriage return
+    assert "\r" not in err and "runs" not in err, err
+    lines = stdout.strip().splitlines()
     assert lines[-1] == "verdict: non-linear"
     assert any(ln.startswith("(a) mean level") for ln in lines)
     assert (out / "linearity.png").read_bytes()[:4] == b"\x89PNG"

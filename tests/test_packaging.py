@@ -180,16 +180,53 @@ def _copy_sources(dest: Path) -> Path:
     return dest
 
 
-@pytest.mark.slow
-def test_built_wheel_contents_and_metadata(tmp_path):
-    """Build the wheel (pip, isolated build: needs the package index for setuptools) and read it."""
-    src = _copy_sources(tmp_path / "src")
-    dist = tmp_path / "dist"
-    subprocess.run(
-        [sys.executable, "-m", "pip", "wheel", "--no-deps", "-q", "-w", str(dist), str(src)],
-        check=True,
+# what setuptools prints when a folder it takes for a package carries data (issue 25: three boxed
+# warnings, ~40 lines each, on every `pip install -e .`) or any other deprecation of the config
+SETUPTOOLS_NOISE = ("is absent from the `packages` configuration", "SetuptoolsDeprecationWarning")
+
+
+def test_package_data_is_exactly_the_listed_patterns():
+    """No implicit package data: the model folders are data, not packages (see pyproject)."""
+    assert SETUPTOOLS["include-package-data"] is False
+
+
+def _pip(*args: str) -> str:
+    """Run pip verbosely (the build backend's output is shown only with -v); its output."""
+    done = subprocess.run(
+        [sys.executable, "-m", "pip", *args, "-v"],
+        capture_output=True,
+        text=True,
         timeout=600,
     )
+    out = done.stdout + done.stderr
+    assert done.returncode == 0, out[-4000:]
+    return out
+
+
+def _noise(output: str) -> list[str]:
+    return [line for line in output.splitlines() if any(n in line for n in SETUPTOOLS_NOISE)]
+
+
+@pytest.mark.slow
+def test_editable_install_prints_no_setuptools_warning(tmp_path):
+    """`pip install -e .` (into a scratch prefix, isolated build: needs the package index).
+    ``--ignore-installed``: without it pip uninstalls the vrig this interpreter runs from."""
+    src = _copy_sources(tmp_path / "src")
+    prefix = str(tmp_path / "prefix")
+    out = _pip("install", "-e", str(src), "--no-deps", "--ignore-installed", "--prefix", prefix)
+    assert "Successfully installed vrig" in out
+    assert "uninstall" not in out.lower(), "pip touched the running environment's vrig"
+    assert not _noise(out), _noise(out)
+
+
+@pytest.mark.slow
+def test_built_wheel_contents_and_metadata(tmp_path):
+    """Build the wheel (pip, isolated build: needs the package index for setuptools) and read it;
+    the build prints no setuptools warning."""
+    src = _copy_sources(tmp_path / "src")
+    dist = tmp_path / "dist"
+    out = _pip("wheel", "--no-deps", "-w", str(dist), str(src))
+    assert not _noise(out), _noise(out)
     (wheel,) = dist.glob("vrig-*.whl")
     assert wheel.name == f"vrig-{vrig.__version__}-py3-none-any.whl"
     names = set(zipfile.ZipFile(wheel).namelist())

@@ -229,23 +229,73 @@ def test_overlay_and_psd_draw_desired_on_top_of_achieved():
             assert des.get_linewidth() < ach.get_linewidth()  # the blue band shows around it
 
 
-def test_small_drive_axes_scaled_to_the_drive_with_limits_noted():
+def test_small_drive_is_drawn_between_its_limits_with_an_inset_scaled_to_it():
+    """The figure is named after the limits: they are drawn whatever the drive's size (issue 25:
+    a final drive at 17 % of full scale was shown with "full scale off axis" and no limit); a
+    drive below a third of them also gets an inset scaled to its own peak."""
     full = 0.05
     x = 0.01 * full * np.sin(np.arange(2000) / 20.0)  # 1 % of full scale
     drive = TimeHistory(x, FS, ["disp"], ["m"])
     fig = drive_vs_limits(drive, (ChannelSpec("disp", "m", full, "hydraulic"),))
-    (ax,) = fig.axes
+    (ax,) = fig.axes  # the inset is a child of the axes, not a figure axes
+    assert sorted(line.get_ydata()[0] for line in ax.get_lines()[1:]) == [-full, full]
+    assert ax.get_ylim()[1] > full and ax.get_ylim()[0] < -full and not ax.texts
+    (inset,) = ax.child_axes
+    np.testing.assert_array_equal(inset.get_lines()[0].get_ydata(), x)
     peak = np.abs(x).max()
-    lo, hi = ax.get_ylim()
+    lo, hi = inset.get_ylim()
     assert peak < hi <= 3 * peak and -3 * peak <= lo < -peak
-    assert len(ax.get_lines()) == 1  # the drive; no limit line far off the axes
-    (note,) = ax.texts
-    assert note.get_text() == "full scale ±0.05 m, off axis"
-    # at half of full scale the lines are drawn and inside the axes
+    # at half of full scale: the lines inside the axes, no inset needed
     fig = drive_vs_limits(drive.with_data(50 * x), (ChannelSpec("disp", "m", full, "hydraulic"),))
     (ax,) = fig.axes
     assert sorted(line.get_ydata()[0] for line in ax.get_lines()[1:]) == [-full, full]
-    assert ax.get_ylim()[1] > full and ax.get_ylim()[0] < -full and not ax.texts
+    assert ax.get_ylim()[1] > full and ax.get_ylim()[0] < -full and not ax.child_axes
+
+
+def test_overlay_error_trace_beneath_each_channel():
+    """``error=True``: beneath each channel an axes with desired - achieved on its own scale and
+    its RMS in % of the desired RMS (means removed) in the legend; the saved whole-record and
+    zoom overlays have it."""
+    from identification.metrics import rms_error_percent
+
+    desired, achieved = _records(2)
+    fig = overlay(desired, achieved, error=True)
+    assert len(fig.axes) == 4
+    for k in range(2):
+        ax, err = fig.axes[2 * k], fig.axes[2 * k + 1]
+        assert len(ax.get_lines()) == 2  # desired, achieved
+        line = err.get_lines()[0]
+        e = desired.data[:, k] - achieved.data[:, k]
+        np.testing.assert_allclose(line.get_ydata(), e)
+        assert to_rgba(line.get_color()) == to_rgba("black")
+        rms = rms_error_percent(desired.data[:, k], achieved.data[:, k])
+        assert f"RMS {rms:.3g} % of desired" in line.get_label()
+        lo, hi = err.get_ylim()
+        assert np.abs(e).max() < hi < 1.5 * np.abs(e).max() and lo == -hi  # scaled to the error
+        assert err.get_ylabel() == "error [N]"
+    assert fig.axes[-1].get_xlabel() == "time [s]"
+
+
+def test_saved_overlays_carry_the_error_trace(monkeypatch):
+    figures = _captured(monkeypatch, _result(n_channels=2), rig=None)
+    for name in ("overlay.png", "overlay_zoom.png"):
+        axes = figures[name].axes
+        assert len(axes) == 4 and axes[1].get_ylabel() == "error [N]", name
+
+
+def test_error_vs_iteration_log_axis_reads_plain_numbers():
+    """η0 from 31.35 to 2.75 % spans more than a decade: a log axis, labelled 3, 5, 10, 20,
+    30 - not matplotlib's "3 × 10^1"."""
+    res = _result(n_channels=1, iterations=5)
+    res.errors = np.array([[31.35], [12.0], [6.1], [4.2], [3.3], [2.75]])
+    res.best_iteration = 5
+    (ax,) = error_vs_iteration(res).axes
+    assert ax.get_yscale() == "log"
+    lo, hi = ax.get_ylim()
+    ticks = [v for v in ax.yaxis.get_major_locator()() if lo <= v <= hi]
+    labels = ax.yaxis.get_major_formatter().format_ticks(ticks)
+    assert labels == ["3", "5", "10", "20", "30"], labels
+    assert ax.yaxis.get_minor_formatter()(30.0) == ""  # no "3 × 10^1" minor label
 
 
 def _rejected(name, error, x):
@@ -286,4 +336,18 @@ def test_refused_drive_marks_the_samples_beyond_full_scale(monkeypatch):
     (ax,) = figures["refused_drive_vs_limits.png"].axes
     (marks,) = [line for line in ax.get_lines() if line.get_marker() == "x"]
     assert list(marks.get_xdata()) == [1000 / FS] and list(marks.get_ydata()) == [0.06]
+    assert ax.get_ylim()[1] > 0.06  # the sample beyond the full scale is inside the axes
     assert "drive interlock" in ax.get_title()
+
+
+def test_plain_log_ticks_over_many_decades():
+    from vrig.plots import plain_log_ticks
+
+    fig = Figure()
+    ax = fig.add_subplot()
+    ax.semilogy([0, 1], [0.01, 1e4])
+    ax.set_ylim(0.01, 1e4)
+    plain_log_ticks(ax.yaxis)
+    ticks = [v for v in ax.yaxis.get_major_locator()() if 0.01 <= v <= 1e4]
+    labels = ax.yaxis.get_major_formatter().format_ticks(ticks)
+    assert labels == ["0.01", "0.1", "1", "10", "100", "1000", "10000"], labels

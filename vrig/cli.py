@@ -1162,9 +1162,8 @@ def _advice(kind: str, stage: str, gain: float, identification: dict | None = No
 
 
 def _cmd_repeatability(args) -> int:
-    from tqdm.auto import tqdm
-
     from .plots import repeatability_plot, save_figure
+    from .progress import bar
     from .repeatability import repeatability_function, repeatability_number, signal_to_noise
 
     if not 2 <= args.runs <= 50:
@@ -1187,9 +1186,11 @@ def _cmd_repeatability(args) -> int:
         f"drive  {args.seconds:g} s random, triangular PSD {band[0]:g}-{band[1]:g} Hz, "
         f"{100 * rms.max():.3g} % of full scale rms, played {args.runs} times"
     )
-    runs = [first]
-    for k in tqdm(range(1, args.runs), desc=f"{rig.name}: runs", leave=False):
-        runs.append(rig.run(drive, seed=args.seed + 10_000 + k))
+    runs = [first]  # run 1 of the bar: pseudo_field played the drive once already
+    with bar(args.runs, desc=f"{rig.name}: runs", unit="run", initial=1) as runs_bar:
+        for k in range(1, args.runs):
+            runs.append(rig.run(drive, seed=args.seed + 10_000 + k))
+            runs_bar.update(1)
     number = repeatability_number(runs, fs=rig.fs, band=band)  # the text's (Tables 3.1-3.3)
     full = repeatability_number(runs)  # the recorded band, up to the anti-alias filter
     nperseg = int(min(drive.n_samples // 4, 2 ** np.ceil(np.log2(2 * rig.fs))))
@@ -1250,8 +1251,8 @@ def _cmd_check_linearity(args) -> int:
         if out.exists() and not out.is_dir():
             raise _UsageError(f"--out {out} is a file, not a folder")
         _check_writable(out)  # before the runs, not after them
-    result = check_rig_linearity(
-        rig, level=args.level, seconds=args.seconds, band=band, seed=args.seed, progress=True
+    result = check_rig_linearity(  # its bar follows VRIG_PROGRESS (a terminal by default)
+        rig, level=args.level, seconds=args.seconds, band=band, seed=args.seed
     )
     lines = result.table().splitlines()
     print("\n".join(lines[:-1]))

@@ -8,10 +8,12 @@ fit and the free-run simulation.
 from __future__ import annotations
 
 import time
+import warnings
 
 import numpy as np
 
 from identification import Narx, band_limited_noise, metrics, random_narx
+from identification.errors import IllConditionedWarning, RankDeficiencyWarning, StabilityWarning
 
 __all__ = ["MAX_SAMPLES", "MIN_SAMPLES", "run_demo"]
 
@@ -20,6 +22,9 @@ MIN_SAMPLES = 2000
 MAX_SAMPLES = 100_000  # the cubic model regresses on 454 terms per output
 """Longest demo record: its regression matrix (375,000 identification rows x 454 terms x 8 bytes =
 1.3 GB) stays within the identification package's 2 GiB memory budget per array."""
+
+
+_FIT_WARNINGS = (StabilityWarning, RankDeficiencyWarning, IllConditionedWarning)
 
 
 def _row(cells, widths):
@@ -71,8 +76,11 @@ def run_demo(*, seed: int = 0, n_samples: int = 20_000, noise: float = 0.01) -> 
     print(f"data:   {n_id} identification + {n_samples - n_id} validation samples\n")
 
     t0 = time.perf_counter()
-    model = Narx(order=2, degree=3).fit(u[:n_id], y[:n_id])
+    with warnings.catch_warnings(record=True) as caught:  # reported below, as one line each
+        warnings.simplefilter("always")
+        model = Narx(order=2, degree=3).fit(u[:n_id], y[:n_id])
     t_fit = time.perf_counter() - t0
+    notes = _notes(caught)
     t0 = time.perf_counter()
     # free run from the validation record's own first outputs (no start-up transient)
     y_sim = model.simulate(u[n_id:], y0=y[n_id : n_id + model.max_lag_])
@@ -97,12 +105,27 @@ def run_demo(*, seed: int = 0, n_samples: int = 20_000, noise: float = 0.01) -> 
     print(
         f"free run:   {t_sim * 1e3:8.1f} ms  ({(n_samples - n_id) / t_sim / 1e6:.2f} M samples/s)"
     )
+    for note in notes:
+        print(f"note:       {note}")
     return {
         "eta0": eta0.tolist(),
         "fit_percent": fit.tolist(),
         "t_fit": t_fit,
         "t_sim": t_sim,
+        "warnings": notes,
     }
+
+
+def _notes(caught) -> list[str]:
+    """The identification warnings of the fit as one line each (``StabilityWarning: ...``);
+    any other warning is passed on unchanged."""
+    notes = []
+    for w in caught:
+        if issubclass(w.category, _FIT_WARNINGS):
+            notes.append(f"{w.category.__name__}: " + " ".join(str(w.message).split()))
+        else:
+            warnings.warn_explicit(w.message, w.category, w.filename, w.lineno, source=w.source)
+    return notes
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -920,10 +920,12 @@ def check_rig_linearity(
     models : bool, optional
         Run the ARX vs NARX comparison (d) (the slowest test).
     progress : bool, optional
-        Show a progress bar over the runs.
+        Show a progress bar over the runs on stderr (:mod:`vrig.progress`; ``False`` leaves an
+        outer :func:`vrig.progress.enabled` in force, as ``vrig check-linearity`` sets it).
     """
     from .errors import RigLimitError
     from .field import default_band
+    from .progress import bar, enabled_if
 
     if not (isinstance(level, (int, float)) and 0 < level <= 0.5):
         raise ValueError(f"level must be a fraction of full scale in (0, 0.5], got {level!r}")
@@ -939,13 +941,10 @@ def check_rig_linearity(
         )  # fmt: skip
         records = {}
         try:
-            items = list(drives.items())
-            if progress:
-                from tqdm.auto import tqdm
-
-                items = tqdm(items, desc=f"{rig.name}: runs", leave=False)
-            for i, (key, drive) in enumerate(items):
-                records[key] = (drive, rig.run(drive, seed=seed + 10_000 + i))
+            with enabled_if(progress), bar(len(drives), desc=f"{rig.name}: runs") as runs:
+                for i, (key, drive) in enumerate(drives.items()):
+                    records[key] = (drive, rig.run(drive, seed=seed + 10_000 + i))
+                    runs.update(1)
         except RigLimitError as exc:
             last = exc
             level /= 2

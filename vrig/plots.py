@@ -6,16 +6,20 @@ Every function builds and returns a :class:`matplotlib.figure.Figure` that is no
 Agg canvas): show one in a notebook by leaving it as the cell's value, or save it with
 ``fig.savefig(path)``.
 
-* :func:`overlay` — desired vs achieved time histories, one axes per channel;
+* :func:`overlay` — desired vs achieved time histories, one axes per channel (and, with
+  ``error=True``, their difference beneath each on its own scale: a long broadband record is a
+  solid block of red and blue at any figure width, its error trace is not);
 * :func:`psd_compare` — their PSDs (Welch, log scale);
-* :func:`error_vs_iteration` — η0 per channel against the iteration, best iteration marked;
-* :func:`drive_vs_limits` — a drive on axes scaled to it, with the ± full-scale lines of the rig's
-  drive channels (or a note that they are off the axes) and, for a drive that tripped the rig,
-  the interlock that tripped;
+* :func:`error_vs_iteration` — η0 per channel against the iteration, best iteration marked (a
+  log axis, when the errors span more than a decade, labelled in plain numbers: 3, 5, 10, 20);
+* :func:`drive_vs_limits` — a drive against the ± full-scale lines of the rig's drive channels
+  (always drawn; a drive below a third of them gets an inset scaled to itself) and, for a drive
+  that tripped the rig, the interlock that tripped;
 * :func:`worst_error_window` — the second of a record with the largest desired-achieved error;
 * :func:`repeatability_plot` — ``R_f(f)`` and the signal-to-noise ratio against frequency;
 * :func:`save_reconstruction_plots` — the PNGs of a :class:`~vrig.reconstruction.ReconstructionResult`;
-* :func:`save_figure` — ``fig.savefig`` that replaces the file atomically (:mod:`vrig.files`).
+* :func:`save_figure` — ``fig.savefig`` that replaces the file atomically (:mod:`vrig.files`);
+* :func:`plain_log_ticks` — plain-number tick labels on a log axis (also the benchmark plots').
 """
 
 from __future__ import annotations
@@ -37,6 +41,7 @@ __all__ = [
     "drive_vs_limits",
     "error_vs_iteration",
     "overlay",
+    "plain_log_ticks",
     "psd_compare",
     "repeatability_plot",
     "save_figure",
@@ -51,7 +56,8 @@ ACHIEVED_COLOR = "blue"
 _LIMIT_COLOR = "black"
 _TRIP_COLOR = "darkorange"
 _TRIP_FIELDS = ("kind", "channel", "time", "value", "limit", "unit")  # of a RigLimitError
-_LIMIT_SPAN = 3.0  # limit lines are drawn when within this many times the drive's peak
+_ERROR_COLOR = "black"
+_LIMIT_SPAN = 3.0  # a drive whose peak is below 1/3 of its limits gets an inset scaled to it
 _ROW_HEIGHT = 2.2
 _WIDTH = 10.0
 
@@ -80,10 +86,39 @@ def _check_pair(desired: TimeHistory, achieved: TimeHistory) -> None:
         )
 
 
-def _rows(n: int, *, sharex: bool = True) -> tuple[Figure, list]:
-    fig = Figure(figsize=(_WIDTH, 1.0 + _ROW_HEIGHT * n), layout="constrained")
+def _rows(n: int, *, sharex: bool = True, height: float = _ROW_HEIGHT) -> tuple[Figure, list]:
+    fig = Figure(figsize=(_WIDTH, 1.0 + height * n), layout="constrained")
     axes = fig.subplots(n, 1, sharex=sharex, squeeze=False)[:, 0]
     return fig, list(axes)
+
+
+def _rows_with_error(n: int) -> tuple[Figure, list, list]:
+    """``n`` channel axes, each with a half-height error axes beneath it (one shared time axis):
+    ``(figure, channel axes, error axes)``; ``figure.axes`` alternates them."""
+    fig = Figure(figsize=(_WIDTH, 1.0 + 1.5 * _ROW_HEIGHT * n), layout="constrained")
+    axes = fig.subplots(2 * n, 1, sharex=True, squeeze=False, height_ratios=[2, 1] * n)[:, 0]
+    return fig, list(axes[0::2]), list(axes[1::2])
+
+
+def plain_log_ticks(axis) -> None:
+    """Label a log-scaled axis in plain numbers (``3``, ``5``, ``10``, ``20``, ``0.5``) instead
+    of matplotlib's ``3 × 10^1``: ticks at 1, 2, 3 and 5 per decade when the axis spans at most
+    1.5 decades, at 1, 2 and 5 up to three decades, at the powers of ten (with unlabelled minor
+    ticks) beyond.
+
+    Parameters
+    ----------
+    axis : matplotlib.axis.Axis
+        ``ax.yaxis`` or ``ax.xaxis`` of an axes whose scale on that axis is already ``"log"``.
+    """
+    from matplotlib.ticker import FuncFormatter, LogLocator, NullFormatter
+
+    lo, hi = sorted(axis.get_view_interval())
+    decades = np.log10(hi / lo) if lo > 0 and np.isfinite(hi / lo) else np.inf
+    subs = (1.0, 2.0, 3.0, 5.0) if decades <= 1.5 else (1.0, 2.0, 5.0) if decades <= 3 else (1.0,)
+    axis.set_major_locator(LogLocator(base=10, subs=subs))
+    axis.set_major_formatter(FuncFormatter(lambda v, _pos: f"{v:g}"))
+    axis.set_minor_formatter(NullFormatter())
 
 
 def overlay(
@@ -95,12 +130,15 @@ def overlay(
     labels: tuple[str, str] = ("desired", "achieved"),
     title: str | None = None,
     mark: tuple[float, float] | None = None,
+    error: bool = False,
 ) -> Figure:
     """Desired (red) and achieved (blue) time histories, one axes per channel.
 
     The achieved line is wide and drawn first, the desired line thin and drawn on top of it
     (higher ``zorder``): when the two agree the red line runs inside the blue band and both stay
-    visible, where they differ the blue band leaves the red line.
+    visible, where they differ the blue band leaves the red line. Over a long broadband record
+    the two fill a solid block at any figure width; ``error=True`` adds beneath each channel its
+    error trace (desired - achieved, black) on an axes scaled to the error itself.
 
     Parameters
     ----------
@@ -117,12 +155,15 @@ def overlay(
         Figure title.
     mark : (start, stop) seconds, optional
         Shade this interval in every axes (e.g. the window shown in a detail plot).
+    error : bool, optional
+        Add an error axes beneath each channel's axes (``fig.axes`` then alternates channel and
+        error axes), with the RMS of the error in % of the desired RMS in its legend.
 
     Returns
     -------
     Figure
         ``n_channels`` axes, each with two lines: desired first (red, on top), achieved second
-        (blue, beneath).
+        (blue, beneath); with ``error=True`` each followed by an axes with one line, the error.
     """
     _check_pair(desired, achieved)
     if errors is not None and len(errors) != desired.n_channels:
@@ -139,7 +180,10 @@ def overlay(
         sel = (t >= t0) & (t < t1)
         if not sel.any():
             raise ValueError(f"window {window} s holds no samples of the {t[-1]:g} s records")
-    fig, axes = _rows(desired.n_channels)
+    if error:
+        fig, axes, error_axes = _rows_with_error(desired.n_channels)
+    else:
+        (fig, axes), error_axes = _rows(desired.n_channels), []
     for k, ax in enumerate(axes):
         ax.plot(
             t[sel],
@@ -164,11 +208,35 @@ def overlay(
         ax.grid(True, alpha=0.3)
         if errors is not None:
             ax.set_title(f"{desired.names[k]}: η0 = {errors[k]:.2f} %", fontsize="medium")
+    for k, ax in enumerate(error_axes):
+        _error_axes(ax, t[sel], desired.data[:n, k][sel], achieved.data[:n, k][sel], mark)
+        ax.set_ylabel(f"error [{desired.units[k]}]")
     axes[0].legend(loc="upper right", fontsize="small")
-    axes[-1].set_xlabel("time [s]")
+    (error_axes or axes)[-1].set_xlabel("time [s]")
     if title:
         fig.suptitle(title)
     return fig
+
+
+def _error_axes(ax, t, desired, achieved, mark) -> None:
+    """The error ``desired - achieved`` against time on ``ax``: scaled to itself (symmetric), its
+    RMS in % of the desired RMS (means removed, as :func:`identification.metrics.rms_error_percent`)
+    in the legend."""
+    e = desired - achieved
+    label = "error = desired - achieved"
+    ok = np.isfinite(e)
+    ref = float(np.std(desired[ok])) if ok.any() else 0.0
+    if ref > 0:
+        label += f" (RMS {100 * float(np.std(e[ok])) / ref:.3g} % of desired)"
+    ax.plot(t, e, color=_ERROR_COLOR, lw=0.6, label=label)
+    peak = float(np.abs(e[ok]).max()) if ok.any() else 0.0
+    if peak > 0:
+        ax.set_ylim(-1.15 * peak, 1.15 * peak)
+    if mark is not None:
+        ax.axvspan(*mark, color="gold", alpha=0.3, zorder=1, lw=0)
+    ax.axhline(0.0, color="0.6", lw=0.6, zorder=0)
+    ax.grid(True, alpha=0.3)
+    ax.legend(loc="upper right", fontsize="small")
 
 
 def worst_error_window(
@@ -320,6 +388,7 @@ def error_vs_iteration(result, *, title: str | None = None) -> Figure:
     finite = errors[np.isfinite(errors)]
     if finite.size and finite.min() > 0 and finite.max() / finite.min() > 10:
         ax.set_yscale("log")
+        plain_log_ticks(ax.yaxis)
     ax.set_xlabel("iteration")
     ax.set_ylabel("η0 [%]")
     ax.set_xticks(its, [f"IT{i:02d}" for i in its])
@@ -332,13 +401,13 @@ def error_vs_iteration(result, *, title: str | None = None) -> Figure:
 def drive_vs_limits(
     drive: TimeHistory, rig_inputs, *, title: str | None = None, trip=None
 ) -> Figure:
-    """A drive on axes scaled to it, with the rig's limits marked.
+    """A drive against the rig's limits.
 
-    Each channel's axes are scaled to the drive's own peak (a drive at 1 % of full scale is not a
-    flat line). The ± full-scale lines (dashed black) are drawn when the full scale is within
-    about three times the drive's peak, and then the axes include them; otherwise the axes say
-    "full scale ±X unit, off axis". A channel that is all zero is shown against its full scale.
-    Samples beyond the full scale (a refused drive) are marked with black crosses.
+    Each channel's axes show the drive between its ± full-scale lines (dashed black, always
+    drawn: how much of the range the drive uses is what the figure is for). A drive whose peak
+    is below a third of the outermost limit drawn would be a thin band there, so it also gets an
+    inset (upper right) scaled to its own peak. A channel that is all zero is shown against its
+    full scale. Samples beyond the full scale (a refused drive) are marked with black crosses.
 
     Parameters
     ----------
@@ -351,18 +420,18 @@ def drive_vs_limits(
     trip : RigLimitError, optional
         The interlock that tripped (or refused) this drive: its time is marked with a vertical
         orange line in every axes (when known), the channel it names gets the limit in its title,
-        and a stroke limit on a drive channel of the same unit is drawn as ± orange lines (with the
-        same three-times rule).
+        and a stroke limit on a drive channel of the same unit is drawn as ± orange lines too.
 
     Returns
     -------
     Figure
-        One axes per drive channel: the drive (blue) first, then the limit lines.
+        One axes per drive channel: the drive (blue) first, then the limit lines; the inset of
+        a small drive is a child of its axes (``ax.child_axes``), not in ``fig.axes``.
     """
     if not isinstance(drive, TimeHistory):
         raise TypeError(f"drive must be a vrig.TimeHistory, got {type(drive).__name__}")
     specs = _match_specs(drive, rig_inputs)
-    fig, axes = _rows(drive.n_channels)
+    fig, axes = _rows(drive.n_channels, height=1.4 * _ROW_HEIGHT)  # room for an inset
     for k, ax in enumerate(axes):
         _drive_axes(ax, drive, k, specs[k], trip)
     axes[-1].set_xlabel("time [s]")
@@ -390,17 +459,21 @@ def _drive_axes(ax, drive: TimeHistory, k: int, c, trip) -> None:
         )
         if trip.kind == "stroke" and trip.unit == c.unit:
             limits.append((trip.limit, c.unit, "stroke limit", _TRIP_COLOR, "-."))
-    reach = _limit_lines(ax, peak or c.full_scale, limits)
+    reach = _limit_lines(ax, limits)
+    inset = 0 < peak < reach / _LIMIT_SPAN
+    if inset:
+        _drive_inset(ax, t, x, peak, unit)
     ax.set_title(title, fontsize="medium", color=_TRIP_COLOR if ours else "black")
     if trip is not None and np.isfinite(getattr(trip, "time", np.nan)):
         ax.axvline(trip.time, color=_TRIP_COLOR, lw=1.5, label=f"{trip.kind} trip")
     over = np.flatnonzero(~(np.abs(x) <= c.full_scale) & np.isfinite(x))
     if over.size:
         ax.plot(t[over], x[over], "x", color=_LIMIT_COLOR, ms=5, label="beyond full scale")
-    ax.set_ylim(-1.15 * reach, 1.15 * reach)
+    top = 1.15 * max(reach, peak)  # a refused drive's samples beyond the limits stay visible
+    ax.set_ylim(-top, top)
     ax.set_ylabel(_label(drive.names[k], unit))
     ax.grid(True, alpha=0.3)
-    ax.legend(loc="upper right", fontsize="small")
+    ax.legend(loc="lower right" if inset else "upper right", fontsize="small")
 
 
 def _match_specs(drive: TimeHistory, rig_inputs) -> list:
@@ -417,29 +490,29 @@ def _match_specs(drive: TimeHistory, rig_inputs) -> list:
     return specs
 
 
-def _limit_lines(ax, peak: float, limits) -> float:
-    """Draw each ``±limit`` of ``limits`` ((limit, unit, what, colour, line style) tuples) that is
-    within ``_LIMIT_SPAN`` times ``peak``; note the others as off the axes (one text box).
-    Returns the level the axes must reach."""
-    reach, off = peak, []
+def _limit_lines(ax, limits) -> float:
+    """Draw each ``±limit`` of ``limits`` ((limit, unit, what, colour, line style) tuples);
+    return the largest (the level the axes must reach)."""
     for limit, unit, what, color, ls in limits:
-        if limit <= _LIMIT_SPAN * peak:
-            ax.axhline(limit, color=color, ls=ls, lw=1.0, label=f"± {what} ({limit:g} {unit})")
-            ax.axhline(-limit, color=color, ls=ls, lw=1.0)
-            reach = max(reach, limit)
-        else:
-            off.append(f"{what} ±{limit:g} {unit}, off axis")
-    if off:
-        ax.annotate(
-            "\n".join(off),
-            xy=(0.01, 0.97),
-            xycoords="axes fraction",
-            ha="left",
-            va="top",
-            fontsize="small",
-            bbox={"boxstyle": "round", "fc": "white", "ec": "0.3", "alpha": 0.85},
-        )
-    return reach
+        ax.axhline(limit, color=color, ls=ls, lw=1.0, label=f"± {what} ({limit:g} {unit})")
+        ax.axhline(-limit, color=color, ls=ls, lw=1.0)
+    return max(limit for limit, *_ in limits)
+
+
+def _drive_inset(ax, t, x, peak: float, unit: str) -> None:
+    """An inset in the upper right of ``ax`` (clear of a drive below a third of the limits, which
+    stays inside the middle third of the axes; the legend goes to the lower right) showing the
+    drive scaled to its own peak."""
+    inset = ax.inset_axes([0.56, 0.64, 0.43, 0.33])
+    inset.plot(t, x, color=ACHIEVED_COLOR, lw=0.5)
+    inset.set_ylim(-1.45 * peak, 1.45 * peak)  # room for the label
+    inset.set_xticks([])
+    inset.tick_params(labelsize="x-small")
+    inset.text(
+        0.01, 0.97, f"scaled to its peak ±{peak:.3g} {unit}", transform=inset.transAxes,
+        ha="left", va="top", fontsize="x-small",
+    )  # fmt: skip
+    inset.grid(True, alpha=0.3)
 
 
 def repeatability_plot(
@@ -500,9 +573,9 @@ def repeatability_plot(
 def save_reconstruction_plots(result, folder, rig=None, *, dpi: int = 110) -> list[Path]:
     """Write the PNGs of a reconstruction into ``folder`` (created if missing).
 
-    Files: ``overlay.png`` (FINRES vs DESRES, whole record, the zoom window shaded),
-    ``overlay_zoom.png`` (the second with the largest error, :func:`worst_error_window`; its
-    title says which), ``psd.png``, ``error_vs_iteration.png`` and, when ``rig`` is given,
+    Files: ``overlay.png`` (FINRES vs DESRES, whole record, the zoom window shaded, each channel's
+    error trace beneath it), ``overlay_zoom.png`` (the second with the largest error,
+    :func:`worst_error_window`; its title says which; with the error traces), ``psd.png``, ``error_vs_iteration.png`` and, when ``rig`` is given,
     ``drive_vs_limits.png`` (FINDRV against the rig's drive full scales). When the loop stopped on
     a drive that was refused or tripped the rig (``result.rejected_drive``) and ``rig`` is given,
     that drive is plotted against the limits too: ``refused_drive_vs_limits.png`` or
@@ -572,6 +645,7 @@ def _result_figures(result, rig) -> dict:
             labels=labels,
             title=f"response reconstruction: best iteration IT{best:02d} (shaded: {where})",
             mark=zoom,
+            error=True,
         ),
     }
     figures["overlay_zoom.png"] = overlay(
@@ -582,6 +656,7 @@ def _result_figures(result, rig) -> dict:
         labels=labels,
         title=f"response reconstruction (detail): IT{best:02d}, {where}\n"
         "(the 1 s of largest RMS error, each channel normalised by its desired RMS)",
+        error=True,
     )
     figures["psd.png"] = psd_compare(
         desired, achieved, band=band, labels=labels, title="PSD of desired and achieved response"

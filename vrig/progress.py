@@ -12,6 +12,13 @@ Inside such a block, :func:`pseudo_field <vrig.field.pseudo_field>` reports each
 the drive-iteration engine says what it identifies and fits, and a MuJoCo rig run shows a bar
 over its chunks when it lasts longer than :data:`RUN_BAR_DELAY_S`. The switch is a context
 variable: it holds for the thread (and task) that set it. Progress never changes a number.
+
+The bars of vrig's loops come from :func:`bar` (a command's loop over rig runs too), so one rule
+holds everywhere: nothing is written unless progress is on (for ``vrig``: the ``VRIG_PROGRESS``
+variable, by default on a terminal only), no carriage-return bars in a redirected stderr.
+The bars are plain text (``tqdm.std``, never ``tqdm.auto``): inside a Jupyter kernel
+``tqdm.auto`` wants ipywidgets and warns ("IProgress not found") on first use, a warning box in
+every executed notebook that imports vrig.
 """
 
 from __future__ import annotations
@@ -78,13 +85,13 @@ def status(text: str) -> None:
         What is being done, e.g. ``"identifying: IDDRV 30 s -> rig"``.
     """
     if is_enabled():
-        from tqdm.auto import tqdm
+        from tqdm import tqdm
 
         tqdm.write(f"vrig: {text}", file=sys.stderr)
         sys.stderr.flush()
 
 
-def bar(total=None, *, desc: str = "", unit: str = "it", delay: float = 0.0):
+def bar(total=None, *, desc: str = "", unit: str = "it", delay: float = 0.0, initial: int = 0):
     """A tqdm bar on stderr, disabled unless progress is enabled (:func:`enabled`).
 
     Parameters
@@ -97,18 +104,21 @@ def bar(total=None, *, desc: str = "", unit: str = "it", delay: float = 0.0):
         What one step is.
     delay : float
         Show the bar only after this many seconds (``tqdm(delay=...)``).
+    initial : int
+        Steps already done when the bar starts (e.g. a first run made before the loop).
 
     Returns
     -------
     tqdm.tqdm
     """
-    from tqdm.auto import tqdm
+    from tqdm import tqdm
 
     return tqdm(
         total=total,
         desc=desc,
         unit=unit,
         delay=delay,
+        initial=initial,
         leave=False,
         file=sys.stderr,
         disable=not is_enabled(),

@@ -2,7 +2,10 @@
 
 * ``records.json`` — the list of records (sorted by id), exactly as in ``records/``;
 * ``records.csv`` — one row per record, scalar fields (per-iteration η0 as ``a;b;c``);
-* ``leaderboard.md`` — the overall ranking and one table per rig (see :func:`leaderboard`);
+* ``leaderboard.md`` — the overall ranking and one table per rig (see :func:`leaderboard`; a
+  modelling error that blew up — above :data:`BLEW_UP_PERCENT` — is marked † and left out of
+  the mean, a damage ratio outside 1/:data:`DAMAGE_FACTOR`..:data:`DAMAGE_FACTOR` is marked ‡,
+  each with a footnote under the table saying what it means);
   a rig run at a non-linearity severity s is its own "rig" ``rig@s`` there; records on field
   targets (``--targets field:<scenario>``) are ranked apart, in a section "Field targets"
   (:func:`field_section`), each rig on a scenario its own "rig" ``rig:scenario``; when a rig
@@ -46,6 +49,20 @@ __all__ = [
 ]
 
 FAILED_SCORE = 100.0  # η0 [%] a failed record counts as in the overall ranking
+
+BLEW_UP_PERCENT = 1000.0
+"""A modelling error (held-out free-run η0, %) above this is a model that blew up: η0 = 100 %
+is what a prediction of zero scores, so above 1000 % the prediction is more than ten times the
+record it predicts (a diverging recursion or an ill-conditioned fit: the FIR plugin's forward
+model scored 4.5e9 %). The leaderboard marks it "blew up †" and leaves it out of the mean."""
+
+DAMAGE_FACTOR = 10.0
+"""A damage ratio (achieved over desired rainflow pseudo-damage, S-N slope 5) off by more than
+this factor (outside [1/DAMAGE_FACTOR, DAMAGE_FACTOR]) is marked ‡ in the leaderboard, with the
+size of load cycles it means: the slope-5 power turns load cycles 2.67 times the desired ones'
+size into a ratio of 136 (ratio^(1/5) = 2.67), cycles 1.6 times their size into 10."""
+
+DAMAGE_SLOPE = 5.0  # = vrig.reconstruction.scores.DAMAGE_SLOPE (the records' pseudo-damage)
 
 _CSV_FIELDS = [
     "id",
@@ -138,8 +155,8 @@ def aggregate(records: list[dict]) -> dict:
             "iterations_to_tolerance": _mean(reached),
             "rms_error": _mean(r["rms_error"] for r in ok),
             "damage_ratio": _mean(r["damage_ratio"] for r in ok),
-            "normal_model_error": _mean(r.get("normal_model_error") for r in recs),
-            "inverse_model_error": _mean(r.get("inverse_model_error") for r in recs),
+            **_modelling("normal", recs),
+            **_modelling("inverse", recs),
             "fit_s": _mean(r["timing"].get("fit_s") for r in ok),
             "model_size": _mean(r.get("model_size") for r in ok),
             "score": float(
@@ -155,6 +172,71 @@ def aggregate(records: list[dict]) -> dict:
             "description": next((r.get("method_description") for r in ok), None),
         }
     return out
+
+
+def _modelling(which: str, recs: list[dict]) -> dict:
+    """``{which}_model_error`` (mean over the records' values at most :data:`BLEW_UP_PERCENT`),
+    ``{which}_model_n`` (records with a value) and ``{which}_model_blew_up`` (the values above
+    it) of a group of records."""
+    values = [v for v in (r.get(f"{which}_model_error") for r in recs) if v is not None]
+    return {
+        f"{which}_model_error": _mean(v for v in values if v <= BLEW_UP_PERCENT),
+        f"{which}_model_n": len(values),
+        f"{which}_model_blew_up": [v for v in values if not v <= BLEW_UP_PERCENT],
+    }
+
+
+def _modelling_cell(a: dict, which: str) -> str:
+    """A modelling-error cell: the mean, with ``(k/n blew up †)`` or ``blew up †`` alone."""
+    n, bad = a[f"{which}_model_n"], len(a[f"{which}_model_blew_up"])
+    if n == 0:
+        return "—"
+    if bad == n:
+        return "blew up †"
+    mean = _f(a[f"{which}_model_error"])
+    return mean if not bad else f"{mean} ({bad}/{n} blew up †)"
+
+
+def _damage_flagged(ratio) -> bool:
+    return ratio is not None and not 1 / DAMAGE_FACTOR <= ratio <= DAMAGE_FACTOR
+
+
+def _damage_cell(ratio) -> str:
+    return _f(ratio, "{:.2f}") + (" ‡" if _damage_flagged(ratio) else "")
+
+
+def _flag_notes(rows: list) -> list[str]:
+    """The footnotes of a rig table's † and ‡ marks (none when nothing is marked)."""
+    blew = [
+        (m, which, v)
+        for m, a in rows
+        for which in ("normal", "inverse")
+        for v in a[f"{which}_model_blew_up"]
+    ]
+    damage = [(m, a["damage_ratio"]) for m, a in rows if _damage_flagged(a["damage_ratio"])]
+    notes = []
+    if blew:
+        worst = max(v for *_, v in blew)
+        notes.append(
+            f"† blew up: the model's held-out free run came out more than ten times the size of "
+            f"the record it predicts (η0 above {BLEW_UP_PERCENT:g} %, here up to {worst:.2g} %; "
+            "100 % is what a prediction of zero scores): a diverging recursion or an "
+            "ill-conditioned fit, not a modelling error. Left out of the mean; the raw values "
+            "are in records.csv. "
+            + "; ".join(f"{m} ({w}): {v:.2g} %" for m, w, v in blew)
+            + "."
+        )
+    if damage:
+        notes.append(
+            f"‡ damage ratio outside {1 / DAMAGE_FACTOR:g}-{DAMAGE_FACTOR:g}: the achieved "
+            f"response's rainflow pseudo-damage (S-N slope {DAMAGE_SLOPE:g}) is off the desired "
+            f"one's by more than a factor {DAMAGE_FACTOR:g}. The slope-{DAMAGE_SLOPE:g} power "
+            f"magnifies: a ratio R means load cycles R^(1/{DAMAGE_SLOPE:g}) times the desired "
+            "ones' size (a reconstruction that missed its target, see its η0): "
+            + "; ".join(f"{m} {r:.3g} → {r ** (1 / DAMAGE_SLOPE):.2f} x" for m, r in damage)
+            + "."
+        )
+    return ["", *notes] if notes else []
 
 
 def _short(msg: str, n: int = 110) -> str:
@@ -289,10 +371,11 @@ def _rig_lines(rig: str, rows: list, h: str) -> list[str]:
         lines.append(
             f"| {rank} | {m} | {a['ok']}/{a['n']} | {_f(a['eta0_it00'])} | "
             f"{_f(a['eta0_final'])} | {_f(a['eta0_best'])} | {tol} | {_f(a['rms_error'])} | "
-            f"{_f(a['damage_ratio'], '{:.2f}')} | {_f(a['normal_model_error'])} | "
-            f"{_f(a['inverse_model_error'])} | {_f(a['fit_s'], '{:.2f}')} | "
+            f"{_damage_cell(a['damage_ratio'])} | {_modelling_cell(a, 'normal')} | "
+            f"{_modelling_cell(a, 'inverse')} | {_f(a['fit_s'], '{:.2f}')} | "
             f"{_f(a['model_size'], '{:.0f}')} |"
         )
+    lines += _flag_notes(rows)
     fails = [(m, f) for m, a in rows for f in a["failures"]]
     if fails:
         lines += ["", "Failures:", ""]
@@ -577,6 +660,7 @@ def plot_severity(rig: str, table: dict, linear: dict, path: Path) -> Path:
             ax.text(cross["severity"], 0.02, " crossover", transform=top, color="0.3", fontsize=8)
         if log:
             ax.set_yscale("log")
+            _plain_log_ticks(ax.yaxis)
         ax.set_xticks(sevs, [format_severity(s) for s in sevs])
         ax.set_xlabel("severity [-]")
         ax.set_title(f"{what}")
@@ -614,6 +698,13 @@ def _records_csv(records: list[dict]) -> str:
     for r in records:
         w.writerow(_csv_row(r))
     return buf.getvalue()
+
+
+def _plain_log_ticks(axis) -> None:
+    """20, 50, 100 on a log axis of η0 rather than matplotlib's "2 × 10^1"."""
+    from vrig.plots import plain_log_ticks
+
+    plain_log_ticks(axis)
 
 
 def _figure(w=7.0, h=4.0):
@@ -695,6 +786,8 @@ def plot_iterations(method: str, records: list[dict], path: Path) -> Path:
     ax.set_xlabel("iteration")
     ax.xaxis.set_major_locator(MaxNLocator(integer=True))
     ax.set_ylabel("mean η0 [%]")
+    if labelled:
+        _plain_log_ticks(ax.yaxis)
     ax.grid(alpha=0.3, which="both")
     if labelled:
         ax.legend(fontsize=8)

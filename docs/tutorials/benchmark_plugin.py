@@ -23,8 +23,8 @@
 # regularisation — and ranks it against the built-in inverse ARX on the shaker rig.
 #
 # **Needs a source checkout**: the `benchmarks` package is not part of the installed wheel. The
-# runs here are the `--quick` settings on one rig and two or three methods (a few seconds per
-# record); `--no-thesis` skips the reference text's tables, which take minutes.
+# runs here are the `--quick` settings on one rig and two or three methods (short records);
+# `--no-thesis` skips the reference text's tables, the longest part of a run.
 
 # %%
 # %matplotlib inline

@@ -33,6 +33,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 import vrig  # noqa: F401  (registers the vrig/ environments)
+from vrig.plots import plain_log_ticks
 from vrig.policies import (
     AdaptiveBandGain,
     BandRatioPolicy,
@@ -91,6 +92,7 @@ for name, runs in results.items():
 ax.axhline(env.unwrapped.task.tolerance, color="k", ls="--", lw=1, label="tolerance")
 ax.set_xlabel("iteration")
 ax.set_ylabel("mean η0 [%]")
+plain_log_ticks(ax.yaxis)  # 2, 5, 10 rather than "2 × 10^0"
 ax.set_title(f"one target (field seed {targets[0]['field_seed']})", fontsize=10)
 ax.legend(fontsize=8)
 plt.show()

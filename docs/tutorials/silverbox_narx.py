@@ -34,6 +34,7 @@
 # %matplotlib inline
 import os
 import time
+import warnings
 from pathlib import Path
 
 import matplotlib.pyplot as plt
@@ -221,10 +222,19 @@ print(sim_focus.describe())
 
 # %%
 t0 = time.perf_counter()
-semp = Narx(na=4, nb=4, nk=1, degree=3, kind="pure", constant=True, selection="simulation",
-            n_terms=12).fit(u_tr[:16000], y_tr[:16000])
+with warnings.catch_warnings(record=True) as caught:  # printed below as a line, not a warning box
+    warnings.simplefilter("always")
+    semp = Narx(na=4, nb=4, nk=1, degree=3, kind="pure", constant=True, selection="simulation",
+                n_terms=12).fit(u_tr[:16000], y_tr[:16000])
 print(f"fit in {time.perf_counter() - t0:.1f} s; {semp.n_terms_[0]} terms:", semp.term_names()[0])
 print(f"free run {score(semp):.2f} mV")
+for w in caught:
+    print(f"{w.category.__name__}: {w.message}")
+
+# %% [markdown]
+# A fit that warns says so in the last lines above: a `StabilityWarning` means the model's free
+# run diverges at 1.5 times the identification input (the stability contract's margin), so it is
+# to be used within the identification amplitude only.
 
 # %% [markdown]
 # ## Validation

@@ -29,7 +29,7 @@ settings one :class:`~vrig.reconstruction.IterationSettings` (:mod:`.settings`),
 from __future__ import annotations
 
 import numpy as np
-from tqdm.auto import tqdm
+from tqdm import tqdm  # plain text bars (vrig.progress: never tqdm.auto)
 
 from identification.errors import IdentificationError, SimulationDivergedError
 
