@@ -51,7 +51,8 @@ Refit
     simulation focus, all terms before FROLS before SEMP) is refitted on the whole record and kept if
     its free run is bounded on every validation block, on the whole record and on the stress
     inputs; otherwise (or when the refit would overrun the budget) the model fitted on the training
-    part (the one validated) is returned. ``refit_`` says which.
+    part (the one validated) is returned. ``refit_`` says which. The refit gets the search's
+    deadline too (a refinement past it keeps the best iterate reached).
 """
 
 from __future__ import annotations
@@ -788,7 +789,7 @@ class NarxSearch:
         input_names, output_names = self._names
         try:
             model = c.narx(self.criterion, self.options).fit(
-                u, y, input_names=input_names, output_names=output_names
+                u, y, input_names=input_names, output_names=output_names, deadline=self._deadline
             )
         except IdentificationError as exc:
             return self._named(
