@@ -26,6 +26,11 @@ six wheel forces -> ball joint / nine control-arm channels, split spectra at 2 H
 on one identification-type record and scored by η0 in free run on a held-out record, at 5 % and
 20 % of the drives' full scale RMS (halved while the rig trips).
 
+``--quick``: desired responses of 20 s and identification records of 30 s (instead of 30 s and
+60 s), without the rows marked :attr:`Row.quick` False (Table 6.16's two vrig-only SEMP rows,
+whose cubic SEMP over every lead candidate took 30 % of the quick report's time; their cells
+say :data:`NOT_IN_QUICK`; every row of the text is run, so every verdict is there).
+
 The run ends with each table's wall time (the slowest first) and its total (also the report's
 last line); NumPy's BLAS gets one thread unless ``OPENBLAS_NUM_THREADS`` etc. are set
 (:mod:`benchmarks.threads`).
@@ -113,6 +118,12 @@ class Row:
     iteration: int = 0  # which ITxxRES the text reports
     thesis: tuple = ()  # the text's figure(s) [%], one per reported channel
     key: str = ""  # identifies a reconstruction run shared by rows (IT00 and IT05 of one run)
+    quick: bool = True  # False: the full report only; a --quick report says so (NOT_IN_QUICK)
+
+
+NOT_IN_QUICK = "not run with --quick: the full report has it"
+"""The cell of a row left out of ``--quick`` (:attr:`Row.quick` False: a vrig-only row whose fit
+takes minutes; none of the text's rows is left out, so every verdict stays)."""
 
 
 @dataclass
@@ -220,10 +231,13 @@ TABLES = [
                 _narx(4, 3, kind="input-polynomial"),
                 thesis=(None,),
             ),
+            # the two SEMP rows: 30 % of the --quick report's time on their own (cubic SEMP
+            # over every lead candidate), so they run in the full report only
             Row(
                 "vrig: NARX 4th order cubic, terms by free run (SEMP), simulation focus, IT00",
                 _narx(4, 3, kind="full", focus="simulation", selection="simulation"),
                 thesis=(None,),
+                quick=False,
             ),
             Row(
                 "vrig: the same plus dead-zone/saturation/|x| terms of the load (§7.4.1), IT00",
@@ -236,6 +250,7 @@ TABLES = [
                     functions=[("saturation", "auto"), ("deadzone", "auto"), "abs", "sign_square"],
                 ),
                 thesis=(None,),
+                quick=False,
             ),
         ],
         "v[1][0] < v[2][0] < v[0][0]",
@@ -837,9 +852,13 @@ def run_table(
     variant: str | None = None,
     severity: float | None = None,
     target: str = "pseudo-field",
+    quick: bool = False,
     log=print,
 ):
     """vrig's figures for one table: a list (per row) of per-channel values or an error string.
+
+    ``quick``: the rows with :attr:`Row.quick` False are not run; their value is
+    :data:`NOT_IN_QUICK`.
 
     ``variant``/``severity``: as resolved by :func:`resolve_variant`/:func:`resolve_severity`
     (``None``: the rig's default, as loaded). ``target``: the desired response's kind
@@ -861,6 +880,9 @@ def run_table(
         return [why] * len(table.rows)
     runs, values, fits = {}, [], cache.setdefault("fits", {})
     for row in table.rows:
+        if quick and not row.quick:
+            values.append(NOT_IN_QUICK)
+            continue
         key = row.key or row.label
         if key not in runs:
             iterations = max(r.iteration for r in table.rows if (r.key or r.label) == key)
@@ -1441,7 +1463,7 @@ def _check_variants(variants) -> list:
     return list(variants)
 
 
-def _table_runs(table, requested, severity, seconds, id_seconds, cache, log) -> list:
+def _table_runs(table, requested, severity, seconds, id_seconds, cache, log, quick=False) -> list:
     """The table run once per requested variant and per target: the text's kind of target
     first, then the pseudo-field record beside it (once, where the text's kind is pseudo-field);
     a list of :class:`TableRun` for :func:`_markdown`."""
@@ -1454,7 +1476,7 @@ def _table_runs(table, requested, severity, seconds, id_seconds, cache, log) -> 
                 log(f"{table.name} [{_setting_text(setting, req)}, {target}]")
                 done[setting, target] = run_table(
                     table, seconds=seconds, id_seconds=id_seconds, cache=cache,
-                    variant=setting[0], severity=setting[1], target=target, log=log,
+                    variant=setting[0], severity=setting[1], target=target, quick=quick, log=log,
                 )  # fmt: skip
             name = f"{req or setting[0]}, {target}"
             text = f"{_setting_text(setting, req)} with a {target} desired response"
@@ -1509,7 +1531,7 @@ def thesis_report(
     table_runs, runs_3_7, times = [], [], [] if times is None else times
     for table in TABLES:
         t = time.perf_counter()
-        runs = _table_runs(table, requested, severity, seconds, id_seconds, cache, log)
+        runs = _table_runs(table, requested, severity, seconds, id_seconds, cache, log, quick)
         times.append((table.name.split(":")[0], time.perf_counter() - t))
         table_runs.append((table, runs))
         parts.append(_markdown(table, runs))
@@ -1541,7 +1563,12 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(
         prog="python -m benchmarks.thesis_tables", description=__doc__.split("\n")[0]
     )
-    ap.add_argument("--quick", action="store_true", help="shorter records (about half the time)")
+    ap.add_argument(
+        "--quick",
+        action="store_true",
+        help="shorter records (desired 20 s, identification 30 s instead of 30 s and 60 s), "
+        "without the vrig-only rows of the full report (Table 6.16's two SEMP rows)",
+    )
     ap.add_argument(
         "--out", default="results/thesis", help="output folder (default results/thesis)"
     )

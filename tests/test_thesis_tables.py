@@ -526,3 +526,45 @@ def test_the_run_ends_with_each_tables_wall_time_and_the_total(tmp_path, monkeyp
     assert sorted(names) == sorted([*want, "Table 3.7", "Belgian road"])
     report = (tmp_path / "thesis_reproduction.md").read_text().rstrip().splitlines()[-1]
     assert report.startswith("_wall time per table: ") and all(n in report for n in want)
+
+
+def test_quick_leaves_out_only_vrig_rows_and_says_so_in_their_cells(monkeypatch):
+    """--quick runs every row of the text (so every verdict) and leaves out only the rows
+    marked full-run-only: Table 6.16's two SEMP rows, whose cells then say so."""
+    import types
+
+    import vrig
+    from benchmarks.thesis_tables import NOT_IN_QUICK, Row, Table
+
+    left_out = [(t.name.split(":")[0], r.label) for t in TABLES for r in t.rows if not r.quick]
+    assert [name for name, _ in left_out] == ["Table 6.16"] * 2
+    assert all(label.startswith("vrig:") for _, label in left_out)  # no text figure lost
+    semp = {  # rows whose terms are chosen by free run (SEMP)
+        r.label
+        for t in TABLES
+        for r in t.rows
+        if callable(r.method) and r.method().options().get("selection") == "simulation"
+    }
+    assert {label for _, label in left_out} <= semp
+
+    fits = []
+
+    def reconstruct(rig, desired, *, method, **_kw):
+        method.identify(*_records(np.linspace(1.0, 2.0, 40)))
+        return types.SimpleNamespace(method=method, errors=[[0.0]], desired=desired)
+
+    monkeypatch.setattr(vrig, "load_rig", lambda name, **_kw: types.SimpleNamespace(name=name))
+    monkeypatch.setattr(vrig, "reconstruct", reconstruct)
+    monkeypatch.setattr(
+        thesis_tables, "_desired", lambda *_a: _records(np.ones(40))[1]
+    )
+    table = Table(
+        "Table X", "shaker", (0.0, 10.0), ["r"],
+        [Row("text row", lambda: _Gain(fits)), Row("vrig: slow", lambda: _Gain(fits), quick=False)],
+        "True", "",
+    )  # fmt: skip
+    kw = {"seconds": 1.0, "id_seconds": 1.0, "log": lambda *_: None}
+    assert thesis_tables.run_table(table, cache={}, quick=True, **kw) == [[0.0], NOT_IN_QUICK]
+    assert len(fits) == 1  # the slow row was not fitted
+    assert thesis_tables.run_table(table, cache={}, **kw) == [[0.0], [0.0]]
+    assert len(fits) == 3  # the full report fits both
