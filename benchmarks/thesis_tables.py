@@ -9,7 +9,10 @@ own kind of desired response (:attr:`Table.target`): a service record of the rig
 (:mod:`vrig.service`: the specimen in its vehicle driven over a road) where the text's target was
 a field measurement (6.3 the slow ditch, 6.12 a road record, 3.4 and 3.5 road simulations), a
 pseudo-field record (the rig's response to a road-like drive, §6.5) where the text used one
-(6.16); every table is also run on a pseudo-field record, printed beside it. The figures are η0 (eq. 5-28, %) of ITxxRES against DESRES, except Table 3.7 (the
+(6.16); every table is also run on a pseudo-field record, printed beside it (a row's inverse is
+fitted once for both targets where its identification records are the same, as they are unless
+the row matches the identification to its target: :mod:`benchmarks.shared_fits`). The figures
+are η0 (eq. 5-28, %) of ITxxRES against DESRES, except Table 3.7 (the
 inverse model's free-run error on a held-out identification record). Each table ends with the
 qualitative verdict: does vrig give the text's *ordering* of the methods? The absolute values
 are not expected to match (other rigs, other field data); the ordering is the physics.
@@ -22,6 +25,15 @@ between measured channels (:data:`NORMAL_TABLES`): 6.5 (damper error-signal mode
 six wheel forces -> ball joint / nine control-arm channels, split spectra at 2 Hz), each fitted
 on one identification-type record and scored by η0 in free run on a held-out record, at 5 % and
 20 % of the drives' full scale RMS (halved while the rig trips).
+
+``--quick``: desired responses of 20 s and identification records of 30 s (instead of 30 s and
+60 s), without the rows marked :attr:`Row.quick` False (Table 6.16's two vrig-only SEMP rows,
+whose cubic SEMP over every lead candidate took 30 % of the quick report's time; their cells
+say :data:`NOT_IN_QUICK`; every row of the text is run, so every verdict is there).
+
+The run ends with each table's wall time (the slowest first) and its total (also the report's
+last line); NumPy's BLAS gets one thread unless ``OPENBLAS_NUM_THREADS`` etc. are set
+(:mod:`benchmarks.threads`).
 
 ``--variant NAME``: each table runs on the rig's variant NAME where the rig has it, else on the
 rig's default variant (e.g. the motorcycle has no ``"thesis"``); several names run each table
@@ -69,6 +81,11 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import NamedTuple
 
+from benchmarks.threads import one_blas_thread
+
+if __name__ == "__main__":  # before NumPy loads its BLAS: one thread (benchmarks/threads.py)
+    one_blas_thread()
+
 import numpy as np
 
 from vrig.files import atomic_write
@@ -87,6 +104,7 @@ __all__ = [
     "run_normal_table",
     "table_3_7",
     "thesis_report",
+    "time_summary",
 ]
 
 
@@ -100,6 +118,12 @@ class Row:
     iteration: int = 0  # which ITxxRES the text reports
     thesis: tuple = ()  # the text's figure(s) [%], one per reported channel
     key: str = ""  # identifies a reconstruction run shared by rows (IT00 and IT05 of one run)
+    quick: bool = True  # False: the full report only; a --quick report says so (NOT_IN_QUICK)
+
+
+NOT_IN_QUICK = "not run with --quick: the full report has it"
+"""The cell of a row left out of ``--quick`` (:attr:`Row.quick` False: a vrig-only row whose fit
+takes minutes; none of the text's rows is left out, so every verdict stays)."""
 
 
 @dataclass
@@ -207,10 +231,13 @@ TABLES = [
                 _narx(4, 3, kind="input-polynomial"),
                 thesis=(None,),
             ),
+            # the two SEMP rows: 30 % of the --quick report's time on their own (cubic SEMP
+            # over every lead candidate), so they run in the full report only
             Row(
                 "vrig: NARX 4th order cubic, terms by free run (SEMP), simulation focus, IT00",
                 _narx(4, 3, kind="full", focus="simulation", selection="simulation"),
                 thesis=(None,),
+                quick=False,
             ),
             Row(
                 "vrig: the same plus dead-zone/saturation/|x| terms of the load (§7.4.1), IT00",
@@ -223,6 +250,7 @@ TABLES = [
                     functions=[("saturation", "auto"), ("deadzone", "auto"), "abs", "sign_square"],
                 ),
                 thesis=(None,),
+                quick=False,
             ),
         ],
         "v[1][0] < v[2][0] < v[0][0]",
@@ -637,7 +665,8 @@ def run_normal_table(table: NormalTable, *, seconds: float, level: float, varian
         except Exception as exc:  # the honest figure is the failure
             values.append(f"{type(exc).__name__}: {str(exc).splitlines()[0][:160]}")
             notes.append("")
-            log(f"  {row.label} @ {level:.0%} FS: FAILED {values[-1]}")
+            log(f"  {row.label} @ {level:.0%} FS: FAILED {values[-1]} "
+                f"({time.perf_counter() - t0:.0f} s)")  # fmt: skip
     return values, notes, rms_text
 
 
@@ -688,8 +717,9 @@ def _markdown_normal(table: NormalTable, runs) -> str:
     return "\n".join(lines)
 
 
-def normal_report(requested, severity, *, seconds: float, log=print) -> list:
-    """Run the normal tables (each per requested variant and drive level): markdown parts."""
+def normal_report(requested, severity, *, seconds: float, log=print, times=None) -> list:
+    """Run the normal tables (each per requested variant and drive level): markdown parts.
+    ``times`` (a list, optional) gets ``(table name, wall time [s])`` per table."""
     parts = []
     for table in NORMAL_TABLES:
         t0 = time.perf_counter()
@@ -706,9 +736,10 @@ def normal_report(requested, severity, *, seconds: float, log=print) -> list:
                 values, notes, rms_text = done[(setting, level)]
                 runs.append((f"{req or setting[0]}, {level:.0%} FS", _setting_text(setting, req),
                              values, notes, rms_text))  # fmt: skip
-        parts.append(
-            _markdown_normal(table, runs) + f"_wall time {time.perf_counter() - t0:.0f} s_\n"
-        )
+        wall = time.perf_counter() - t0
+        parts.append(_markdown_normal(table, runs) + f"_wall time {wall:.0f} s_\n")
+        if times is not None:
+            times.append((table.name.split(":")[0], wall))
     return parts
 
 
@@ -809,6 +840,9 @@ def _desired(rig, band, seconds, cache, target: str = "pseudo-field"):
     return cache[key]
 
 
+_SHARED = "; fit shared with the run on the other target: same identification records"
+
+
 def run_table(
     table: Table,
     *,
@@ -818,14 +852,24 @@ def run_table(
     variant: str | None = None,
     severity: float | None = None,
     target: str = "pseudo-field",
+    quick: bool = False,
     log=print,
 ):
     """vrig's figures for one table: a list (per row) of per-channel values or an error string.
 
+    ``quick``: the rows with :attr:`Row.quick` False are not run; their value is
+    :data:`NOT_IN_QUICK`.
+
     ``variant``/``severity``: as resolved by :func:`resolve_variant`/:func:`resolve_severity`
     (``None``: the rig's default, as loaded). ``target``: the desired response's kind
-    (:func:`vrig.field.desired_response`: ``"pseudo-field"`` or ``"field:<scenario>"``)."""
+    (:func:`vrig.field.desired_response`: ``"pseudo-field"`` or ``"field:<scenario>"``).
+    ``cache``: the desired responses and, under ``"fits"``, the rows' inverse fits, shared
+    between the runs of a row on the same identification records
+    (:class:`~benchmarks.shared_fits.SharedFit`: the default identification does not depend on
+    the target, so a row's pseudo-field run reuses its field run's fit; an ``id_match`` row
+    fits again)."""
     import vrig
+    from benchmarks.shared_fits import SharedFit
 
     rig = vrig.load_rig(table.rig, seed=0, variant=variant, severity=severity)
     try:
@@ -834,17 +878,21 @@ def run_table(
         why = f"no {target} target: {type(exc).__name__}: {str(exc).splitlines()[0][:160]}"
         log(f"  {why}")
         return [why] * len(table.rows)
-    runs, values = {}, []
+    runs, values, fits = {}, [], cache.setdefault("fits", {})
     for row in table.rows:
+        if quick and not row.quick:
+            values.append(NOT_IN_QUICK)
+            continue
         key = row.key or row.label
         if key not in runs:
             iterations = max(r.iteration for r in table.rows if (r.key or r.label) == key)
             t0 = time.perf_counter()
+            method = SharedFit(row.method(), (table.name, key, variant, severity), fits)
             try:
                 runs[key] = vrig.reconstruct(
                     rig,
                     desired,
-                    method=row.method(),
+                    method=method,
                     iterations=iterations,
                     bandwidth=table.band,
                     id_duration=id_seconds,
@@ -852,11 +900,15 @@ def run_table(
                     **row.options,  # e.g. id_match: the identification matched to the target
                 )
                 log(
-                    f"  {row.label}: {runs[key].method.describe()} ({time.perf_counter() - t0:.0f} s)"
+                    f"  {row.label}: {runs[key].method.describe()} ({time.perf_counter() - t0:.0f} s"
+                    f"{_SHARED if method.shared else ''})"
                 )
             except Exception as exc:  # the honest figure is the failure
                 runs[key] = f"{type(exc).__name__}: {str(exc).splitlines()[0][:160]}"
-                log(f"  {row.label}: FAILED {runs[key]}")
+                log(
+                    f"  {row.label}: FAILED {runs[key]} ({time.perf_counter() - t0:.0f} s"
+                    f"{_SHARED if method.shared else ''})"
+                )
         res = runs[key]
         if isinstance(res, str):
             values.append(res)
@@ -1411,7 +1463,7 @@ def _check_variants(variants) -> list:
     return list(variants)
 
 
-def _table_runs(table, requested, severity, seconds, id_seconds, cache, log) -> list:
+def _table_runs(table, requested, severity, seconds, id_seconds, cache, log, quick=False) -> list:
     """The table run once per requested variant and per target: the text's kind of target
     first, then the pseudo-field record beside it (once, where the text's kind is pseudo-field);
     a list of :class:`TableRun` for :func:`_markdown`."""
@@ -1424,7 +1476,7 @@ def _table_runs(table, requested, severity, seconds, id_seconds, cache, log) -> 
                 log(f"{table.name} [{_setting_text(setting, req)}, {target}]")
                 done[setting, target] = run_table(
                     table, seconds=seconds, id_seconds=id_seconds, cache=cache,
-                    variant=setting[0], severity=setting[1], target=target, log=log,
+                    variant=setting[0], severity=setting[1], target=target, quick=quick, log=log,
                 )  # fmt: skip
             name = f"{req or setting[0]}, {target}"
             text = f"{_setting_text(setting, req)} with a {target} desired response"
@@ -1440,12 +1492,16 @@ def thesis_report(
     *,
     variants=None,
     severity: float | None = None,
+    times: list | None = None,
 ) -> str:
     """Run every table, write the report into ``out_dir`` (:func:`report_name`) and return it.
 
     ``variants``: names, each table run once per name on the rig's variant of that name where
     it has one, else its default (``None``: once, on each rig's default variant).
-    ``severity``: in [0, 2], for the rigs with a severity axis (``None``: as loaded)."""
+    ``severity``: in [0, 2], for the rigs with a severity axis (``None``: as loaded).
+    ``times`` (a list, optional) gets ``(table, wall time [s])`` per table (Table 3.7 and the
+    Belgian road example once per variant), in the order they ran; the report's last line
+    gives the same per table and the total."""
     requested = _check_variants(variants)
     if severity is not None and not (0.0 <= float(severity) <= 2.0):
         raise ValueError(f"severity must lie in [0, 2], got {severity!r}")
@@ -1472,25 +1528,31 @@ def thesis_report(
         "",
     ]
     cache: dict = {}
-    table_runs, runs_3_7 = [], []
+    table_runs, runs_3_7, times = [], [], [] if times is None else times
     for table in TABLES:
-        runs = _table_runs(table, requested, severity, seconds, id_seconds, cache, log)
+        t = time.perf_counter()
+        runs = _table_runs(table, requested, severity, seconds, id_seconds, cache, log, quick)
+        times.append((table.name.split(":")[0], time.perf_counter() - t))
         table_runs.append((table, runs))
         parts.append(_markdown(table, runs))
-    parts += normal_report(requested, severity, seconds=id_seconds, log=log)
+    parts += normal_report(requested, severity, seconds=id_seconds, log=log, times=times)
     settings_7 = {}
     for req in requested:
         settings_7.setdefault(resolve_variant("fuel-tank-7ch", req), req)
     for variant, req in settings_7.items():
         text = _setting_text((variant, None), req)
         log(f"Table 3.7: seven-channel fuel tank [{text}]")
+        t = time.perf_counter()
         names, out = table_3_7(seconds=id_seconds, variant=variant, log=log)
         runs_3_7.append((variant, names, out))
         parts.append(_markdown_3_7(names, out, text))
         log(f"Belgian road on the seven-channel fuel tank [{text}]")
+        t1 = time.perf_counter()
         parts.append(belgian_road_example(seconds=seconds, variant=variant, log=log))
+        times += [("Table 3.7", t1 - t), ("Belgian road", time.perf_counter() - t1)]
     parts.append(closing_table(table_runs, runs_3_7))
-    parts.append(f"_wall time {time.perf_counter() - t0:.0f} s_\n")
+    per_table = ", ".join(f"{name} {sec:.0f} s" for name, sec in times)
+    parts.append(f"_wall time per table: {per_table}; total {time.perf_counter() - t0:.0f} s_\n")
     text = "\n".join(parts)
     with atomic_write(out_dir / report_name(variants, severity), "w", encoding="utf-8") as f:
         f.write(text)
@@ -1501,7 +1563,12 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(
         prog="python -m benchmarks.thesis_tables", description=__doc__.split("\n")[0]
     )
-    ap.add_argument("--quick", action="store_true", help="shorter records (about half the time)")
+    ap.add_argument(
+        "--quick",
+        action="store_true",
+        help="shorter records (desired 20 s, identification 30 s instead of 30 s and 60 s), "
+        "without the vrig-only rows of the full report (Table 6.16's two SEMP rows)",
+    )
     ap.add_argument(
         "--out", default="results/thesis", help="output folder (default results/thesis)"
     )
@@ -1520,14 +1587,39 @@ def main(argv=None) -> int:
         "(default: as loaded); the linear rigs run as loaded",
     )
     args = ap.parse_args(argv)
+    t0, times = time.perf_counter(), []
     try:
         text = thesis_report(
-            args.out, quick=args.quick, variants=args.variant, severity=args.severity
+            args.out, quick=args.quick, variants=args.variant, severity=args.severity, times=times
         )
     except ValueError as exc:
         ap.error(str(exc))
     print(text)
+    for line in time_summary(times, time.perf_counter() - t0):
+        print(line)
     return 0
+
+
+def time_summary(times, wall_s: float) -> list[str]:
+    """The end-of-run lines of ``python -m benchmarks.thesis_tables``: each table's wall time
+    and share of the run, the slowest first, then the run's total wall time.
+
+    Parameters
+    ----------
+    times : list of (str, float)
+        ``(table, wall time [s])`` as :func:`thesis_report` fills them.
+    wall_s : float
+        The whole run's wall time [s].
+
+    Returns
+    -------
+    list of str
+    """
+    lines = ["", "wall time per table (slowest first):"]
+    for name, sec in sorted(times, key=lambda t: -t[1]):
+        lines.append(f"  {sec:7.1f} s {100 * sec / max(wall_s, 1e-12):5.1f} %  {name}")
+    lines.append(f"wall time {wall_s:.0f} s ({wall_s / 60:.1f} min), the whole run")
+    return lines
 
 
 if __name__ == "__main__":

@@ -267,7 +267,7 @@ def test_kill_9_of_the_runner_leaves_no_worker_or_thesis_process(tmp_path):
         sys.executable, "-m", "benchmarks", "run", "--rigs", "shock-absorber", "--methods",
         "sleepy", "--desired", "0", "--seconds", "4", "--iterations", "0", "--fidelity",
         "fast", "--backend", "process", "--workers", "1", "--plugin", str(plugin), "--no-plots",
-        "--quick", "--out", str(out),
+        "--quick", "--thesis", "--out", str(out),
     ]  # fmt: skip
     proc = subprocess.Popen(
         cmd, cwd=ROOT, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE
@@ -366,6 +366,66 @@ def test_the_thesis_report_does_not_overlap_another_runs(tmp_path, monkeypatch):
         holder.wait()
     line, ok = run_child()  # the holder is dead: its lock is stale
     assert ok and "skipped" not in line and calls == [tmp_path]
+
+
+class _FakeThesis:
+    """Stands in for the runner's thesis process: runs nothing."""
+
+    def result(self):
+        return "thesis reproduction (stand-in)", True
+
+    def stop(self):
+        pass
+
+
+def test_quick_leaves_the_thesis_out_unless_asked_and_ends_with_the_times(
+    tmp_path, monkeypatch, capsys
+):
+    """``run --quick`` starts no thesis reproduction (``--thesis`` does, as the full run does)
+    and ends with the record times (the slowest first) and the run's wall time, last."""
+    from benchmarks.runner import cli
+
+    started = []
+    monkeypatch.setattr(
+        cli, "_Thesis", lambda out, quick: started.append((out, quick)) or _FakeThesis()
+    )
+    args = ["run", "--quick", "--rigs", "shock-absorber", "--methods", "arx", "frf",
+            "--seconds", "4", "--iterations", "1", "--backend", "serial", "--no-plots"]  # fmt: skip
+    assert cli.main([*args, "--out", str(tmp_path / "q")]) == 0
+    lines = capsys.readouterr().out.rstrip().splitlines()
+    assert started == [] and cli.QUICK_THESIS_NOTE in lines
+    assert lines[-1].startswith("wall time ") and lines[-1].endswith("the whole run")
+    first = lines.index(next(ln for ln in lines if ln.startswith("records     2 computed")))
+    times = lines[first + 1 : first + 3]
+    ids = [ln.split()[-1] for ln in times]
+    assert sorted(ids) == ["shock-absorber--arx--d0--s0", "shock-absorber--frf--d0--s0"]
+    recs = {r["id"]: r for r in json.loads((tmp_path / "q" / "records.json").read_text())}
+    secs = [recs[i]["timing"]["record_s"] for i in ids]
+    assert secs == sorted(secs, reverse=True)  # the slowest first
+    assert cli.main([*args, "--thesis", "--out", str(tmp_path / "t")]) == 0
+    assert started == [(tmp_path / "t", True)]
+    assert "thesis reproduction (stand-in)" in capsys.readouterr().out
+
+
+def test_thesis_and_no_thesis_together_are_refused(capsys):
+    from benchmarks.runner import cli
+
+    assert cli.main(["run", "--quick", "--thesis", "--no-thesis"]) == 2
+    assert "--thesis and --no-thesis" in capsys.readouterr().err
+
+
+def test_the_time_summary_lists_this_runs_records_slowest_first():
+    from benchmarks.runner.cli import timing_lines
+
+    def rec(name, seconds, status="ok"):
+        return {"id": name, "status": status, "timing": {"record_s": seconds}}
+
+    records = [rec("a", 1.0), rec("b", 5.0, "failed"), rec("c", 3.0), rec("old", 100.0)]
+    lines = timing_lines(records, ["a", "b", "c"], 6.0, slowest=2)
+    assert lines[0].startswith("records     3 computed in 6 s of wall time (9 s summed")
+    assert [ln.split()[-1] for ln in lines[1:]] == ["(failed)", "c"]  # "old" was resumed
+    assert "b (failed)" in lines[1] and f"{100 * 5 / 9:5.1f} %" in lines[1]
+    assert len(timing_lines(records, [], 0.0)) == 1  # nothing computed: one line says so
 
 
 def test_a_long_record_gets_status_lines_on_stderr(tmp_path, monkeypatch, capsys):

@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import json
 
+import numpy as np
 import pytest
 
 from benchmarks import calibrate, thesis_tables
@@ -417,3 +418,153 @@ def test_each_table_runs_on_the_texts_kind_of_target_and_on_pseudo_field(tmp_pat
         ran = [t for r, _v, t in calls.targets if r == table.rig]
         want = [texts[table.rig], "pseudo-field"] if table.rig in texts else ["pseudo-field"]
         assert ran == want, table.name
+
+
+# ------------------------------------------------------------------ shared fits, run times
+
+
+class _Gain:
+    """A method fitting one least-squares gain drive = g * response; counts its fits."""
+
+    def __init__(self, fits: list):
+        self.fits, self.gain = fits, None
+
+    def identify(self, iddrv, idres):
+        self.fits.append(idres.data.copy())
+        if np.any(idres.data < 0):
+            raise ValueError("no gain for a negative response")
+        x, y = idres.data[:, 0], iddrv.data[:, 0]
+        self.gain = float(x @ y / (x @ x))
+
+    def drive(self, response):
+        return self.gain * response.data
+
+    def describe(self):
+        return f"gain {self.gain:g}"
+
+
+def _records(response, gain=2.0):
+    from vrig.timehistory import TimeHistory
+
+    r = np.asarray(response, float)[:, None]
+    return TimeHistory(gain * r, 100.0, ["d"], ["m"]), TimeHistory(r, 100.0, ["r"], ["N"])
+
+
+def test_a_shared_fit_is_reused_only_on_equal_records_under_the_same_tag():
+    from benchmarks.shared_fits import SharedFit
+
+    fits, store = [], {}
+    ramp = np.linspace(1.0, 2.0, 50)
+    first = SharedFit(_Gain(fits), "row", store)
+    first.identify(*_records(ramp))
+    second = SharedFit(_Gain(fits), "row", store)
+    second.identify(*_records(ramp.copy()))  # equal records, other objects: no second fit
+    assert len(fits) == 1 and second.shared == 1 and second.method is not first.method
+    assert second.gain == pytest.approx(2.0) and second.describe() == "gain 2"
+    np.testing.assert_allclose(second.drive(_records(ramp)[1]), 2.0 * ramp[:, None])
+    bumped = ramp.copy()
+    bumped[17] += 1e-12  # one sample differs: fitted again
+    SharedFit(_Gain(fits), "row", store).identify(*_records(bumped))
+    SharedFit(_Gain(fits), "other row", store).identify(*_records(ramp))  # another tag
+    assert len(fits) == 3
+    for _ in range(2):  # a fit that raised raises again, without fitting again
+        with pytest.raises(ValueError, match="negative"):
+            SharedFit(_Gain(fits), "row", store).identify(*_records(-ramp))
+    assert len(fits) == 4
+
+
+def test_a_tables_two_targets_share_the_fit_of_equal_identification_records(monkeypatch):
+    """The default identification does not depend on the target: a row fits once for both
+    targets; an id_match row (records matched to each target) fits once per target."""
+    import types
+
+    import vrig
+    from benchmarks.thesis_tables import Row, Table
+
+    fits = []
+    targets = {"field:road": 3.0, "pseudo-field": 5.0}
+
+    def reconstruct(rig, desired, *, method, id_match=False, **_kw):
+        level = float(desired.data[0, 0]) if id_match else 1.0  # matched: the target's level
+        method.identify(*_records(level * np.linspace(1.0, 2.0, 40)))
+        return types.SimpleNamespace(
+            method=method, errors=[[100 * abs(method.gain - 2.0)]], desired=desired
+        )
+
+    monkeypatch.setattr(vrig, "load_rig", lambda name, **_kw: types.SimpleNamespace(name=name))
+    monkeypatch.setattr(vrig, "reconstruct", reconstruct)
+    monkeypatch.setattr(
+        thesis_tables,
+        "_desired",
+        lambda rig, band, seconds, cache, target: _records(np.full(40, targets[target]))[1],
+    )
+    table = Table(
+        "Table X", "shaker", (0.0, 10.0), ["r"],
+        [Row("default", lambda: _Gain(fits)), Row("matched", lambda: _Gain(fits),
+                                                  options={"id_match": True})],
+        "True", "",
+    )  # fmt: skip
+    cache, logged = {}, []
+    for target in targets:
+        values = thesis_tables.run_table(
+            table, seconds=1.0, id_seconds=1.0, cache=cache, target=target, log=logged.append
+        )
+        assert values == [[pytest.approx(0.0)], [pytest.approx(0.0)]]  # the gain 2 of the data
+    assert len(fits) == 3  # default: once; matched: once per target
+    shared = [ln for ln in logged if "fit shared" in ln]
+    assert len(shared) == 1 and shared[0].startswith("  default:")
+
+
+def test_the_run_ends_with_each_tables_wall_time_and_the_total(tmp_path, monkeypatch, capsys):
+    _fake_runs(monkeypatch)
+    assert thesis_tables.main(["--quick", "--out", str(tmp_path)]) == 0
+    lines = capsys.readouterr().out.rstrip().splitlines()
+    assert lines[-1].startswith("wall time ") and lines[-1].endswith("the whole run")
+    head = lines.index("wall time per table (slowest first):")
+    names = [ln.split("%  ", 1)[1] for ln in lines[head + 1 : -1]]
+    want = [t.name.split(":")[0] for t in TABLES + thesis_tables.NORMAL_TABLES]
+    assert sorted(names) == sorted([*want, "Table 3.7", "Belgian road"])
+    report = (tmp_path / "thesis_reproduction.md").read_text().rstrip().splitlines()[-1]
+    assert report.startswith("_wall time per table: ") and all(n in report for n in want)
+
+
+def test_quick_leaves_out_only_vrig_rows_and_says_so_in_their_cells(monkeypatch):
+    """--quick runs every row of the text (so every verdict) and leaves out only the rows
+    marked full-run-only: Table 6.16's two SEMP rows, whose cells then say so."""
+    import types
+
+    import vrig
+    from benchmarks.thesis_tables import NOT_IN_QUICK, Row, Table
+
+    left_out = [(t.name.split(":")[0], r.label) for t in TABLES for r in t.rows if not r.quick]
+    assert [name for name, _ in left_out] == ["Table 6.16"] * 2
+    assert all(label.startswith("vrig:") for _, label in left_out)  # no text figure lost
+    semp = {  # rows whose terms are chosen by free run (SEMP)
+        r.label
+        for t in TABLES
+        for r in t.rows
+        if callable(r.method) and r.method().options().get("selection") == "simulation"
+    }
+    assert {label for _, label in left_out} <= semp
+
+    fits = []
+
+    def reconstruct(rig, desired, *, method, **_kw):
+        method.identify(*_records(np.linspace(1.0, 2.0, 40)))
+        return types.SimpleNamespace(method=method, errors=[[0.0]], desired=desired)
+
+    monkeypatch.setattr(vrig, "load_rig", lambda name, **_kw: types.SimpleNamespace(name=name))
+    monkeypatch.setattr(vrig, "reconstruct", reconstruct)
+    monkeypatch.setattr(
+        thesis_tables, "_desired", lambda *_a: _records(np.ones(40))[1]
+    )
+    table = Table(
+        "Table X", "shaker", (0.0, 10.0), ["r"],
+        [Row("text row", lambda: _Gain(fits)), Row("vrig: slow", lambda: _Gain(fits), quick=False)],
+        "True", "",
+    )  # fmt: skip
+    kw = {"seconds": 1.0, "id_seconds": 1.0, "log": lambda *_: None}
+    assert thesis_tables.run_table(table, cache={}, quick=True, **kw) == [[0.0], NOT_IN_QUICK]
+    assert len(fits) == 1  # the slow row was not fitted
+    assert thesis_tables.run_table(table, cache={}, **kw) == [[0.0], [0.0]]
+    assert len(fits) == 3  # the full report fits both

@@ -2,11 +2,12 @@
 
 ::
 
-    python -m benchmarks run --quick                       # ~8 min on 2 shared cores
+    python -m benchmarks run --quick [--thesis]            # ends with its slowest records, wall time
     python -m benchmarks run [--rigs R ...] [--methods M ...] [--desired D ...] [--seeds S ...]
                              [--severity S ...] [--targets T ...] [--out DIR]
                              [--backend process|serial|ray] [--workers N]
                              [--address RAY_ADDRESS] [--plugin MODULE_OR_FILE.py ...]
+                             [--no-thesis]
     python -m benchmarks report --out DIR                  # rebuild leaderboard/plots
     python -m benchmarks list                              # rigs and registered methods
 
@@ -29,6 +30,7 @@ import time
 from dataclasses import asdict, replace
 from pathlib import Path
 
+from ..threads import one_blas_thread
 from .execute import BACKENDS, SettingsMismatchError, Store, execute, write_atomic
 from .lifetime import LockHeldError, PidLock, die_with_parent
 from .record import (
@@ -61,7 +63,7 @@ FULL = Settings(seconds=30.0, iterations=5, gain=0.8, fidelity="full", tolerance
 """The full run: every rig × every registered method × desired 0, 1, 2 × seed 0."""
 QUICK = Settings(seconds=12.0, iterations=3, gain=0.8, fidelity="fast", tolerance=5.0)
 """``--quick``: every rig but fuel-tank-7ch × the quick methods × desired 0 × seed 0, short
-records, fast rigs."""
+records, fast rigs; no thesis reproduction (``--thesis`` adds it; see :data:`QUICK_THESIS_NOTE`)."""
 FULL_DESIRED, QUICK_DESIRED = (0, 1, 2), (0,)
 QUICK_EXCLUDED_RIGS = ("fuel-tank-7ch",)
 """Left out of ``--quick``: a 7 × 7 record takes minutes (delay estimation and inverse fits of
@@ -126,7 +128,15 @@ def _parser() -> argparse.ArgumentParser:
     )
     run.add_argument("--no-plots", action="store_true", help="skip the plots")
     run.add_argument("--policies", type=Path, default=POLICIES, help=_POLICIES_HELP)
-    run.add_argument("--no-thesis", action="store_true", help="skip the thesis reproduction")
+    run.add_argument(
+        "--no-thesis", action="store_true", help="skip the thesis reproduction (full run)"
+    )
+    run.add_argument(
+        "--thesis",
+        action="store_true",
+        help="with --quick: run the thesis reproduction alongside the records too (not part of "
+        "--quick; python -m benchmarks.thesis_tables --quick runs it alone)",
+    )
     run.add_argument("--quiet", action="store_true", help="no per-record lines")
 
     rep = sub.add_parser("report", help="rebuild records.json/.csv, leaderboard and plots")
@@ -176,6 +186,22 @@ def _code_version() -> dict:
     except (OSError, subprocess.CalledProcessError):
         pass
     return info
+
+
+QUICK_THESIS_NOTE = (
+    "thesis reproduction not part of --quick (python -m benchmarks.thesis_tables --quick runs "
+    "it alone; --thesis runs it alongside the records)"
+)
+
+
+def _thesis_skipped(args) -> str | None:
+    """Why this run does not start the thesis reproduction (None: it does): ``--no-thesis``,
+    or ``--quick`` without ``--thesis``."""
+    if args.no_thesis:
+        return "thesis reproduction skipped (--no-thesis)"
+    if args.quick and not args.thesis:
+        return QUICK_THESIS_NOTE
+    return None
 
 
 def _thesis_available() -> str | None:
@@ -247,6 +273,7 @@ class _Thesis:
     def __init__(self, out: Path, quick: bool):
         import multiprocessing
 
+        one_blas_thread()  # it runs beside the record workers (benchmarks/threads.py)
         ctx = multiprocessing.get_context("spawn")
         self.recv, send = ctx.Pipe(duplex=False)
         self.proc = ctx.Process(
@@ -340,8 +367,8 @@ def cmd_run(args) -> int:
     if threading.current_thread() is threading.main_thread():  # SIGTERM -> clean stop
         signal.signal(signal.SIGTERM, _terminate)
     thesis = None
-    thesis_line, ok = "thesis reproduction skipped (--no-thesis)", True
-    if not args.no_thesis:
+    thesis_line, ok = _thesis_skipped(args), True
+    if thesis_line is None:
         why_not = _thesis_available()
         if why_not:
             thesis_line = f"thesis reproduction skipped: {why_not}"
@@ -413,8 +440,52 @@ def cmd_run(args) -> int:
     if n_plots:
         print(f"plots       {out / 'plots'}/ ({n_plots} figures)")
     print(thesis_line)
-    print(f"wall time   {wall:.0f} s")
+    for line in timing_lines(records, summary["computed"], summary["wall_s"]):
+        print(line)
+    print(f"wall time   {wall:.0f} s ({wall / 60:.1f} min), the whole run")
     return 0 if ok else 1
+
+
+SLOWEST = 8
+"""How many records the end-of-run time summary lists (the slowest first)."""
+
+
+def timing_lines(records: list[dict], computed, records_wall_s: float, *,
+                 slowest: int = SLOWEST) -> list[str]:  # fmt: skip
+    """The end-of-run time summary of the records computed in this run: their wall time, the
+    sum of their ``record_s`` and the ``slowest`` of them (seconds and share of the sum).
+
+    Parameters
+    ----------
+    records : list of dict
+        The run's records (those resumed from an earlier run are left out: their times are not
+        this run's).
+    computed : collection of str
+        Ids of the records computed in this run.
+    records_wall_s : float
+        Wall time [s] of the records' phase (the pool, or the serial loop).
+    slowest : int
+        How many records to list.
+
+    Returns
+    -------
+    list of str
+        Lines to print.
+    """
+    ids = set(computed)
+    now = sorted((r for r in records if r["id"] in ids), key=lambda r: -r["timing"]["record_s"])
+    if not now:
+        return ["records     none computed in this run (every record resumed): no record times"]
+    total = sum(r["timing"]["record_s"] for r in now)
+    lines = [
+        f"records     {len(now)} computed in {records_wall_s:.0f} s of wall time ({total:.0f} s "
+        f"summed over the records); the slowest {min(slowest, len(now))}:"
+    ]
+    for r in now[:slowest]:
+        t = r["timing"]["record_s"]
+        failed = "" if r["status"] == "ok" else " (failed)"
+        lines.append(f"  {t:7.1f} s {100 * t / max(total, 1e-12):5.1f} %  {r['id']}{failed}")
+    return lines
 
 
 def cmd_report(args) -> int:
@@ -513,6 +584,8 @@ def _note_skipped(target: str, skipped: list[str], why: str, n_rigs: int) -> Non
 
 
 def _check_run_args(args) -> None:
+    if args.thesis and args.no_thesis:
+        raise _BadInput("--thesis and --no-thesis contradict each other: give one")
     if args.workers is not None and args.workers < 1:
         raise _BadInput(f"--workers must be >= 1, got {args.workers}")
     for flag, values in (("--desired", args.desired), ("--seeds", args.seeds)):

@@ -10,7 +10,8 @@ record of this run (cut short, tampered with, another record's, another run's, N
 
 Backends: ``serial`` (this process), ``process`` (default: a ``ProcessPoolExecutor`` with the
 *spawn* start method, safest with MuJoCo and numba; its workers die with the runner, even on a
-``kill -9``: :func:`~.lifetime.die_with_parent`) and ``ray`` (an existing Ray cluster with
+``kill -9``: :func:`~.lifetime.die_with_parent`; each uses one BLAS thread unless
+``OPENBLAS_NUM_THREADS`` etc. are set: :mod:`benchmarks.threads`) and ``ray`` (an existing Ray cluster with
 ``--address``, else a local one). Every backend runs the same pure function
 :func:`~.record.compute_record` on the same keys, so the records are identical; only the
 parent process writes files.
@@ -33,6 +34,7 @@ from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import asdict
 from pathlib import Path
 
+from ..threads import one_blas_thread
 from .lifetime import die_with_parent
 from .record import SCHEMA, RecordKey, Settings, check_record, compute_record, record_id
 
@@ -138,6 +140,7 @@ def _serial(keys, settings, specs, workers, address, on_done):
 
 
 def _process(keys, settings, specs, workers, address, on_done):
+    one_blas_thread()  # the workers are the parallelism: one BLAS thread each (threads.py)
     ctx = multiprocessing.get_context("spawn")
     pool = ProcessPoolExecutor(
         max_workers=max(1, min(workers, len(keys))),

@@ -133,5 +133,6 @@ print((out / "leaderboard.md").read_text())
 # `records.json`/`records.csv` and one JSON file per record under `records/`: running the same
 # command again computes nothing (it resumes), and adding a method or rig computes only the new
 # records. `python -m benchmarks run --quick` (without `--rigs`/`--methods`) is the full quick
-# leaderboard (30 records, a few minutes), `python -m benchmarks run` the full one;
+# leaderboard (48 records; it prints its slowest records and its wall time at the end),
+# `python -m benchmarks run` the full one;
 # `benchmarks/README.md` describes the rest (Ray, severities, speed suites).
