@@ -3,7 +3,7 @@
 Run from the repository root::
 
     python -m benchmarks.public_data            # all four data sets, ~3-4 min on 2 busy cores
-    python -m benchmarks.public_data --quick    # smaller searches, no SysIdentPy F-16 run (~1 min)
+    python -m benchmarks.public_data --quick    # smaller searches, no SysIdentPy F-16 run, no NarxSearch rows
     python -m benchmarks.public_data --only silverbox f16 --no-sysidentpy
 
 The data are read from ``../shared/external-data/`` (next to the repository) or from the folder

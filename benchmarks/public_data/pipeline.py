@@ -60,7 +60,7 @@ def run_dataset(
         _transfer_rows(report, ds, prob, sim[0].model, "the first simulation-focus model")
     if ds.sweep is not None and not quick:
         _sweep_note(report, ds, prob, sels[0].best)
-    if ds.search is not None:
+    if ds.search is not None and not quick:  # a minute per data set: the full run only
         _search_row(report, ds, prob, quick)
     return Fitted(prob, sels, sim)
 
