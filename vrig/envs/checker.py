@@ -35,6 +35,9 @@ class ResetSafeEnvChecker(PassiveEnvChecker):
         The env to check.
     """
 
+    def __init__(self, env):
+        super().__init__(env)
+
     def reset(self, *, seed=None, options=None):
         """As :meth:`gymnasium.wrappers.PassiveEnvChecker.reset`; a first reset that raises is
         not recorded as the checked one.
