@@ -18,7 +18,6 @@ import sys
 from pathlib import Path
 
 import pytest
-import yaml
 
 ROOT = Path(__file__).resolve().parents[1]
 TUTORIALS = sorted((ROOT / "docs" / "tutorials").glob("*.py"))
@@ -32,6 +31,7 @@ def _hooks():
 
 
 pytest.importorskip("mkdocs")  # the docs extra: pip install -e ".[docs]"
+yaml = pytest.importorskip("yaml")  # comes with mkdocs
 hooks = _hooks()
 
 # what nbconvert (through mkdocs-jupyter) makes of a notebook: a heading with an id and an anchor
