@@ -151,6 +151,7 @@ def test_deterministic_under_a_seed():
     assert np.array_equal(np.concatenate(a.best_.coef_), np.concatenate(b.best_.coef_))
 
 
+@pytest.mark.slow  # a wall-time check: not in the default (CI) run, whose box is shared
 def test_budget_is_respected():
     """A grid far larger than the budget: the wall time stays within 20 % of the budget (one
     candidate at most overruns its prediction) and candidates are skipped for the budget."""
