@@ -29,8 +29,9 @@ Rejection (a candidate is never returned when)
 
 Search order and time budget
     Stage 1 fits every structure (order x degree x kind x functions) by least squares, with all
-    terms and, when ``"frols"`` is in ``selection``, with FROLS terms sized by ``criterion`` —
-    cheapest first (by term count). The structures are then ranked — the best by validation
+    terms and, when ``"frols"`` is in ``selection``, with FROLS terms sized by ``criterion`` and
+    at each size of ``n_terms`` — cheapest first (by term count). A sized FROLS path is its own
+    entry in stage 2 (refined there at that size). The structures are then ranked — the best by validation
     score and the best by one-step held-out error, alternately (simulation focus can make a
     structure whose least-squares fit diverges the best one; its one-step error says how much
     it can explain) — and stage 2 spends the rest of the budget on the expensive options
@@ -122,25 +123,35 @@ class SearchCandidate:
     lags : {"text", "sysidentpy"}
         Input lag convention: from 0 (the reference text's full-order structure, eq. 5-3: input
         lags 0..n) or from 1 (SysIdentPy's ``xlag=n``: input lags 1..n).
+    n_terms : int, optional
+        Terms per output channel of a FROLS or SEMP selection (None: sized by the criterion;
+        ignored with all terms).
     """
 
-    order: int | tuple[int, int]
+    order: int | tuple
     degree: int
     kind: str
     functions: tuple | None
     focus: str
     selection: str
     lags: str = "text"
+    n_terms: int | None = None
 
     @property
-    def lag_orders(self) -> tuple[int, int]:
-        """(largest output lag, largest input lag)."""
-        return (self.order, self.order) if isinstance(self.order, int) else self.order
+    def lag_orders(self) -> tuple:
+        """(largest output lag, largest input lag or one per input)."""
+        return _pair(self.order)
 
     @property
     def structure(self) -> tuple:
         """The structure part (order, degree, kind, functions)."""
         return (self.order, self.degree, self.kind, self.functions)
+
+    @property
+    def entry(self) -> tuple:
+        """What stage 2 ranks and refines: the structure and the selection size (``None``: all
+        terms, or sized by the criterion)."""
+        return (*self.structure, self.n_terms)
 
     @property
     def options(self) -> tuple[str, str]:
@@ -156,13 +167,16 @@ class SearchCandidate:
                 f if isinstance(f, str) else f"{f[0]}({f[1]})" for f in self.functions
             )
         how = {"all": "all terms", "frols": "FROLS", "simulation": "SEMP"}[self.selection]
+        if self.selection != "all" and self.n_terms is not None:
+            how += f" {self.n_terms} terms"
         fit = "LS" if self.focus == "prediction" else "sim. focus"
         na, nb = self.lag_orders
         first = 0 if self.lags == "text" else 1
+        ulags = "/".join(f"{first}..{b}" for b in (nb if isinstance(nb, tuple) else (nb,)))
         order = (
             f"order {na}"
             if isinstance(self.order, int) and first == 0
-            else f"y lags 1..{na}, u lags {first}..{nb}"
+            else f"y lags 1..{na}, u lags {ulags}"
         )
         return f"{order}, degree {self.degree}{kind}{funs}, {fit}, {how}"
 
@@ -179,12 +193,14 @@ class SearchCandidate:
         kw = dict(options)
         if self.selection != "all":
             kw.update(selection=("frols" if self.selection == "frols" else "simulation"))
-            kw.update(criterion=criterion)
+            if self.n_terms is None:
+                kw.update(criterion=criterion)
+            else:
+                kw.update(n_terms=self.n_terms)
         na, nb = self.lag_orders
-        if self.lags == "text":
-            kw.update(na=na, nb=nb + 1, nk=0)
-        else:
-            kw.update(na=na, nb=nb, nk=1)
+        text = self.lags == "text"
+        nb = [b + text for b in nb] if isinstance(nb, tuple) else nb + text
+        kw.update(na=na, nb=nb, nk=0 if text else 1)
         return Narx(
             degree=self.degree,
             kind=self.kind,
@@ -243,22 +259,49 @@ def _tuple(values, name: str) -> tuple:
 
 
 def _order_grid(values) -> tuple:
-    """Orders: ints n >= 0 or pairs (na, nb) of them; sorted by largest lag, duplicates
-    removed."""
+    """Orders: ints n >= 0 or pairs (na, nb) of them, nb an int or one int per input; sorted by
+    largest lag, duplicates removed."""
     out = []
     for v in _tuple(values, "orders"):
         if isinstance(v, Sequence) and not isinstance(v, str):
             pair = tuple(v)
             if len(pair) != 2:
                 raise IdentificationError(f"an order pair must be (na, nb), got {v!r}")
-            out.append(tuple(_int_grid(x, "orders", 0)[0] for x in pair))
+            na = _int_grid(pair[0], "orders", 0)[0]
+            nb = pair[1]
+            if isinstance(nb, Sequence) and not isinstance(nb, str):
+                if not nb:
+                    raise IdentificationError(f"per-input lags nb are empty in {v!r}")
+                nb = tuple(_int_grid(x, "orders", 0)[0] for x in nb)
+            else:
+                nb = _int_grid(nb, "orders", 0)[0]
+            out.append((na, nb))
         else:
             out.append(_int_grid(v, "orders", 0)[0])
-    return tuple(sorted(dict.fromkeys(out), key=lambda o: (max(_pair(o)), _pair(o))))
+
+    def key(o):
+        na, nb = _pair(o)
+        return (_largest_lag(o), na, nb if isinstance(nb, tuple) else (nb,))
+
+    return tuple(sorted(dict.fromkeys(out), key=key))
 
 
-def _pair(order) -> tuple[int, int]:
+def _pair(order) -> tuple:
     return (order, order) if isinstance(order, int) else order
+
+
+def _largest_lag(order) -> int:
+    """The largest lag of an order (an int, or (na, nb) with nb an int or one per input)."""
+    na, nb = _pair(order)
+    return max(na, *(nb if isinstance(nb, tuple) else (nb,)))
+
+
+def _size_grid(values) -> tuple:
+    """Selection sizes: None (the criterion) or ints >= 1; duplicates removed, None first."""
+    values = (None,) if values is None else _tuple(values, "n_terms")
+    sizes = [v for v in values if v is not None]
+    out = (None,) if len(sizes) < len(values) else ()
+    return out + (_int_grid(sizes, "n_terms", 1) if sizes else ())
 
 
 def _int_grid(values, name: str, minimum: int) -> tuple[int, ...]:
@@ -313,7 +356,8 @@ class NarxSearch:
         Wall-clock budget of :meth:`fit`, seconds (default 60); None: try every candidate.
     orders : sequence of int or (int, int)
         Model orders to try (samples): n (output lags 1..n, input lags up to n) or a pair
-        ``(na, nb)`` (output lags 1..na, input lags up to nb).
+        ``(na, nb)`` (output lags 1..na, input lags up to nb; nb may be a tuple, one largest lag
+        per input, e.g. ``(3, (2, 7))``).
     lags : {"text", "sysidentpy"}
         Input lags from 0 (default: the reference text's full-order structure, eq. 5-3) or from
         1 (SysIdentPy's ``xlag``), so that comparisons with SysIdentPy are like for like.
@@ -331,6 +375,11 @@ class NarxSearch:
         Least squares on all terms is always tried (stage 1: it ranks the structures).
     criterion : {"aic", "aicc", "bic", "fpe", "press"}
         Size criterion of the FROLS and SEMP paths.
+    n_terms : sequence of int or None, optional
+        Sizes of the FROLS and SEMP selections to try, terms per output channel; ``None`` in the
+        sequence (or ``n_terms=None``, the default) sizes them by ``criterion``. Each size is its
+        own candidate (validated by free run like every other): on long records an information
+        criterion can keep hundreds of terms whose free run is worse than a shorter path's.
     holdout : float
         Fraction of the record held out for validation, in (0, 0.5].
     folds : {1, 2}
@@ -387,6 +436,7 @@ class NarxSearch:
         focus=FOCUSES,
         selection=SELECTIONS,
         criterion: str = "bic",
+        n_terms=None,
         holdout: float = 0.25,
         folds: int = 1,
         n_blocks: int = 2,
@@ -409,6 +459,7 @@ class NarxSearch:
         self.selection = _choice_grid(selection, "selection", SELECTIONS)
         Narx(order=1, criterion=criterion)  # validates the criterion
         self.criterion = criterion
+        self.n_terms = _size_grid(n_terms)
         if not (isinstance(holdout, (int, float)) and 0 < holdout <= 0.5):
             raise IdentificationError(f"holdout must be a fraction in (0, 0.5], got {holdout!r}")
         self.holdout = float(holdout)
@@ -428,7 +479,7 @@ class NarxSearch:
         self.max_candidates = _int_grid(max_candidates, "max_candidates", 1)[0]
         self.options = dict(options or {})
         reserved_options = ("order", "na", "nb", "nk", "degree", "kind", "functions", "focus")
-        for reserved in (*reserved_options, "selection"):
+        for reserved in (*reserved_options, "n_terms", "selection"):
             if reserved in self.options:
                 raise IdentificationError(
                     f"options may not set {reserved!r}: it is searched (give the grid instead)"
@@ -439,7 +490,7 @@ class NarxSearch:
 
     # ------------------------------------------------------------------ grid
     def _max_lag(self) -> int:
-        return max(max(_pair(o)) for o in self.orders)
+        return max(_largest_lag(o) for o in self.orders)
 
     def structures(self) -> list[tuple]:
         """Every structure (order, degree, kind, functions) of the grid, without duplicates."""
@@ -480,6 +531,12 @@ class NarxSearch:
         u = as_signal(u, "u")
         y = as_signal(y, "y")
         check_same_length(u, y, "u", "y")
+        for o in self.orders:
+            nb = _pair(o)[1]
+            if isinstance(nb, tuple) and len(nb) != u.shape[1]:
+                raise IdentificationError(
+                    f"order {o!r} gives {len(nb)} per-input lags, but u has {u.shape[1]} inputs"
+                )
         self._names = (input_names, output_names)
         self._deadline = None if self.budget is None else t0 + self.budget
         self._prepare(u, y)
@@ -545,37 +602,48 @@ class NarxSearch:
 
     # ------------------------------------------------------------------ stages
     def _stage1(self) -> None:
-        selections = ["all"] + (["frols"] if "frols" in self.selection else [])
-        cands = [
-            SearchCandidate(*s, "prediction", sel, self.lags)
-            for s in self.structures()
-            for sel in selections
-            if "prediction" in self.focus or sel == "all"
-        ]
-        for c in sorted(cands, key=lambda c: (self._terms(c), c.selection != "all")):
+        cands = []
+        for s in self.structures():
+            cands.append(SearchCandidate(*s, "prediction", "all", self.lags))
+            if "frols" in self.selection and "prediction" in self.focus:
+                cands += [
+                    SearchCandidate(*s, "prediction", "frols", self.lags, k) for k in self.n_terms
+                ]
+        size = {c: self._terms(c) for c in cands}
+        for c in sorted(cands, key=lambda c: (size[c], c.selection != "all", c.n_terms or 0)):
             self._try(c)
 
     def _stage2(self) -> None:
         """The expensive options on the ranked structures, best first, each structure's
         options cheapest first; each option class is first tried on the smallest structure,
         which calibrates its rate cheaply."""
-        options = self._stage2_options()
         ranked = self._ranked_structures()
-        if not options or not ranked:
+        if not self._stage2_options() or not ranked:
             return
         lags = self.lags
-        size = {s: self._terms(SearchCandidate(*s, "prediction", "all", lags)) for s in ranked}
-        smallest = min(ranked, key=lambda s: (size[s], ranked.index(s)))
-        first = [SearchCandidate(*smallest, *o, lags) for o in options]
+        size = {e: self._terms(SearchCandidate(*e[:4], "prediction", "all", lags)) for e in ranked}
+        smallest = min(ranked, key=lambda e: (size[e], ranked.index(e)))
+        first = self._entry_candidates(smallest)
         for c in first:
             self._try(c)
-        for s in ranked:  # each structure's options cheapest first (as predicted now)
-            cands = [SearchCandidate(*s, *o, lags) for o in options]
-            cands = [c for c in cands if c not in first]
+        for e in ranked:  # each entry's options cheapest first (as predicted now)
+            cands = [c for c in self._entry_candidates(e) if c not in first]
             if self.budget is not None:  # without a budget the order is fixed (deterministic)
-                cands.sort(key=lambda c: self._predicted(c, size[c.structure]))
+                cands.sort(key=lambda c: self._predicted(c, size[c.entry]))
             for c in cands:
                 self._try(c)
+
+    def _entry_candidates(self, entry: tuple) -> list[SearchCandidate]:
+        """Stage 2's candidates of a ranked entry: every expensive option of a structure (its
+        selections sized by the criterion), or the selections of a sized entry at that size."""
+        *s, k = entry
+        opts = self._stage2_options()
+        if k is not None:
+            opts = [o for o in opts if o[1] != "all"]
+            sizes = [k]
+        else:
+            sizes = [None]
+        return [SearchCandidate(*s, *o, self.lags, n) for o in opts for n in sizes]
 
     def _ranked_structures(self) -> list[tuple]:
         """Structures in the order stage 2 refines them: the best by stage-1 validation score
@@ -584,7 +652,7 @@ class NarxSearch:
         error says how much it can explain). Structures never fitted are left out."""
         best: dict[tuple, list[float]] = {}
         for r in self.results_:
-            v = best.setdefault(r.candidate.structure, [math.inf, math.inf])
+            v = best.setdefault(r.candidate.entry, [math.inf, math.inf])
             v[0], v[1] = min(v[0], r.score), min(v[1], r.one_step)
         by_free_run = sorted((s for s, v in best.items() if math.isfinite(v[0])), key=best.get)
         by_one_step = sorted(
@@ -608,9 +676,12 @@ class NarxSearch:
         """Work units of one candidate, per fold: rows x k x (k + 30) for the fit of its k terms
         (a QR's rows x k^2; the refinement's Jacobian; the free runs' rows x k) plus rows x 30 x
         terms for building and screening its ``terms`` candidates. k is ``terms`` with all
-        terms; with FROLS or SEMP the number FROLS kept for the structure in stage 1 (the
-        selections size by the same criterion), else ``terms``."""
-        k = terms if c.selection == "all" else self._kept.get(c.structure, terms)
+        terms; with FROLS or SEMP the candidate's ``n_terms``, else the number FROLS kept for
+        the structure in stage 1 (the selections size by the same criterion), else ``terms``."""
+        if c.selection == "all":
+            k = terms
+        else:
+            k = c.n_terms if c.n_terms is not None else self._kept.get(c.structure, terms)
         return self._rows * (float(k) * (k + 30.0) + 30.0 * terms) * self.folds
 
     def _predicted(self, c: SearchCandidate, terms: int) -> float:
@@ -651,7 +722,7 @@ class NarxSearch:
         if result.status != "failed" or result.n_terms:
             work = self._work(c, terms)
             self._rates.setdefault(c.options, []).append((work, result.fit_time / work))
-            if c.options == ("prediction", "frols") and result.n_terms:
+            if c.options == ("prediction", "frols") and c.n_terms is None and result.n_terms:
                 self._kept[c.structure] = max(1, result.n_terms // self._y.shape[1])
         return self._record(result)
 
@@ -666,6 +737,8 @@ class NarxSearch:
                     f"{self._rows} available"
                 )
             return ""
+        if c.n_terms is not None and c.n_terms >= terms:
+            return f"n_terms {c.n_terms} >= its {terms} candidate terms: the all-terms fit"
         if terms > self.max_candidates:
             return f"{terms} candidate terms: over max_candidates ({self.max_candidates})"
         if terms > self._rows:
@@ -854,7 +927,7 @@ class NarxSearch:
         """A cheap stand-in for the search (an ARX of the middle order): what
         :class:`~identification.inverse.InverseModel` ranks the leads with before it runs the
         search once, at the lead chosen."""
-        mid = max(_pair(self.orders[len(self.orders) // 2]))
+        mid = _largest_lag(self.orders[len(self.orders) // 2])
         opts = {k: v for k, v in self.options.items() if k in ("max_radius", "stability_margin")}
         return Narx(order=max(mid, 1), degree=1, **opts)
 

@@ -181,6 +181,10 @@ def test_budget_is_respected():
         ({"folds": 3}, "folds"),
         ({"options": {"degree": 2}}, "searched"),
         ({"init_window": 2, "orders": (4,)}, "init_window"),
+        ({"n_terms": ()}, "n_terms is empty"),
+        ({"n_terms": (0,)}, "n_terms must be integers >= 1"),
+        ({"options": {"n_terms": 5}}, "searched"),
+        ({"orders": ((2, ()),)}, "per-input lags"),
     ],
 )
 def test_bad_arguments_are_refused_clearly(kwargs, match):
@@ -214,3 +218,39 @@ def test_a_fit_past_its_deadline_stops_iterating_and_says_so():
     assert late.stability_["input"] is True
     free = Narx(order=2, degree=2, focus="simulation").fit(x, yn)
     assert not free.timed_out_ and free.refinement_.iterations > 0
+
+
+def test_sized_frols_paths_are_candidates_and_ties_go_to_the_fewest_terms():
+    """FROLS at 3 terms on data of a 3-term NARX: its free run ties the larger fits, so the
+    3-term path is chosen, and its terms are the generating ones; a size at or above the
+    structure's candidate count is the all-terms fit and is not fitted again."""
+    x, _, yn = _problem_a(3000, seed=3)
+    search = NarxSearch(
+        budget=None, orders=(2,), degrees=(2,), kinds=("full",), focus=("prediction",),
+        selection=("all", "frols"), n_terms=(3, 8, 10_000),
+    ).fit(x, yn)  # fmt: skip
+    rows = {r.candidate.n_terms: r for r in search.results_ if r.candidate.selection == "frols"}
+    assert rows[3].status == rows[8].status == "ok"
+    assert rows[3].n_terms == 3 and rows[8].n_terms == 8
+    assert rows[10_000].status == "skipped" and "all-terms fit" in rows[10_000].reason
+    assert search.best_result_.candidate.n_terms == 3
+    assert set(search.best_.term_names()[0]) == GENERATING_TERMS
+
+
+def test_per_input_lags_reach_a_late_input():
+    """y(t) = 0.5 y(t-1) + u1(t-1) + 0.8 u2(t-5): order 1 cannot see u2(t-5), the per-input
+    order (1, (1, 5)) can, and the search picks it with a near-perfect free run."""
+    rng = np.random.default_rng(4)
+    u = rng.standard_normal((2000, 2))
+    y = np.zeros(2000)
+    for t in range(5, 2000):
+        y[t] = 0.5 * y[t - 1] + u[t - 1, 0] + 0.8 * u[t - 5, 1]
+    search = NarxSearch(
+        budget=None, orders=(1, (1, (1, 5))), degrees=(1,), focus=("prediction",),
+        selection=("all",), init_window=5,
+    ).fit(u, y)  # fmt: skip
+    assert search.best_result_.candidate.order == (1, (1, 5))
+    assert search.best_result_.score < 1e-6
+    assert "u lags 0..1/0..5" in search.best_result_.candidate.label()
+    with pytest.raises(IdentificationError, match="per-input lags, but u has 2 inputs"):
+        NarxSearch(budget=None, orders=((1, (1, 2, 3)),), degrees=(1,)).fit(u, y)

@@ -398,10 +398,12 @@ F16 = DataSet(
             lags="sysidentpy",
             degrees=(1, 2, 3),
             kinds=("input-polynomial",),
+            n_terms=(None, 40, 80, 160),
             options={"constant": True},
         ),
         note="grid: the published lags (y 1..20, u 1..9), degrees 1-3, input-polynomial terms, "
-        "every fitting option",
+        "FROLS/SEMP sized by BIC and at the simulation rows' 40, 80, 160 terms, every fitting "
+        "option",
     ),
 )
 
@@ -508,10 +510,17 @@ MR_DAMPER = DataSet(
     inputs="inputs D, Y",
     simulation=MR_SIM,
     search=SearchRow(
-        dict(orders=(1, 2, 3, 4), degrees=(1, 2, 3), kinds=("input-polynomial",)),
+        dict(
+            orders=(1, 2, 3, 4, (3, (2, 7, 2, 2))),
+            degrees=(1, 2, 3),
+            kinds=("input-polynomial",),
+            n_terms=(None, 60, 100),
+        ),
         features="v,tanh:2",
         note="inputs D, Y, v, tanh(v / 2 cm/s) (the best simulation row's input set); grid: "
-        "orders 1-4, degrees 1-3, input-polynomial terms, every fitting option",
+        "orders 1-4 and the simulation rows' per-input lags (Y 0..7), degrees 1-3, "
+        "input-polynomial terms, FROLS/SEMP sized by BIC and at the simulation rows' 60 and 100 "
+        "terms, every fitting option",
     ),
 )
 
