@@ -40,6 +40,7 @@ from __future__ import annotations
 import contextlib
 import contextvars
 import dataclasses
+import time
 from dataclasses import dataclass
 
 import numpy as np
@@ -310,6 +311,7 @@ def simulation_selection(
     screen="default",
     budget: float | None = None,
     workers: int | None = None,
+    deadline: float | None = None,
 ) -> SelectionPath:
     """SEMP forward selection with pruning by free-run error for output channel ``k``.
 
@@ -347,6 +349,10 @@ def simulation_selection(
         share it; default :data:`SELECTION_BUDGET_S`).
     workers : int, optional
         Threads scoring candidates (default: the CPU count).
+    deadline : float, optional
+        A ``time.perf_counter()`` value after which no further forward step starts (the
+        estimate behind ``budget`` is nominal: on a loaded machine the path can run slower);
+        the size is then chosen among the steps made. Default: none.
 
     Raises
     ------
@@ -371,7 +377,7 @@ def simulation_selection(
         scorer = CompiledScorer(siso, X, inputs, y[:, k], start, bound, workers=workers)
         screened = scorer.shortlist = _shortlist(screen, scorer, k, n_max, budget, y.shape[1])
     try:
-        steps, mses, crits = _semp_path(scorer, n_max, tol, criterion, X, target)
+        steps, mses, crits = _semp_path(scorer, n_max, tol, criterion, X, target, deadline)
     finally:
         scorer.close()
     if not steps:
@@ -384,12 +390,15 @@ def simulation_selection(
     return SelectionPath(steps, np.array(mses), crit, chosen, screened)
 
 
-def _semp_path(scorer, n_max: int, tol: float, criterion, X, target):
-    """The SEMP path: forward steps by free-run MSE, each followed by pruning."""
+def _semp_path(scorer, n_max: int, tol: float, criterion, X, target, deadline=None):
+    """The SEMP path: forward steps by free-run MSE, each followed by pruning; no step starts
+    after ``deadline`` once one was made."""
     selected: list[int] = []
     steps, mses, crits = [], [], []
     current = np.inf
     while len(selected) < n_max:
+        if steps and deadline is not None and time.perf_counter() > deadline:
+            break
         cap = current * (1.0 - tol) if np.isfinite(current) else np.inf
         best_j, best = scorer.forward(selected, cap)
         if best_j < 0 or not np.isfinite(best):

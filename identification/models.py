@@ -763,6 +763,7 @@ class Narx:
                 criterion=self.criterion or "bic",
                 bound=float(self.bound_[k]),
                 budget=self._selection_budget(),
+                deadline=getattr(self, "_deadline", None),
             )
             return path.selected, None, path
         target = y[start:, k]

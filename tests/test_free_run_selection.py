@@ -3,6 +3,8 @@ generating systems, the term-table free run against the compiled plan, and the s
 
 from __future__ import annotations
 
+import time
+
 import numpy as np
 import pytest
 
@@ -146,6 +148,18 @@ def test_the_path_does_not_depend_on_the_number_of_scoring_threads():
     assert _steps(paths[0]) == _steps(paths[1]) == _steps(paths[2])
     assert np.array_equal(paths[0].mse, paths[1].mse) and np.array_equal(paths[0].mse, paths[2].mse)
 
+
+def test_no_forward_step_starts_after_the_deadline():
+    """The size estimate is nominal (a loaded machine runs slower): with a deadline already
+    past the path makes its first step and no other; without one it goes on."""
+    u, y = _system_a(2000, seed=5, noise=0.1)
+    ch = _candidates(na=3, nb=3, nk=1, degree=3, constant=True)
+    start = ch.max_lag
+    X = regression_matrix(u, y, ch, start)
+    late = simulation_selection(X, ch, 0, u, y, start, deadline=time.perf_counter())
+    free = simulation_selection(X, ch, 0, u, y, start)
+    assert len(late.steps) == 1 and len(free.steps) > 1
+    assert np.array_equal(late.steps[0], free.steps[0])
 
 # ------------------------------------------------------------------ the term-table free run
 def _structure_with_functions() -> ChannelStructure:
