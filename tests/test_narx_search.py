@@ -254,3 +254,18 @@ def test_per_input_lags_reach_a_late_input():
     assert "u lags 0..1/0..5" in search.best_result_.candidate.label()
     with pytest.raises(IdentificationError, match="per-input lags, but u has 2 inputs"):
         NarxSearch(budget=None, orders=((1, (1, 2, 3)),), degrees=(1,)).fit(u, y)
+
+
+def test_stage_one_leaves_time_for_stage_two(monkeypatch):
+    """Stage 1 spends at most its share of the budget (here none: only its first candidate);
+    stage 2 then refines what was ranked, and the stage-1 candidates left over are still tried
+    afterwards while time is left."""
+    import identification.narx_search as ns
+
+    monkeypatch.setattr(ns, "_STAGE1_SHARE", 0.0)
+    x, _, yn = _problem_a(1500, seed=11)
+    search = NarxSearch(budget=600, orders=(1, 2), degrees=(1, 2), kinds=("full",)).fit(x, yn)
+    cheap = [r.candidate.options in {("prediction", "all"), ("prediction", "frols")}
+             for r in search.results_]  # fmt: skip
+    assert cheap[0] and not cheap[1]  # one least-squares fit, then stage 2
+    assert sum(cheap) == 2 * 4  # every structure's LS and FROLS fits still tried
