@@ -91,7 +91,6 @@ import numpy as np
 from .field import (
     TARGET_KINDS,
     default_band,
-    default_split_hz,
     desired_response,
     parse_target,
     pseudo_field,
@@ -101,7 +100,17 @@ from .files import file_kind, mount_points
 __all__ = ["EXIT_CODE_MEANINGS", "STOP_EXIT", "ExitCode", "main"]
 
 
-_METHODS = ("arx", "narx", "split", "frf", "error-signal")
+class _MethodChoices(tuple):
+    """``--method``'s choices: the built-in names (listed in the help and the error), and any
+    ``rattlesnake:FILE.py:NAME`` (:func:`vrig.reconstruction.vocabulary.is_method_name`)."""
+
+    def __contains__(self, value) -> bool:
+        return super().__contains__(value) or (
+            isinstance(value, str) and value.startswith("rattlesnake:")
+        )
+
+
+_METHODS = _MethodChoices(("arx", "narx", "split", "frf", "error-signal"))
 _DEMO_SAMPLES = (2000, 100_000)  # = vrig.demo's MIN/MAX_SAMPLES (454 terms per output)
 DEFAULT_GAIN = 0.8  # reconstruct's iteration gain unless the rig's side-car names its own
 _MAX_SECONDS = 3600.0  # longest record a command plays or reconstructs (--seconds, --desired)
@@ -322,7 +331,9 @@ def _add_model_arguments(rec) -> None:
         help="inverse model: arx (QanTiM), narx, split (split spectra), frf (H1, RPC-style), "
         "error-signal (ARX + NARX of its drive error, §5.5.4); default arx. A method the "
         "reference text reports as failing on the rig runs after a one-line warning quoting "
-        "it (the rig's side-car: reconstruction.methods.METHOD.unsupported, models/README.md)",
+        "it (the rig's side-car: reconstruction.methods.METHOD.unsupported, models/README.md). "
+        "rattlesnake:FILE.py:NAME runs a Sandia Rattlesnake transient control law (function, "
+        "generator or class NAME in FILE.py) on vrig's identification (docs/reconstruction.md)",
     )
     rec.add_argument(
         "--order",
@@ -637,66 +648,29 @@ def _unsupported_warning(method: str, rig_name: str, text: str) -> str:
     )
 
 
-def _method(args, band):
-    from .reconstruction import InverseArx, InverseErrorSignal, InverseNarx, SplitSpectra
+def _method(args, band, rig):
+    """``--method`` and its options as a method object and its description, by the one method
+    vocabulary (:func:`vrig.reconstruction.vocabulary.method_spec`: the rig side-car's defaults,
+    the built-in ones, the ranges); a bad option is a usage error."""
+    from .reconstruction.vocabulary import MethodOptionError, method_spec
 
-    m = args.method
-    if args.order is not None and m == "frf":
-        raise _UsageError("--order applies to arx, narx and split, not frf")
-    if args.degree is not None and m not in ("narx", "split", "error-signal"):
-        raise _UsageError(
-            "--degree applies to narx and split (a NARX low band), and to error-signal; not " + m
+    given = {k: getattr(args, k, None) for k in ("order", "degree", "split_hz", "budget")}
+    try:
+        spec = method_spec(
+            args.method, rig=rig, band=band, search=bool(getattr(args, "search", False)), **given
         )
-    if args.split_hz is not None and m != "split":
-        raise _UsageError("--split-hz applies to --method split only")
-    search = bool(getattr(args, "search", False))
-    budget = getattr(args, "budget", None)
-    if search and m != "narx":
-        raise _UsageError("--search applies to --method narx only")
-    if budget is not None and not search:
-        raise _UsageError("--budget applies to --search only")
-    if budget is not None and not (0 < budget < float("inf")):
-        raise _UsageError(f"--budget must be a positive number of seconds, got {budget:g}")
-    order = (3 if m == "error-signal" else 4) if args.order is None else args.order
-    if not 1 <= order <= 20:
-        raise _UsageError(f"--order must be 1..20, got {order}")
-    if args.degree is not None and not 1 <= args.degree <= 5:
-        raise _UsageError(f"--degree must be 1..5, got {args.degree}")
-    if m == "arx":
-        return InverseArx(order), f"arx order {order}"
-    focus = getattr(args, "focus", None) or "prediction"  # the side-car's (_defaults)
-    fit = "" if focus == "prediction" else f", {focus} focus"
-    if m == "narx":
-        degree = 2 if args.degree is None else args.degree
-        if search:
-            budget = 60.0 if budget is None else budget
-            return InverseNarx(order, degree, search=True, budget=budget), (
-                f"narx searched by free-run validation (orders up to {2 * order}, degrees "
-                f"1..{degree}, budget {budget:g} s)"
-            )
-        return InverseNarx(order, degree, focus=focus), f"narx order {order} degree {degree}{fit}"
-    if m == "split":
-        lo, hi = band
-        split = args.split_hz  # the side-car's when the user gave none (_defaults)
-        if split is None:
-            split = default_split_hz(band)
-        if not lo < split < hi:
-            raise _UsageError(
-                f"--split-hz must lie inside the band {lo:g}-{hi:g} Hz, got {split:g}"
-            )
-        low = InverseNarx(order, args.degree) if args.degree else InverseArx(order)
-        kind = f"narx degree {args.degree}" if args.degree else "arx"
-        return (
-            SplitSpectra(split, low=low, high=InverseArx(order)),
-            f"split spectra at {split:g} Hz (low {kind} order {order}, high arx order {order})",
-        )
-    if m == "error-signal":
-        degree = 2 if args.degree is None else args.degree
-        return InverseErrorSignal(order, 2, degree, focus=focus), (
-            f"error-signal (arx order {order} + narx order 2 degree {degree} of its drive "
-            f"error{fit})"
-        )
-    return "frf", "frf (H1, truncated-SVD/Tikhonov inverse)"
+    except MethodOptionError as exc:
+        raise _UsageError(exc.cli) from None
+    except (ValueError, TypeError) as exc:  # e.g. a Rattlesnake law's file or signature
+        raise _UsageError(f"--method {args.method}: {exc}") from None
+    return spec.method, spec.description
+
+
+def _method_stem(method: str) -> str:
+    """The method's part of the default results folder name (a Rattlesnake law: its name)."""
+    if method.startswith("rattlesnake:"):
+        return "rattlesnake-" + method.rpartition(":")[2]
+    return method
 
 
 def _out_dir(out, default: str, overwrite: bool) -> Path:
@@ -858,13 +832,14 @@ def _reconstruct_holding(args, hold: contextlib.ExitStack) -> int:
     rig = _load_rig(args.rig, seed=args.seed)
     extra = _defaults(args, rig)  # the rig side-car's defaults for what the user did not give
     band = _band(rig, args.band)
-    method, method_text = _method(args, band)
-    out = _out_dir(args.out, f"{Path(rig.name).stem}-{args.method}", args.overwrite)
+    method, method_text = _method(args, band, rig)
+    default_out = f"{Path(rig.name).stem}-{_method_stem(args.method)}"
+    out = _out_dir(args.out, default_out, args.overwrite)
     if args.desired is not None:  # a file: read and check it first
         field, source, records = _read_field(args, rig, band)
     _check_writable(out)  # before the run, not after it
     _hold_out(hold, out)  # one writer per folder, from here to the end of the save
-    out = _out_dir(args.out, f"{Path(rig.name).stem}-{args.method}", args.overwrite)  # locked
+    out = _out_dir(args.out, default_out, args.overwrite)  # locked
     if args.desired is None:  # a pseudo-field response: a rig run
         field, source, records = _read_field(args, rig, band)
     _check_space(out, field, rig, args)

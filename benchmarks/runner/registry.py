@@ -152,12 +152,20 @@ def method_names(*, quick: bool = False) -> list[str]:
 # ---------------------------------------------------------------------------------------------
 # built-in methods (the four of vrig.reconstruction, with the CLI's default settings)
 # ---------------------------------------------------------------------------------------------
-def _split(rig, band):
-    from vrig.reconstruction import InverseArx, SplitSpectra
+def _built(name: str, **options):
+    """A factory of method ``name`` built by the one method vocabulary
+    (:func:`vrig.reconstruction.vocabulary.method_spec`: its built-in defaults, no rig side-car)."""
+    from vrig.reconstruction.vocabulary import method_spec
 
-    lo, hi = band
-    split = float(np.sqrt(lo * hi)) if lo > 0 else hi / 4
-    return SplitSpectra(split, low=InverseArx(4), high=InverseArx(4))
+    return lambda: method_spec(name, side_car=False, **options).method
+
+
+def _split(rig, band):
+    """Split spectra at the band's rule (:func:`vrig.field.default_split_hz` without the rig's
+    side-car split), inverse ARX(4) per band, by the method vocabulary."""
+    from vrig.reconstruction.vocabulary import method_spec
+
+    return method_spec("split", band=band, side_car=False).method
 
 
 class ForwardFrf:
@@ -205,32 +213,30 @@ class ForwardFrf:
 
 
 def _register_builtins() -> None:
-    from vrig.reconstruction import InverseArx, InverseErrorSignal, InverseFrf, InverseNarx
-
-    register_method("arx", lambda: InverseArx(4), description="inverse ARX(4), QanTiM", linear=True)
+    register_method("arx", _built("arx"), description="inverse ARX(4), QanTiM", linear=True)
     register_method(
         "narx",
-        lambda: InverseNarx(4, 2, kind="full"),
+        _built("narx", kind="full"),
         description="inverse NARX(4), quadratic, every monomial (full)",
         quick=False,  # its free run diverges on most rigs at --quick settings; narx-ip is quick
         linear=False,
     )
     register_method(
         "narx-ip",
-        lambda: InverseNarx(4, 2, kind="input-polynomial"),
+        _built("narx", kind="input-polynomial"),
         description="inverse NARX(4), quadratic, input-polynomial terms (vrig's default)",
         linear=False,
     )
     register_method(
         "narx-sim",
-        lambda: InverseNarx(4, 2, kind="full", focus="simulation", selection="simulation"),
+        _built("narx", kind="full", focus="simulation", selection="simulation"),
         description="inverse NARX(4), quadratic, terms chosen and refined by free-run error "
         "(SEMP, simulation focus)",
         linear=False,
     )
     register_method(
         "narx-search",
-        lambda: InverseNarx(4, 2, search=True, budget=60.0),
+        _built("narx", search=True, budget=60.0),
         description="inverse NARX searched by free-run validation (orders 1-8, degrees 1-2, "
         "both term kinds, least squares / simulation focus, all / FROLS / SEMP terms; 60 s "
         "budget; identification.NarxSearch)",
@@ -239,7 +245,7 @@ def _register_builtins() -> None:
     )
     register_method(
         "error-signal",
-        lambda: InverseErrorSignal(3, 2, 2),
+        _built("error-signal"),
         description="inverse ARX(3) plus a quadratic input-polynomial NARX(2) of its drive "
         "error (§5.5.4, Table 6.5)",
         quick=False,
@@ -253,7 +259,7 @@ def _register_builtins() -> None:
     )
     register_method(
         "frf",
-        lambda: InverseFrf(),
+        _built("frf"),
         description="H1 FRF, regularised inverse (RPC)",
         forward=lambda: ForwardFrf(),
         linear=True,

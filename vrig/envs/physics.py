@@ -22,9 +22,10 @@ import numpy as np
 from identification.errors import SimulationDivergedError
 
 from ..errors import RigLimitError, SimulationInstabilityError
-from ..field import default_band, default_split_hz, desired_response, parse_target
-from ..reconstruction import DriveIteration, InverseArx, InverseNarx, IterationSettings
+from ..field import default_band, desired_response, parse_target
+from ..reconstruction import DriveIteration, IterationSettings
 from ..reconstruction.settings import cache_key
+from ..reconstruction.vocabulary import side_car_options
 from ..rigs import load_rig
 from ..timehistory import TimeHistory
 
@@ -38,29 +39,6 @@ _MODELS: OrderedDict = OrderedDict()
 def clear_model_cache() -> None:
     """Forget every identified inverse model (the next reset identifies again)."""
     _MODELS.clear()
-
-
-def _method_options(name: str, m, band) -> dict:
-    """The side-car's :class:`~vrig.rigs.spec.MethodDefaults` ``m`` of method ``name`` as
-    keyword arguments of :func:`~vrig.reconstruction.methods.make_method`, built as
-    ``vrig reconstruct`` builds the method (``order``, ``degree``, ``focus``, ``split_hz``;
-    ``split`` without a side-car split: :func:`vrig.field.default_split_hz`'s band rule)."""
-    if name == "arx":
-        return {"order": m.order} if m.order is not None else {}
-    if name in ("narx", "error-signal"):
-        order = "order" if name == "narx" else "linear_order"
-        given = {order: m.order, "degree": m.degree, "focus": m.focus}
-        return {k: v for k, v in given.items() if v is not None}
-    if name == "split":
-        lo, hi = band
-        split = m.split_hz if m.split_hz is not None else default_split_hz((lo, hi))
-        out = {"split_hz": float(split)}
-        if m.order is not None or m.degree is not None:
-            order = 4 if m.order is None else m.order
-            out["low"] = InverseNarx(order, m.degree) if m.degree else InverseArx(order)
-            out["high"] = InverseArx(order)
-        return out
-    return {}  # frf: no option in the side-car's vocabulary
 
 
 def rig_settings(rig, settings: IterationSettings, band) -> IterationSettings:
@@ -103,7 +81,7 @@ def rig_settings(rig, settings: IterationSettings, band) -> IterationSettings:
             UserWarning,
             stacklevel=2,
         )
-    options = {**_method_options(name, m, band), **settings.method_options}
+    options = {**side_car_options(name, rig, band), **settings.method_options}
     changes = {"method_options": options}
     level = m.id_rms if m.id_rms is not None else defaults.id_rms
     if settings.id_rms is None and level is not None:

@@ -3,7 +3,8 @@
 ``settings`` (:class:`IterationSettings`, one frozen object) → ``engine`` (:class:`DriveIteration`:
 identify, invert, play, correct) → ``iteration`` (:func:`reconstruct`: the loop) →
 ``result`` (:class:`ReconstructionResult`), scored by ``scores``; the inverse-model methods are in
-``methods`` (their contract in ``protocol``).
+``methods`` (their contract in ``protocol``), built from a name and options by ``vocabulary``
+(:func:`method_spec`); Rattlesnake control laws run as methods through ``rattlesnake``.
 """
 
 from ..processing import band_gains
@@ -19,10 +20,12 @@ from .methods import (
     cross_spectra,
     make_method,
 )
-from .protocol import InverseModelMethod, Method, SavableMethod, SizedMethod
+from .protocol import InverseModelMethod, Method, ObservingMethod, SavableMethod, SizedMethod
+from .rattlesnake import RattlesnakeLaw
 from .result import ReconstructionResult
 from .scores import pseudo_damage
 from .settings import IterationSettings
+from .vocabulary import MethodOptionError, MethodSpec, method_spec
 
 __all__ = [
     "MAX_ITERATIONS",
@@ -35,6 +38,10 @@ __all__ = [
     "InverseNarx",
     "IterationSettings",
     "Method",
+    "MethodOptionError",
+    "MethodSpec",
+    "ObservingMethod",
+    "RattlesnakeLaw",
     "ReconstructionResult",
     "SavableMethod",
     "SizedMethod",
@@ -42,6 +49,7 @@ __all__ = [
     "band_gains",
     "cross_spectra",
     "make_method",
+    "method_spec",
     "pseudo_damage",
     "reconstruct",
 ]

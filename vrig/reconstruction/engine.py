@@ -15,7 +15,7 @@ from scipy.signal import windows
 from identification.errors import SimulationDivergedError
 
 from ..errors import RigLimitError, SimulationInstabilityError
-from ..field import default_band, default_split_hz
+from ..field import default_band
 from ..processing import band_gains, decimate, gprepro, identification_band
 from ..progress import status
 from ..rigs.limits import check_drive_limits
@@ -23,8 +23,10 @@ from ..signals import random_drive, triangular_psd
 from ..timehistory import TimeHistory
 from .matching import identify_matched, level_ratios
 from .methods import make_method
+from .protocol import ObservingMethod
 from .scores import scores
 from .settings import IterationSettings
+from .vocabulary import method_spec
 
 __all__ = ["DriveIteration", "play_batch"]
 
@@ -167,10 +169,9 @@ class DriveIteration:
         band = s.bandwidth if s.bandwidth is not None else default_band(rig)  # side-car's
         self.band = _check_band(band, rig.fs)
         self.id_band = identification_band(self.band, fs=rig.fs)
-        options = dict(s.method_options)
-        if s.method == "split" and "split_hz" not in options:  # the rig's, else the band's
-            options["split_hz"] = default_split_hz(self.band, rig)
-        self.method = make_method(s.method, **options)
+        # the one method vocabulary; split without split_hz: the rig's split, else the band's
+        spec = method_spec(s.method, rig=rig, band=self.band, side_car=False, **s.method_options)
+        self.method = spec.method
         self.decimation = (
             max(1, int(rig.fs // (8 * self.id_band[1]))) if s.decimation is None else s.decimation
         )
@@ -441,6 +442,8 @@ class DriveIteration:
     def _processed(self, drv: TimeHistory, raw: TimeHistory):
         """(ITxxDRV, RITxxRES, ITxxRES, scores) of a played drive (see :meth:`play`)."""
         res = gprepro(raw, self.band)
+        if isinstance(self.method, ObservingMethod):  # e.g. a Rattlesnake law's last signals
+            self.method.observe(self.down(drv), self.down(res))
         return drv, raw, res, scores(self.desres, res)
 
     def _send(self, drive, tag: str, what: str, seed: int):

@@ -79,7 +79,8 @@ def reconstruct(
         :func:`vrig.progress.enabled` in force).
     **options
         Settings by name on top of ``settings``: ``method`` (``"arx"``, ``"narx"``, ``"split"``,
-        ``"frf"``, ``"error-signal"`` or a method object), ``iterations``, ``gain``,
+        ``"frf"``, ``"error-signal"``, ``"rattlesnake:<file.py>:<name>"`` or a method object;
+        names are built by :func:`~vrig.reconstruction.method_spec`), ``iterations``, ``gain``,
         ``strategy``, ``bandwidth``, ``id_duration``, ``id_rms``, ``id_psd``, ``id_match``,
         ``decimation``, ``taper``, ``id_seed``, ``run_seed``, ``divergence``, ``min_increase``,
         ``tolerance``; ``seed`` sets both seeds; any other name is a method option

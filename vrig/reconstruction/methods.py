@@ -44,6 +44,7 @@ __all__ = [
     "InverseNarx",
     "SplitSpectra",
     "cross_spectra",
+    "h1_spectra",
     "make_method",
 ]
 
@@ -603,22 +604,15 @@ class InverseFrf:
         idres : TimeHistory
             The response measured for it (same length and sample rate).
         """
-        u, y, fs = iddrv.data, idres.data, iddrv.fs
-        nper = min(self.nperseg, u.shape[0] // 4)
-        f, suu = cross_spectra(u, u, fs, nper)
-        _, syu = cross_spectra(y, u, fs, nper)
-        self.f = f
-        H = np.einsum("fij,fjk->fik", syu, np.linalg.pinv(suu))  # (F, ny, nu)
+        fs = iddrv.fs
+        h1 = h1_spectra(iddrv.data, idres.data, fs, min(self.nperseg, iddrv.n_samples // 4))
+        self.f, H = h1["f"], h1["H"]
         U, s, Vh = np.linalg.svd(H, full_matrices=False)
         keep = s >= self.rcond * s[:, :1]
         lam = self.tikhonov * s[:, :1]
         sinv = np.where(keep, s / (s**2 + lam**2), 0.0)
         self.Hinv = np.einsum("fji,fj,fkj->fik", Vh.conj(), sinv, U.conj())  # (F, nu, ny)
-        _, syy = cross_spectra(y, y, fs, nper)
-        self.coherence = np.real(
-            np.einsum("fij,fjk,fki->fi", syu, np.linalg.pinv(suu), syu.conj().transpose(0, 2, 1))
-            / np.maximum(np.real(np.einsum("fii->fi", syy)), 1e-300)
-        )
+        self.coherence = h1["coherence"]
         self.fs = fs
 
     def min_samples(self, n_drives: int, n_responses: int) -> int:
@@ -672,6 +666,39 @@ class InverseFrf:
         :meth:`identify`."""
         hinv = getattr(self, "Hinv", None)
         return None if hinv is None else int(2 * np.asarray(hinv).size)
+
+
+def h1_spectra(u: np.ndarray, y: np.ndarray, fs: float, nperseg: int) -> dict:
+    """The H1 FRF of drive ``u`` to response ``y`` and the spectra it is made of (Welch,
+    :func:`cross_spectra`): what :class:`InverseFrf` inverts and a Rattlesnake control law is
+    given (:mod:`vrig.reconstruction.rattlesnake`).
+
+    Parameters
+    ----------
+    u, y : ndarray (n_samples, nu), (n_samples, ny)
+        Drive and response records sampled at ``fs`` [Hz].
+    fs : float
+        Sample rate [Hz].
+    nperseg : int
+        Welch segment length [samples].
+
+    Returns
+    -------
+    dict
+        ``f`` (F,) [Hz]; ``suu`` (F, nu, nu), ``syu`` (F, ny, nu), ``syy`` (F, ny, ny) the
+        cross-spectral matrices; ``H`` (F, ny, nu) ``= syu suu^+`` (units of y per unit of u);
+        ``coherence`` (F, ny) the multiple coherence of each response with all drives.
+    """
+    f, suu = cross_spectra(u, u, fs, nperseg)
+    _, syu = cross_spectra(y, u, fs, nperseg)
+    suu_inv = np.linalg.pinv(suu)
+    H = np.einsum("fij,fjk->fik", syu, suu_inv)  # (F, ny, nu)
+    _, syy = cross_spectra(y, y, fs, nperseg)
+    coherence = np.real(
+        np.einsum("fij,fjk,fki->fi", syu, suu_inv, syu.conj().transpose(0, 2, 1))
+        / np.maximum(np.real(np.einsum("fii->fi", syy)), 1e-300)
+    )
+    return {"f": f, "suu": suu, "syu": syu, "syy": syy, "H": H, "coherence": coherence}
 
 
 def cross_spectra(a: np.ndarray, b: np.ndarray, fs: float, nperseg: int):

@@ -24,7 +24,10 @@ has it:
   inverse advances the response by): ``fitted_lead()`` reads the lead the fit chose,
   ``set_lead(lead)`` fixes it for the next ``identify`` (0: a causal model, no lead search).
   The runner uses these for its extra modelling-error fits: the fresh inverse keeps the
-  reconstruction's lead, the forward model (roles of drive and response swapped) is causal.
+  reconstruction's lead, the forward model (roles of drive and response swapped) is causal;
+* :class:`ObservingMethod` — ``observe(drive, response)``: told, after every drive the iteration
+  plays, that drive and its processed response (at the model rate); a Rattlesnake control law
+  gets them as its last excitation and response (:mod:`vrig.reconstruction.rattlesnake`).
 
 ``isinstance(obj, Method)`` checks that the members exist (``typing.runtime_checkable``), not
 their signatures.
@@ -39,7 +42,14 @@ import numpy as np
 
 from ..timehistory import TimeHistory
 
-__all__ = ["InverseModelMethod", "Lead", "Method", "SavableMethod", "SizedMethod"]
+__all__ = [
+    "InverseModelMethod",
+    "Lead",
+    "Method",
+    "ObservingMethod",
+    "SavableMethod",
+    "SizedMethod",
+]
 
 Lead = int | str | None | Mapping[str, "Lead"]
 """A method's lead [samples]: an int (``"auto"``: searched at identification; None: not
@@ -122,4 +132,21 @@ class SavableMethod(Protocol):
     def fitted_models(self) -> dict[str, Any]:
         """``{file stem: fitted model}`` (models with ``save(path)``); empty before
         ``identify``."""
+        ...
+
+
+@runtime_checkable
+class ObservingMethod(Protocol):
+    """A method told of every drive the iteration plays and its response."""
+
+    def observe(self, drive: TimeHistory, response: TimeHistory) -> None:
+        """Take note of a played drive and its processed response (both at the model rate).
+
+        Parameters
+        ----------
+        drive : TimeHistory
+            The drive played (ITxxDRV).
+        response : TimeHistory
+            Its response after GPREPRO (ITxxRES).
+        """
         ...

@@ -58,8 +58,11 @@ class IterationSettings:
     Parameters
     ----------
     method : str or method object
-        ``"arx"``, ``"narx"``, ``"split"``, ``"frf"``, ``"error-signal"`` or an object
-        implementing the :class:`~vrig.reconstruction.Method` protocol.
+        ``"arx"``, ``"narx"``, ``"split"``, ``"frf"``, ``"error-signal"``,
+        ``"rattlesnake:<file.py>:<name>"`` (a Rattlesnake control law,
+        :mod:`vrig.reconstruction.rattlesnake`) or an object implementing the
+        :class:`~vrig.reconstruction.Method` protocol; a name is built by
+        :func:`~vrig.reconstruction.method_spec`.
     method_options : mapping
         Options of a named method (``order``, ``degree``, ``split_hz``, ...); stored read-only.
     iterations : int
