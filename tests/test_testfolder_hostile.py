@@ -326,6 +326,74 @@ def test_ctrl_c_while_vrig_is_imported_is_one_line_and_exit_130(tmp_path):
     assert err.splitlines() == ["vrig rigs: interrupted"]
 
 
+# the launcher pip writes for pyproject's [project.scripts] entry (distlib's template)
+_LAUNCHER = """import re
+import sys
+from {module} import {func}
+if __name__ == '__main__':
+    sys.argv[0] = re.sub(r'(-script\\.pyw|\\.exe)?$', '', sys.argv[0])
+    sys.exit({func}())
+"""
+
+
+@linux
+def test_ctrl_c_right_after_the_console_module_is_imported_is_one_line(tmp_path):
+    """The handler is in force from the console module's import, before the launcher calls
+    its entry function: an interrupt between the two was a raw KeyboardInterrupt traceback."""
+    module, _ = _console_script()
+    code = (
+        f"import os, signal, sys, time; sys.argv = ['vrig', 'rigs']; import {module}\n"
+        "os.kill(os.getpid(), signal.SIGINT)\n"
+        "time.sleep(60)\n"
+        "print('the interrupt was lost', file=sys.stderr)"
+    )
+    env = {**os.environ, "PYTHONPATH": str(ROOT)}
+    proc = subprocess.run(
+        [sys.executable, "-c", code], cwd=tmp_path, env=env, text=True, capture_output=True,
+        timeout=120,
+    )  # fmt: skip
+    assert proc.returncode == 130, proc.stderr
+    assert proc.stderr.splitlines() == ["vrig rigs: interrupted"]
+
+
+def _python_startup_traceback(err: str) -> bool:
+    """A traceback raised before any code of vrig's ran: in ``site`` (the environment's
+    ``.pth`` files) or in the launcher's own first imports, no frame in vrig."""
+    frames = [line for line in err.splitlines() if line.lstrip().startswith("File ")]
+    ours = [f for f in frames if "vrig" in f.split(",")[0].replace("__editable___vrig", "")]
+    return bool(frames) and not ours and err.rstrip().endswith("KeyboardInterrupt")
+
+
+@linux
+@pytest.mark.parametrize("delay_s", [0.0, 0.01, 0.02, 0.04, 0.06, 0.1, 0.2, 0.5])
+def test_ctrl_c_early_in_start_up_is_never_a_vrig_traceback(delay_s, tmp_path):
+    """SIGINT to the launcher pip writes, at several delays after the start (where it lands
+    depends on the machine's load, so each outcome is checked, not its timing): killed before
+    Python installs its handler (no output), one line and exit 130 once vrig's code runs, or a
+    traceback of Python's own start-up (``site``) where no code of vrig's can run yet — never a
+    traceback from a frame of vrig's, and never a command that goes on."""
+    module, func = _console_script()
+    launcher = tmp_path / "vrig"
+    launcher.write_text(_LAUNCHER.format(module=module, func=func))
+    env = {**os.environ, "PYTHONPATH": str(ROOT), "OPENBLAS_NUM_THREADS": "1"}
+    proc = subprocess.Popen(
+        [sys.executable, str(launcher), "rigs"], cwd=tmp_path, env=env, text=True,
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+    )  # fmt: skip
+    try:
+        time.sleep(delay_s)
+        proc.send_signal(signal.SIGINT)
+        out, err = proc.communicate(timeout=120)
+    finally:
+        proc.kill()
+    if proc.returncode == -signal.SIGINT:  # before Python's handler: the shell says 130
+        assert err == "" and out == ""
+    elif proc.returncode == 130:
+        assert err.splitlines() == ["vrig rigs: interrupted"]
+    else:
+        assert _python_startup_traceback(err), (proc.returncode, err)
+
+
 # ---------------------------------------------------------------------------------------------
 # 3. one lock per results folder
 # ---------------------------------------------------------------------------------------------
