@@ -1112,10 +1112,10 @@ _NARROWER = "a narrower --band, a lower --order or --method frf"
 _ADVICE = {
     # (stage, stop kind) -> what to change; stage "identification", "model", "IT00" (nothing
     # played: the gain plays no role) or "after IT00" (an iteration stopped: the gain does)
-    ("identification", "interlock"): "the identification drive trips the rig even at 1/8 of its "
-    "amplitude (TRIPPEDID): check the rig's limits, or use a narrower --band",
+    ("identification", "interlock"): "the identification drive trips the rig even at 1/1024 of "
+    "its amplitude (TRIPPEDID): check the rig's limits, or use a narrower --band",
     ("identification", "refused"): "the identification drive is beyond the drives' full scale "
-    "even at 1/8 of its amplitude (REFUSEDID): check the rig's limits",
+    "even at 1/1024 of its amplitude (REFUSEDID): check the rig's limits",
     ("identification", "unstable"): "the rig's simulation became unstable under the "
     "identification drive: check the rig model (time step, parameters) or use a narrower --band",
     ("model", "diverged"): "the inverse model diverges on the desired response: try a lower "
