@@ -16,20 +16,24 @@ package (it imports nothing heavy) and is the entry point of the ``vrig`` comman
   during which Python's handler is gone and a Ctrl-C killed the process without a line.
 
 The handler is installed by this module's first statements, when the console script imports
-it (before ``atexit``, ``threading`` and every other import), not when :func:`main` is called. What
-no code of vrig's can cover is what runs before that import: the interpreter's own start-up and
-its ``site`` module, which executes every ``.pth`` file of the environment (setuptools' editable
-finder ``__editable___vrig_*_finder`` in a development install, and whatever other packages put
-there), then the first lines of the launcher pip writes (``import re``). That is 20 to 30 ms on a
-development install here; a Ctrl-C in it is Python's (a ``KeyboardInterrupt`` traceback, or
-``Fatal Python error: init_import_site``). Only a ``.pth`` file of vrig's own would run earlier,
-and it would run in every Python process of the environment: not done.
+it (through CPython's built-in ``_signal``, before ``signal.py``, ``atexit``, ``threading`` and
+every other import), not when :func:`main` is called. What no code of vrig's can cover is what
+runs before that: the interpreter's own start-up and its ``site`` module, which executes every
+``.pth`` file of the environment (setuptools' editable finder ``__editable___vrig_*_finder`` in a
+development install, and whatever other packages put there), then the first lines of the
+launcher pip writes (``import re``, and the import system finding and loading this module). That
+is 20 to 30 ms on a development install here; a Ctrl-C in it is Python's (a
+``KeyboardInterrupt`` traceback with no frame of vrig's, or ``Fatal Python error:
+init_import_site``). Only a ``.pth`` file of vrig's own would run earlier, and it would run in
+every Python process of the environment: not done.
 """
 
 from __future__ import annotations
 
+# _signal: CPython's built-in signal module, nothing to run (``signal.py`` builds its enums on
+# import: milliseconds in which an interrupt landed before the handler); os and sys are loaded
+import _signal
 import os
-import signal
 import sys
 
 INTERRUPTED = 130
@@ -59,12 +63,13 @@ def _interrupt_now(signum, frame) -> None:
 # own handler (a traceback) is replaced at once; a handler someone else installed, or SIGINT
 # ignored (a background job of a script), is left as it is until main()
 try:
-    if signal.getsignal(signal.SIGINT) is signal.default_int_handler:
-        signal.signal(signal.SIGINT, _interrupt_now)
+    if _signal.getsignal(_signal.SIGINT) is _signal.default_int_handler:
+        _signal.signal(_signal.SIGINT, _interrupt_now)
 except ValueError:  # imported by a thread other than the main one: signals are not its own
     pass
 
 import atexit  # noqa: E402  (after the handler: these imports are in its cover)
+import signal  # noqa: E402
 import threading  # noqa: E402
 
 __all__ = ["main"]

@@ -247,10 +247,15 @@ def _check_kept(out: Path, err: str) -> bool:
 
 def _startup(err: str) -> bool:
     """A traceback of Python's own start-up: ``site`` and the ``.pth`` files (setuptools'
-    editable finder is one) or the launcher's first imports, no frame of vrig's code."""
-    frames = [ln.split(",")[0] for ln in err.splitlines() if ln.lstrip().startswith("File ")]
-    ours = [f for f in frames if "vrig" in f.replace("__editable___vrig", "")]
-    return bool(frames) and not ours
+    editable finder is one) or the launcher's own lines (its imports, the import system finding
+    the console module), no frame of vrig's code (``vrig_console.py``, the ``vrig`` and
+    ``identification`` packages)."""
+    files = [Path(ln.split('"')[1]) for ln in err.splitlines() if ln.lstrip().startswith('File "')]
+    ours = [
+        f for f in files
+        if f.name == "vrig_console.py" or {"vrig", "identification"} & set(f.parent.parts)
+    ]  # fmt: skip
+    return bool(files) and not ours
 
 
 def interrupts(n: int, rng: random.Random, work: Path) -> dict:

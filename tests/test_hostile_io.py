@@ -54,7 +54,21 @@ KeyboardInterrupt
 """
 
 
+LAUNCHER = """Traceback (most recent call last):
+  File "/tmp/vrig-hostile-x/vrig", line 3, in <module>
+    from vrig_console import main
+KeyboardInterrupt
+"""
+PACKAGE = """Traceback (most recent call last):
+  File "/venv/bin/vrig", line 8, in <module>
+  File "/venv/lib/python3.11/site-packages/vrig/cli.py", line 12, in main
+KeyboardInterrupt
+"""
+
+
 def test_a_start_up_traceback_is_told_from_one_of_vrig():
     assert hostile_io._startup(SITE)
+    assert hostile_io._startup(LAUNCHER)  # the import system, before vrig_console's first line
     assert not hostile_io._startup(OURS)
+    assert not hostile_io._startup(PACKAGE)
     assert not hostile_io._startup("vrig reconstruct: interrupted\n")

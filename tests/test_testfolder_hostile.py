@@ -359,10 +359,19 @@ def test_ctrl_c_right_after_the_console_module_is_imported_is_one_line(tmp_path)
 
 def _python_startup_traceback(err: str) -> bool:
     """A traceback raised before any code of vrig's ran: in ``site`` (the environment's
-    ``.pth`` files) or in the launcher's own first imports, no frame in vrig."""
-    frames = [line for line in err.splitlines() if line.lstrip().startswith("File ")]
-    ours = [f for f in frames if "vrig" in f.split(",")[0].replace("__editable___vrig", "")]
-    return bool(frames) and not ours and err.rstrip().endswith("KeyboardInterrupt")
+    ``.pth`` files, setuptools' editable finder among them) or in the launcher's own lines
+    (its imports, the import system finding the console module), no frame in vrig's code
+    (``vrig_console.py``, the ``vrig`` and ``identification`` packages)."""
+    files = [
+        Path(line.split('"')[1])
+        for line in err.splitlines()
+        if line.lstrip().startswith('File "')
+    ]
+    ours = [
+        f for f in files
+        if f.name == "vrig_console.py" or {"vrig", "identification"} & set(f.parent.parts)
+    ]  # fmt: skip
+    return bool(files) and not ours and err.rstrip().endswith("KeyboardInterrupt")
 
 
 @linux
