@@ -15,19 +15,26 @@ package (it imports nothing heavy) and is the entry point of the ``vrig`` comman
   flushed), without the interpreter's finalisation: about 2 s here after a reconstruction,
   during which Python's handler is gone and a Ctrl-C killed the process without a line.
 
-What no Python code can cover is the interpreter's own start-up before this module runs (tens of
-milliseconds): an interrupt there is Python's.
+The handler is installed by this module's first statements, when the console script imports
+it (through CPython's built-in ``_signal``, before ``signal.py``, ``atexit``, ``threading`` and
+every other import), not when :func:`main` is called. What no code of vrig's can cover is what
+runs before that: the interpreter's own start-up and its ``site`` module, which executes every
+``.pth`` file of the environment (setuptools' editable finder ``__editable___vrig_*_finder`` in a
+development install, and whatever other packages put there), then the first lines of the
+launcher pip writes (``import re``, and the import system finding and loading this module). That
+is 20 to 30 ms on a development install here; a Ctrl-C in it is Python's (a
+``KeyboardInterrupt`` traceback with no frame of vrig's, or ``Fatal Python error:
+init_import_site``). Only a ``.pth`` file of vrig's own would run earlier, and it would run in
+every Python process of the environment: not done.
 """
 
 from __future__ import annotations
 
-import atexit
+# _signal: CPython's built-in signal module, nothing to run (``signal.py`` builds its enums on
+# import: milliseconds in which an interrupt landed before the handler); os and sys are loaded
+import _signal
 import os
-import signal
 import sys
-import threading
-
-__all__ = ["main"]
 
 INTERRUPTED = 130
 
@@ -36,12 +43,6 @@ def _command() -> str:
     """``vrig COMMAND`` for the one line (``vrig`` alone before a command is known)."""
     args = [a for a in sys.argv[1:2] if not a.startswith("-")]
     return " ".join(["vrig", *args])
-
-
-def _interrupted() -> int:
-    sys.stderr.write(f"{_command()}: interrupted\n")
-    sys.stderr.flush()
-    return INTERRUPTED
 
 
 def _interrupt_now(signum, frame) -> None:
@@ -56,6 +57,28 @@ def _interrupt_now(signum, frame) -> None:
         os.write(2, f"{_command()}: interrupted\n".encode(errors="replace"))
     finally:
         os._exit(INTERRUPTED)
+
+
+# the earliest point vrig's code runs (the launcher's ``from vrig_console import main``): Python's
+# own handler (a traceback) is replaced at once; a handler someone else installed, or SIGINT
+# ignored (a background job of a script), is left as it is until main()
+try:
+    if _signal.getsignal(_signal.SIGINT) is _signal.default_int_handler:
+        _signal.signal(_signal.SIGINT, _interrupt_now)
+except ValueError:  # imported by a thread other than the main one: signals are not its own
+    pass
+
+import atexit  # noqa: E402  (after the handler: these imports are in its cover)
+import signal  # noqa: E402
+import threading  # noqa: E402
+
+__all__ = ["main"]
+
+
+def _interrupted() -> int:
+    sys.stderr.write(f"{_command()}: interrupted\n")
+    sys.stderr.flush()
+    return INTERRUPTED
 
 
 def _exit(code) -> None:

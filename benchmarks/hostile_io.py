@@ -19,12 +19,25 @@ The tries, each as the issue's hostile testing made them:
   any vrig code and prints Python's traceback for an interrupt there;
 * **two CLI runs** with ``--overwrite`` on one folder at once: the second is refused (exit 2)
   before it plays anything, the first completes;
+  ``vrig repeatability`` and ``vrig check-linearity --plot`` on the folder the first run holds
+  are refused the same way (exit 2);
 * **µε**: a desired CSV whose unit is ``µε`` is reconstructed and read back with its unit;
 * **full disk**: ``os.fsync`` fails with ``ENOSPC`` from the first plot on (in this process):
-  no half-written folder, and the line says that nothing was saved.
+  no half-written folder, and the line says that nothing was saved;
+* **fuzzed files**: RPC III (integer and float), CSV, MAT and NPZ records written by vrig, then
+  mutated (random bytes anywhere, header values replaced by absurd numbers such as
+  ``PTS_PER_GROUP=1e11`` or ``DELTA_T=1e-308``, truncation) and read by :func:`vrig.io.read`:
+  each must read as a finite history (``fs > 0``) or be refused with
+  :class:`~vrig.errors.FileFormatError`; anything else (another exception, a non-finite
+  result) counts as a raw traceback.
 
-Runs in a few minutes on a loaded two-core box (``--quick``: about one). Not part of the test
-run::
+The last lines are the totals: kills, concurrent saves, interrupts and fuzzed files tried, and
+what was lost and how many raw tracebacks were seen (both expected 0; the exit code is 1
+otherwise). A traceback that Python's own start-up printed before any vrig code ran (an
+interrupt inside ``site``'s ``.pth`` files: no frame of vrig's) is counted apart.
+
+Runs in about ten minutes on a loaded two-core box (``--quick``: under three). Not part of the
+test run::
 
     python -m benchmarks.hostile_io [--quick] [--seed 0]
 """
@@ -232,6 +245,19 @@ def _check_kept(out: Path, err: str) -> bool:
     return summary["iterations_run"] == n - 1
 
 
+def _startup(err: str) -> bool:
+    """A traceback of Python's own start-up: ``site`` and the ``.pth`` files (setuptools'
+    editable finder is one) or the launcher's own lines (its imports, the import system finding
+    the console module), no frame of vrig's code (``vrig_console.py``, the ``vrig`` and
+    ``identification`` packages)."""
+    files = [Path(ln.split('"')[1]) for ln in err.splitlines() if ln.lstrip().startswith('File "')]
+    ours = [
+        f for f in files
+        if f.name == "vrig_console.py" or {"vrig", "identification"} & set(f.parent.parts)
+    ]  # fmt: skip
+    return bool(files) and not ours
+
+
 def interrupts(n: int, rng: random.Random, work: Path) -> dict:
     t0 = time.perf_counter()
     base = _vrig(_argv(work / "baseline"), work)
@@ -239,7 +265,7 @@ def interrupts(n: int, rng: random.Random, work: Path) -> dict:
     t_run = time.perf_counter() - t0
     assert base.returncode == 0, err
     codes: dict[int, int] = {}
-    tracebacks = {"interpreter start-up (< 0.1 s)": 0, "vrig (>= 0.1 s)": 0}
+    tracebacks = {"Python's own start-up (no vrig frame)": 0, "vrig": 0}
     swallowed = lost = extra_lines = sent_total = 0
     for i in range(n):
         out = work / f"int{i:02d}"
@@ -252,8 +278,8 @@ def interrupts(n: int, rng: random.Random, work: Path) -> dict:
         sent_total += sent
         _, err = proc.communicate()
         codes[proc.returncode] = codes.get(proc.returncode, 0) + 1
-        phase = "interpreter start-up (< 0.1 s)" if when < 0.1 else "vrig (>= 0.1 s)"
-        tracebacks[phase] += "Traceback" in err or "Exception ignored" in err
+        if "Traceback" in err or "Exception ignored" in err:
+            tracebacks["Python's own start-up (no vrig frame)" if _startup(err) else "vrig"] += 1
         swallowed += sent and proc.returncode == 0
         lines = [ln for ln in err.splitlines() if ln.strip()]
         extra_lines += len(lines) > 1
@@ -284,13 +310,19 @@ def two_runs(work: Path) -> dict:
     while not lock.exists() and first.poll() is None and time.monotonic() < deadline:
         time.sleep(0.05)
     second = _vrig(_argv(out, "--overwrite"), work)
+    plots = [
+        _vrig([command, "--rig", "shock-absorber", "--seconds", "2", *extra, "--out", out], work)
+        for command, extra in (("repeatability", ["--runs", "2"]), ("check-linearity", ["--plot"]))
+    ]
     _, err2 = second.communicate()
+    errs = [p.communicate()[1] for p in plots]
     _, err1 = first.communicate()
     return {
         "first exit": first.returncode,
         "second exit (2: refused up front)": second.returncode,
         "second refused before playing": int("is being written by vrig process" in err2),
-        "raw tracebacks": int("Traceback" in err1 + err2),
+        "repeatability, check-linearity exits (2: refused up front)": [p.returncode for p in plots],
+        "raw tracebacks": sum("Traceback" in e for e in [err1, err2, *errs]),
     }
 
 
@@ -339,16 +371,131 @@ def full_disk(work: Path) -> dict:
     }
 
 
+# ------------------------------------------------------------------------------ fuzzed files
+_ABSURD = {  # header values the issue's fuzzing found let numpy errors through, and kin
+    b"PTS_PER_GROUP": [b"1e11", b"99999999999", b"-256", b"0"],
+    b"PTS_PER_FRAME": [b"1e11", b"0", b"-1", b"2147483648"],
+    b"FRAMES": [b"1e11", b"-4", b"0"],
+    b"CHANNELS": [b"0", b"100000", b"-3"],
+    b"DELTA_T": [b"1e-308", b"1e300", b"0", b"-1e-3", b"nan", b"inf"],
+    b"NUM_HEADER_BLOCKS": [b"0", b"100000", b"-1"],
+    b"NUM_PARAMS": [b"0", b"100000"],
+    b"SCALE.CHAN_1": [b"nan", b"inf", b"1e308", b"0"],
+}
+
+
+def _fuzz_bases(work: Path) -> dict[str, bytes]:
+    """One small record per format, written by vrig (3 channels, 1000 samples)."""
+    import vrig
+    import vrig.io
+
+    rng = np.random.default_rng(5)
+    th = vrig.TimeHistory(rng.standard_normal((1000, 3)), 512.0, ["a", "b", "c"], ["N", "m", "V"])
+    bases = {}
+    for name, kwargs in (("int.rsp", {"data_type": "SHORT_INTEGER"}),
+                         ("float.rsp", {"data_type": "FLOATING_POINT"}),
+                         ("x.csv", {}), ("x.mat", {}), ("x.npz", {})):  # fmt: skip
+        path = work / name
+        writer = vrig.io.write_rpc3 if name.endswith(".rsp") else vrig.io.write
+        writer(path, th, **kwargs)
+        bases[name] = path.read_bytes()
+    return bases
+
+
+def _mutate(buf: bytes, rng: random.Random) -> bytes:
+    """Random bytes (mostly in the first 2 KiB: the header), an absurd header value, and/or a
+    truncation."""
+    out = bytearray(buf)
+    how = rng.random()
+    if how < 0.4 or not out:
+        for _ in range(rng.randint(1, 8)):
+            pos = rng.randrange(min(len(out), 2048)) if rng.random() < 0.8 else rng.randrange(len(out))
+            out[pos] = rng.choice([rng.randrange(256), *b"0123456789.-+E \0,\n"])
+    elif how < 0.7:
+        keys = [k for k in _ABSURD if k in out]
+        if keys:
+            key = rng.choice(keys)
+            i = out.index(key)
+            value = rng.choice(_ABSURD[key]).ljust(48)[:48]  # the value field of a 128-byte record
+            out[i + 32 : i + 32 + len(value)] = value
+    if rng.random() < 0.3:
+        out = out[: rng.randrange(len(out) + 1)]
+    return bytes(out)
+
+
+def fuzz(n: int, rng: random.Random, work: Path) -> dict:
+    """``n`` mutated files per format, each read by :func:`vrig.io.read`."""
+    import vrig.io
+    from vrig.errors import FileFormatError
+
+    bases = _fuzz_bases(work)
+    read = refused = raw = 0
+    kinds: dict[str, int] = {}
+    for name, base in bases.items():
+        path = work / f"fuzz-{name}"
+        for _ in range(n):
+            path.write_bytes(_mutate(base, rng))
+            try:
+                th = vrig.io.read(path)
+            except FileFormatError:
+                refused += 1
+                continue
+            except Exception as exc:  # (what the count is for)
+                raw += 1
+                kinds[type(exc).__name__] = kinds.get(type(exc).__name__, 0) + 1
+                continue
+            ok = np.all(np.isfinite(th.data)) and np.isfinite(th.fs) and th.fs > 0
+            read += bool(ok)
+            raw += not ok
+            if not ok:
+                kinds["non-finite result"] = kinds.get("non-finite result", 0) + 1
+    return {
+        "files": n * len(bases),
+        "formats": sorted(bases),
+        "read (finite)": read,
+        "refused (FileFormatError)": refused,
+        "raw tracebacks": raw,
+        "raw by kind": kinds,
+    }
+
+
+def _totals(report: dict) -> dict:
+    """The issue's counts: tries per kind, lost, raw tracebacks (vrig's)."""
+    kill, conc = report["kills"], report["concurrent saves"]
+    intr, two = report["interrupts"], report["two CLI runs, --overwrite"]
+    strain_, disk, fz = report["µε unit"], report["full disk"], report["fuzzed files"]
+    lost = (
+        kill["lost"] + conc["saves lost"] + conc["saves failed"] + intr["exit 0 after SIGINT"]
+        + intr["lost (folder not as the line says)"] + disk["half-written folders"]
+        + (two["first exit"] != 0) + (strain_["exit"] != 0)
+    )  # fmt: skip
+    raw = (
+        conc["raw tracebacks"] + intr["raw tracebacks"]["vrig"] + two["raw tracebacks"]
+        + int(strain_["raw tracebacks"]) + fz["raw tracebacks"]
+    )  # fmt: skip
+    return {
+        "kills": kill["kills"],
+        "concurrent saves": conc["saves"],
+        "interrupts": intr["runs"],
+        "fuzzed files": fz["files"],
+        "lost": lost,
+        "raw tracebacks": raw,
+        "Python start-up tracebacks (no vrig code ran yet)": intr["raw tracebacks"][
+            "Python's own start-up (no vrig frame)"
+        ],
+    }
+
+
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(prog="python -m benchmarks.hostile_io", description=__doc__)
-    p.add_argument("--quick", action="store_true", help="fewer tries (about a minute)")
+    p.add_argument("--quick", action="store_true", help="fewer tries (under three minutes)")
     p.add_argument("--seed", type=int, default=0, help="random seed of the moments (default 0)")
     args = p.parse_args(argv)
     if sys.platform != "linux":
         print("hostile_io: Linux only (fork, flock, /proc)")
         return 0
     rng = random.Random(args.seed)
-    n_kills, n_int, saves = (8, 6, 6) if args.quick else (24, 14, 15)
+    n_kills, n_int, saves, n_fuzz = (8, 6, 6, 400) if args.quick else (24, 14, 15, 5200)
     work = Path(tempfile.mkdtemp(prefix="vrig-hostile-"))
     report = {}
     try:
@@ -360,11 +507,19 @@ def main(argv=None) -> int:
         report["two CLI runs, --overwrite"] = two_runs(work)
         report["µε unit"] = strain(field, work)
         report["full disk"] = full_disk(work)
+        report["fuzzed files"] = fuzz(n_fuzz, rng, work)
         report["seconds"] = round(time.perf_counter() - t0, 1)
     finally:
         shutil.rmtree(work, ignore_errors=True)
+    totals = report["totals"] = _totals(report)
     print(json.dumps(report, indent=2, ensure_ascii=False, default=str))
-    return 0
+    print(
+        f"hostile_io: {totals['kills']} kills, {totals['concurrent saves']} concurrent saves, "
+        f"{totals['interrupts']} interrupts, {totals['fuzzed files']} fuzzed files: "
+        f"{totals['lost']} lost, {totals['raw tracebacks']} raw tracebacks "
+        f"({report['seconds']} s)"
+    )
+    return 0 if totals["lost"] == 0 and totals["raw tracebacks"] == 0 else 1
 
 
 if __name__ == "__main__":

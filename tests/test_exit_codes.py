@@ -159,20 +159,20 @@ def test_a_refused_it00_exits_7_writes_the_folder_and_does_not_advise_the_gain(
 
 
 def test_a_failed_identification_exits_7_and_writes_the_folder(stub, tmp_path, capsys):
-    """Every identification run trips (the drive is halved three times first): exit 7, the
+    """Every identification run trips (the drive is halved ten times first): exit 7, the
     tripping identification drive and the desired records are in --out."""
     stub("ID", _trip, plots=True)
     out = tmp_path / "id"
     assert main([*ARGV, "--out", str(out)]) == 7
     line = _stderr_line(capsys)
     assert line.startswith("vrig reconstruct: failed: no iteration played: identification")
-    assert "the identification drive trips the rig even at 1/8" in line and "--gain" not in line
+    assert "the identification drive trips the rig even at 1/1024" in line and "--gain" not in line
     names = {p.name for p in out.iterdir()}
     assert {"TRIPPEDID.npz", "FIELD01.npz", "DESRES01.npz", "DESDRV.npz", "summary.json"} <= names
     assert not names & {"IDRES.npz", "IT00DRV.npz"}
     tripped = vrig.TimeHistory.load(out / "TRIPPEDID.npz")
     full = vrig.load_rig("shock-absorber").inputs[0].full_scale
-    assert 0 < np.sqrt(np.mean(tripped.data**2)) <= 0.05 * full / 8 * (1 + 1e-9)  # 1/8 of 5 %
+    assert 0 < np.sqrt(np.mean(tripped.data**2)) <= 0.05 * full / 1024 * (1 + 1e-9)  # of 5 %
     summary = _summary(out)
     assert summary["stop_kind"] == "interlock" and summary["rejected"] == "TRIPPEDID"
 
@@ -229,7 +229,7 @@ def test_each_error_has_its_stop_kind():
 @pytest.mark.parametrize(
     "stage,kind,wanted,unwanted",
     [
-        ("identification", "interlock", "1/8 of its amplitude", "--gain"),
+        ("identification", "interlock", "1/1024 of its amplitude", "--gain"),
         ("identification", "unstable", "rig model", "--gain"),
         ("model", "diverged", "a lower --order", "--gain"),
         ("model", "model", "could not be fitted", "--gain"),
@@ -241,7 +241,7 @@ def test_each_error_has_its_stop_kind():
         ("after IT00", "diverged", "--strategy adaptive", "--band"),
         ("after IT00", "unstable", "a lower --gain", "--band"),
         ("after IT00", "model", "a lower --order", "--band"),
-        ("after IT00", "failed", "a lower --gain", "1/8"),
+        ("after IT00", "failed", "a lower --gain", "1/1024"),
     ],
 )
 def test_the_advice_acts_on_the_failure_at_hand(stage, kind, wanted, unwanted):

@@ -110,3 +110,86 @@ def test_run_episode_follows_the_env():
     # the same episode with the same seed
     again = run_episode(env, FixedGain(env, 1.0), seed=5)
     assert again.mean_eta0 == res.mean_eta0
+
+
+# ---------------------------------------------------------------------------------------------
+# issue 25: complex gains were cast to their real part (NumPy's ComplexWarning at most)
+# ---------------------------------------------------------------------------------------------
+COMPLEX = [0.5 + 0.2j, np.complex128(0.5 + 0.2j), np.array(0.5 + 0.2j)]
+
+
+@pytest.mark.parametrize("value", COMPLEX, ids=["python", "numpy-scalar", "numpy-0d"])
+@pytest.mark.parametrize(
+    "make",
+    [
+        lambda env, v: FixedGain(env, v),
+        lambda env, v: DecreasingGain(env, start=v),
+        lambda env, v: DecreasingGain(env, decay=v),
+        lambda env, v: DecreasingGain(env, floor=v),
+        lambda env, v: AdaptiveBandGain(env, start=v),
+        lambda env, v: AdaptiveBandGain(env, shrink=v),
+        lambda env, v: AdaptiveBandGain(env, grow=v),
+        lambda env, v: AdaptiveBandGain(env, low=v),
+        lambda env, v: AdaptiveBandGain(env, high=v),
+        lambda env, v: BandRatioPolicy(env, np.full(7, v)),
+        lambda env, v: BandRatioPolicy.initial(env, v),
+    ],
+    ids=[
+        "FixedGain", "Decreasing-start", "Decreasing-decay", "Decreasing-floor", "Adaptive-start",
+        "Adaptive-shrink", "Adaptive-grow", "Adaptive-low", "Adaptive-high", "BandRatio-params",
+        "BandRatio-initial",
+    ],
+)  # fmt: skip
+def test_every_constructor_refuses_a_complex_gain(make, value):
+    with pytest.raises(TypeError, match="complex value"):
+        make(fake_env(), value)
+
+
+def test_a_complex_gain_is_refused_in_the_complex_action_mode_too():
+    """The complex mode takes a real gain and a real phase per band, not a complex gain."""
+    with pytest.raises(TypeError, match="complex value"):
+        FixedGain(fake_env("complex"), np.complex128(0.5 + 0.2j))
+
+
+class _ComplexGains(FixedGain):
+    def gains(self, obs):
+        return np.full(4, 0.5 + 0.2j)
+
+
+class _ComplexPhases(FixedGain):
+    def phases(self, obs):
+        return np.full(4, 0.1 + 0.1j)
+
+
+def test_a_policy_whose_gains_or_phases_are_complex_is_refused_when_called():
+    with pytest.raises(TypeError, match="gains must be real"):
+        _ComplexGains(fake_env())(obs())
+    with pytest.raises(TypeError, match="phases must be real"):
+        _ComplexPhases(fake_env("complex"))(obs())
+
+
+@pytest.mark.parametrize(
+    ("value", "error", "match"),
+    [
+        ("0.8", TypeError, "real number"),
+        (True, TypeError, "real number"),
+        (np.nan, ValueError, "finite"),
+        (np.inf, ValueError, "finite"),
+        ([0.5, 0.6], TypeError, "one number"),
+    ],
+)
+def test_a_gain_must_be_one_finite_real_number(value, error, match):
+    with pytest.raises(error, match=match):
+        FixedGain(fake_env(), value)
+
+
+def test_real_gains_of_any_numeric_type_are_kept_exactly():
+    for value in (1, np.float32(0.75), np.int64(1), np.array(0.5)):
+        assert FixedGain(fake_env(), value).gain == float(value)
+    with pytest.raises(ValueError, match="> 0"):
+        BandRatioPolicy.initial(fake_env(), 0.0)
+
+
+def test_cross_entropy_search_refuses_a_complex_start():
+    with pytest.raises(TypeError, match="complex value"):
+        cross_entropy_search(lambda p: float(p @ p), np.array([1 + 1j, 0.0]), 1.0)

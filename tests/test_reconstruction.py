@@ -210,15 +210,29 @@ def test_a_diverged_inverse_at_it00_still_returns_the_identification(shaker_case
 def test_an_identification_drive_that_always_trips_is_kept(shaker_case):
     rig, desired = shaker_case
     played = []
-    trips = {k: _trip() for k in range(4)}  # full, 1/2, 1/4, 1/8 of the RMS
+    trips = {k: _trip() for k in range(11)}  # full, 1/2, ..., 1/1024 of the RMS
     with pytest.raises(vrig.ReconstructionError, match="identification") as err:
         reconstruct(_Recording(rig, played, trips), desired, bandwidth=BAND)
     res = err.value.result
-    assert len(played) == 4 and err.value.stage == "identification"
+    assert len(played) == 11 and err.value.stage == "identification"
     assert res.id_drive is None and res.id_response is None
     assert res.rejected_name == "TRIPPEDID"
     np.testing.assert_array_equal(res.rejected_drive.data, played[-1])
-    np.testing.assert_allclose(played[-1], played[0] / 8)
+    np.testing.assert_allclose(played[-1], played[0] / 1024)
+
+
+def test_the_identification_level_halves_past_an_eighth_until_the_rig_runs(shaker_case):
+    """A rig that takes only 1/32 of the default identification level (a user's rig whose
+    response ranges do not match its drives' full scales: models/README.md's example) is
+    identified at 1/32; the rule used to give up at 1/8."""
+    rig, desired = shaker_case
+    played = []
+    trips = {k: _trip() for k in range(5)}  # full, 1/2, 1/4, 1/8, 1/16 trip; 1/32 runs
+    res = reconstruct(_Recording(rig, played, trips), desired, iterations=0, bandwidth=BAND)
+    np.testing.assert_allclose(res.id_drive.data, played[0] / 32)
+    assert res.identification["reason"].endswith(
+        f"halved 5x after interlock trips ({trips[4]})"
+    )
 
 
 def test_pseudo_damage_scales_with_the_slope():

@@ -7,7 +7,8 @@ of a results folder found, one test per defect.
    KeyboardInterrupt) with the result attached, the CLI saves it and exits 130 with one line,
    an interrupt while ``vrig`` is imported is one line too, and none is swallowed;
 3. one advisory lock per results folder: a second writer waits or fails before anything is
-   written or played, and no reader puts an old folder back while a writer holds the lock;
+   written or played, and no reader puts an old folder back while a writer holds the lock
+   (``vrig repeatability`` and ``vrig check-linearity`` too);
 4. the plots are drawn into the staged folder: a failure between records and plots leaves the
    old folder whole, a full disk leaves no half-written folder and the message says what was
    saved;
@@ -326,6 +327,83 @@ def test_ctrl_c_while_vrig_is_imported_is_one_line_and_exit_130(tmp_path):
     assert err.splitlines() == ["vrig rigs: interrupted"]
 
 
+# the launcher pip writes for pyproject's [project.scripts] entry (distlib's template)
+_LAUNCHER = """import re
+import sys
+from {module} import {func}
+if __name__ == '__main__':
+    sys.argv[0] = re.sub(r'(-script\\.pyw|\\.exe)?$', '', sys.argv[0])
+    sys.exit({func}())
+"""
+
+
+@linux
+def test_ctrl_c_right_after_the_console_module_is_imported_is_one_line(tmp_path):
+    """The handler is in force from the console module's import, before the launcher calls
+    its entry function: an interrupt between the two was a raw KeyboardInterrupt traceback."""
+    module, _ = _console_script()
+    code = (
+        f"import os, signal, sys, time; sys.argv = ['vrig', 'rigs']; import {module}\n"
+        "os.kill(os.getpid(), signal.SIGINT)\n"
+        "time.sleep(60)\n"
+        "print('the interrupt was lost', file=sys.stderr)"
+    )
+    env = {**os.environ, "PYTHONPATH": str(ROOT)}
+    proc = subprocess.run(
+        [sys.executable, "-c", code], cwd=tmp_path, env=env, text=True, capture_output=True,
+        timeout=120,
+    )  # fmt: skip
+    assert proc.returncode == 130, proc.stderr
+    assert proc.stderr.splitlines() == ["vrig rigs: interrupted"]
+
+
+def _python_startup_traceback(err: str) -> bool:
+    """A traceback raised before any code of vrig's ran: in ``site`` (the environment's
+    ``.pth`` files, setuptools' editable finder among them) or in the launcher's own lines
+    (its imports, the import system finding the console module), no frame in vrig's code
+    (``vrig_console.py``, the ``vrig`` and ``identification`` packages)."""
+    files = [
+        Path(line.split('"')[1])
+        for line in err.splitlines()
+        if line.lstrip().startswith('File "')
+    ]
+    ours = [
+        f for f in files
+        if f.name == "vrig_console.py" or {"vrig", "identification"} & set(f.parent.parts)
+    ]  # fmt: skip
+    return bool(files) and not ours and err.rstrip().endswith("KeyboardInterrupt")
+
+
+@linux
+@pytest.mark.parametrize("delay_s", [0.0, 0.01, 0.02, 0.04, 0.06, 0.1, 0.2, 0.5])
+def test_ctrl_c_early_in_start_up_is_never_a_vrig_traceback(delay_s, tmp_path):
+    """SIGINT to the launcher pip writes, at several delays after the start (where it lands
+    depends on the machine's load, so each outcome is checked, not its timing): killed before
+    Python installs its handler (no output), one line and exit 130 once vrig's code runs, or a
+    traceback of Python's own start-up (``site``) where no code of vrig's can run yet — never a
+    traceback from a frame of vrig's, and never a command that goes on."""
+    module, func = _console_script()
+    launcher = tmp_path / "vrig"
+    launcher.write_text(_LAUNCHER.format(module=module, func=func))
+    env = {**os.environ, "PYTHONPATH": str(ROOT), "OPENBLAS_NUM_THREADS": "1"}
+    proc = subprocess.Popen(
+        [sys.executable, str(launcher), "rigs"], cwd=tmp_path, env=env, text=True,
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+    )  # fmt: skip
+    try:
+        time.sleep(delay_s)
+        proc.send_signal(signal.SIGINT)
+        out, err = proc.communicate(timeout=120)
+    finally:
+        proc.kill()
+    if proc.returncode == -signal.SIGINT:  # before Python's handler: the shell says 130
+        assert err == "" and out == ""
+    elif proc.returncode == 130:
+        assert err.splitlines() == ["vrig rigs: interrupted"]
+    else:
+        assert _python_startup_traceback(err), (proc.returncode, err)
+
+
 # ---------------------------------------------------------------------------------------------
 # 3. one lock per results folder
 # ---------------------------------------------------------------------------------------------
@@ -473,6 +551,88 @@ def test_a_second_cli_run_on_a_folder_in_use_is_refused_before_playing(
     assert first.returncode == 0, first_err
     summary = TestFolder(out).summary()
     assert summary["stop_kind"] == "completed" and "overlay.png" in summary["plots"]
+
+
+_PLOT_COMMANDS = {  # the other commands that write into a results folder: argv, their plot
+    "repeatability": (["--seconds", "2", "--runs", "2"], "repeatability.png"),
+    "check-linearity": (["--seconds", "2", "--plot"], "linearity.png"),
+}
+
+
+def _plot_argv(command: str, out: Path) -> list:
+    return [command, "--rig", "shock-absorber", *_PLOT_COMMANDS[command][0], "--out", out]
+
+
+@linux
+@pytest.mark.parametrize("command", sorted(_PLOT_COMMANDS))
+def test_a_plot_command_on_a_folder_in_use_is_refused_before_its_runs(
+    command, tmp_path, monkeypatch
+):
+    """Another writer holds the folder (a reconstruction being saved into it, or the same
+    command): the second is refused with one line naming the holder, before it plays the rig,
+    and the folder is left exactly as it was (it wrote its plot into the folder regardless)."""
+    out = tmp_path / "shared"
+    out.mkdir()
+    (out / _PLOT_COMMANDS[command][1]).write_bytes(b"the other writer's plot")
+    (out / "FIELD01.rsp").write_bytes(b"a record")
+    before = _snapshot(out)
+
+    def refuse(*args, **kwargs):
+        raise AssertionError("the second writer played the rig")
+
+    monkeypatch.setattr(vrig.rigs.mujoco_rig.MujocoRig, "run", refuse)
+    with _lock_held_by_another_process(out) as (holder, _):
+        code, _, err = _cli(_plot_argv(command, out))
+        (line,) = _lines(err)
+        assert code == 2
+        assert line.startswith(f"vrig {command}: --out: ")
+        assert f"is being written by vrig process {holder.pid}" in line
+        assert _snapshot(out) == before
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["shared"]  # no lock file, no debris
+
+
+def _lock_is_free(path: Path, answer) -> None:
+    from vrig.errors import FolderLockedError
+    from vrig.files import folder_lock
+
+    try:
+        with folder_lock(path, timeout=0):
+            answer.value = 1
+    except FolderLockedError:
+        answer.value = 0
+
+
+@linux
+@pytest.mark.parametrize("command", sorted(_PLOT_COMMANDS))
+def test_a_plot_command_writes_its_plot_holding_the_folder_lock(command, tmp_path, monkeypatch):
+    """While the plot is written, another process cannot take the folder's lock (a
+    reconstruction's swap of the same folder waits for it or is refused); the lock is released
+    afterwards and the folder holds the new plot beside what it held."""
+    import vrig.plots
+
+    out = tmp_path / "shared"
+    out.mkdir()
+    (out / "FIELD01.rsp").write_bytes(b"a record")
+    ctx = multiprocessing.get_context("fork")
+    free_while_writing = ctx.Value("i", -1)
+    save = vrig.plots.save_figure
+
+    def save_and_probe(fig, path, **kwargs):
+        probe = ctx.Process(target=_lock_is_free, args=(out, free_while_writing))
+        probe.start()
+        probe.join(60)
+        return save(fig, path, **kwargs)
+
+    monkeypatch.setattr(vrig.plots, "save_figure", save_and_probe)
+    code, _, err = _cli(_plot_argv(command, out))
+    assert code == 0, err
+    assert free_while_writing.value == 0  # held by the command
+    free_after = ctx.Value("i", -1)
+    _lock_is_free(out, free_after)
+    assert free_after.value == 1
+    plot = _PLOT_COMMANDS[command][1]
+    assert sorted(p.name for p in out.iterdir()) == sorted(["FIELD01.rsp", plot])
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["shared"]
 
 
 # ---------------------------------------------------------------------------------------------

@@ -65,7 +65,9 @@ was played (every whole iteration, the identification records, the desired respo
 ``--out`` as after any other stop; a Ctrl-C while the results are being written waits until they
 are written whole (seconds). ``vrig reconstruct`` holds the lock of ``--out``
 (:func:`vrig.files.folder_lock`) from its argument checks to the end: a second run on the same
-folder is refused (exit code 2) before it plays anything. The test folder and the plots are
+folder is refused (exit code 2) before it plays anything; ``vrig repeatability`` and ``vrig
+check-linearity --plot`` hold the lock of their ``--out`` the same way, from their checks until
+the plot is written (atomically). The test folder and the plots are
 written in one swap: a full disk or a kill leaves the previous folder (or none), never new
 records beside old plots.
 """
@@ -1085,10 +1087,10 @@ _NARROWER = "a narrower --band, a lower --order or --method frf"
 _ADVICE = {
     # (stage, stop kind) -> what to change; stage "identification", "model", "IT00" (nothing
     # played: the gain plays no role) or "after IT00" (an iteration stopped: the gain does)
-    ("identification", "interlock"): "the identification drive trips the rig even at 1/8 of its "
-    "amplitude (TRIPPEDID): check the rig's limits, or use a narrower --band",
+    ("identification", "interlock"): "the identification drive trips the rig even at 1/1024 of "
+    "its amplitude (TRIPPEDID): check the rig's limits, or use a narrower --band",
     ("identification", "refused"): "the identification drive is beyond the drives' full scale "
-    "even at 1/8 of its amplitude (REFUSEDID): check the rig's limits",
+    "even at 1/1024 of its amplitude (REFUSEDID): check the rig's limits",
     ("identification", "unstable"): "the rig's simulation became unstable under the "
     "identification drive: check the rig model (time step, parameters) or use a narrower --band",
     ("model", "diverged"): "the inverse model diverges on the desired response: try a lower "
@@ -1137,6 +1139,12 @@ def _advice(kind: str, stage: str, gain: float, identification: dict | None = No
 
 
 def _cmd_repeatability(args) -> int:
+    with contextlib.ExitStack() as hold:  # the plot folder's lock, from the checks to the end
+        return _repeatability(args, hold)
+
+
+def _repeatability(args, hold: contextlib.ExitStack) -> int:
+    """``vrig repeatability``; ``hold`` keeps the lock of ``--out`` (:func:`_hold_out`)."""
     from .plots import repeatability_plot, save_figure
     from .progress import bar
     from .repeatability import repeatability_function, repeatability_number, signal_to_noise
@@ -1153,6 +1161,7 @@ def _cmd_repeatability(args) -> int:
     if out.exists() and not out.is_dir():
         raise _UsageError(f"--out {out} is a file, not a folder")
     _check_writable(out)  # before the runs, not after them
+    _hold_out(hold, out)  # one writer per folder: a second one is refused before its runs
 
     drive, first = pseudo_field(rig, band, args.seconds, seed=args.seed)
     rms = np.sqrt(np.mean(drive.data**2, axis=0)) / [c.full_scale for c in rig.inputs]
@@ -1208,6 +1217,13 @@ def _cmd_repeatability(args) -> int:
 
 
 def _cmd_check_linearity(args) -> int:
+    with contextlib.ExitStack() as hold:  # the plot folder's lock, from the checks to the end
+        return _check_linearity(args, hold)
+
+
+def _check_linearity(args, hold: contextlib.ExitStack) -> int:
+    """``vrig check-linearity``; ``hold`` keeps the lock of ``--out`` (:func:`_hold_out`)
+    when the plot is asked for."""
     from .linearity import check_rig_linearity
 
     if not (np.isfinite(args.level) and 0 < args.level <= 0.5):
@@ -1226,6 +1242,7 @@ def _cmd_check_linearity(args) -> int:
         if out.exists() and not out.is_dir():
             raise _UsageError(f"--out {out} is a file, not a folder")
         _check_writable(out)  # before the runs, not after them
+        _hold_out(hold, out)  # one writer per folder: a second one is refused before its runs
     result = check_rig_linearity(  # its bar follows VRIG_PROGRESS (a terminal by default)
         rig, level=args.level, seconds=args.seconds, band=band, seed=args.seed
     )

@@ -30,6 +30,7 @@ the rig's first service scenario, :func:`vrig.service.field_scenarios`)."""
 _FIELD_FRACTION = 0.10  # pseudo-field drive RMS as a fraction of full scale (5 mm on the damper)
 _FIELD_HEADROOM = 2 / 3  # pseudo-field responses peak below this fraction of the transducer range
 _FADE_S = 1.0
+_FIELD_ATTEMPTS = 11  # the level halved up to ten times: down to 1/1024 of it (60 dB)
 
 
 def default_band(rig) -> tuple[float, float]:
@@ -84,11 +85,15 @@ def pseudo_field(rig, band: tuple[float, float], seconds: float, *, seed: int = 
     """A pseudo-field drive and the rig's response to it (reference text §6.5).
 
     The drive has a triangular PSD over ``band`` (the QanTiM road-like shape), a 1 s fade-in and
-    fade-out, and 10 % of each drive channel's full scale RMS; the level is halved (up to four
-    times) until every response peaks below two thirds of its transducer range and the rig runs
-    1.5 times the drive without an interlock trip (room for the iterations to overshoot: a
-    desired response made right at the following-error limit cannot be reached by any drive
-    that differs from the original).
+    fade-out, and 10 % of each drive channel's full scale RMS; the level is halved (up to ten
+    times: down to 1/1024 of it) until every response peaks below two thirds of its transducer
+    range and the rig runs 1.5 times the drive without an interlock trip (room for the
+    iterations to overshoot: a desired response made right at the following-error limit cannot
+    be reached by any drive that differs from the original). A level set from the drives' full
+    scales knows nothing of the responses' ranges: on a user's rig whose ranges do not match its
+    drives' (a 200 m/s^2 accelerometer behind a 50 mm actuator driven to 125 Hz, the table's
+    own acceleration growing with the frequency squared: ``models/README.md``'s example) the
+    level that fits is 1/32 of the start, beyond the four halvings this rule used to allow.
 
     Each level tried is reported on stderr inside :func:`vrig.progress.enabled` (quiet
     otherwise).
@@ -96,7 +101,7 @@ def pseudo_field(rig, band: tuple[float, float], seconds: float, *, seed: int = 
     Parameters
     ----------
     rig : Rig
-        The rig that makes the record; run up to ten times (two runs per level tried).
+        The rig that makes the record; run up to 22 times (two runs per level tried).
     band : (float, float)
         Frequency band (low, high) of the triangular drive PSD [Hz].
     seconds : float
@@ -122,11 +127,15 @@ def pseudo_field(rig, band: tuple[float, float], seconds: float, *, seed: int = 
     fade = tukey(n, min(1.0, 2 * _FADE_S / seconds))[:, None]
     fraction = _FIELD_FRACTION
     last_error = None
-    for attempt in range(5):
+    for attempt in range(_FIELD_ATTEMPTS):
         status(
             f"desired response: {seconds:g} s pseudo-field drive at {100 * fraction:.3g} % of "
             f"full scale rms -> {rig.name}"
-            + (f" (attempt {attempt + 1} of 5: the last level was too large)" if attempt else "")
+            + (
+                f" (attempt {attempt + 1} of {_FIELD_ATTEMPTS}: the last level was too large)"
+                if attempt
+                else ""
+            )
         )
         drive = random_drive(
             triangular_psd(band),

@@ -18,6 +18,12 @@ then the episode is the ``bands`` one, bit for bit).
   by :func:`~vrig.policies.search.cross_entropy_search` (``benchmarks/learned_iteration.py``
   trains it). No GPU, no deep-learning library.
 
+Every gain and parameter is a finite real number: a complex one (whose imaginary part a
+float conversion would drop, with only NumPy's ``ComplexWarning`` to say so) is a
+:class:`TypeError`, also when a policy's :meth:`Policy.gains` or :meth:`Policy.phases` returns
+one. None of these policies takes complex gains: a phase is the ``complex`` action mode's
+:meth:`Policy.phases`, given apart from the gain.
+
 An episode of a policy is played by :func:`~vrig.policies.episodes.run_episode`.
 """
 
@@ -32,6 +38,31 @@ __all__ = [
     "FixedGain",
     "Policy",
 ]
+
+
+def _real_array(value, what: str) -> np.ndarray:
+    """``value`` as a float array of finite real numbers, or a TypeError/ValueError naming
+    ``what`` (a complex value is refused, never cast to its real part)."""
+    arr = np.asarray(value)
+    if arr.dtype.kind == "c":
+        raise TypeError(
+            f"{what} must be real, got a complex value ({value!r}): the imaginary part would be "
+            "dropped; a phase is the 'complex' action mode's Policy.phases"
+        )
+    if arr.dtype.kind not in "iuf":
+        raise TypeError(f"{what} must be a real number (or numbers), got {value!r}")
+    arr = arr.astype(float)
+    if not np.all(np.isfinite(arr)):
+        raise ValueError(f"{what} must be finite, got {value!r}")
+    return arr
+
+
+def _real(value, what: str) -> float:
+    """``value`` as one finite real float (see :func:`_real_array`)."""
+    arr = _real_array(value, what)
+    if arr.ndim != 0:
+        raise TypeError(f"{what} must be one number, got an array of shape {arr.shape}")
+    return float(arr)
 
 
 class Policy:
@@ -91,14 +122,14 @@ class Policy:
     def __call__(self, obs) -> np.ndarray:
         lay = self.layout
         shape = (lay.n_inputs, lay.n_bands)
-        g = np.broadcast_to(np.asarray(self.gains(obs), float), shape)
+        g = np.broadcast_to(_real_array(self.gains(obs), f"{self.name}: gains"), shape)
         if lay.mode == "channels":
             g = g.mean(axis=1)
         elif lay.mode == "scalar":
             g = np.array([g.mean()])
         phases = None
         if lay.mode == "complex":
-            phases = np.broadcast_to(np.asarray(self.phases(obs), float), shape)
+            phases = np.broadcast_to(_real_array(self.phases(obs), f"{self.name}: phases"), shape)
             phases = np.clip(phases, -lay.phase_max, lay.phase_max)
         return lay.action(
             np.clip(g, lay.low, lay.high), phases, reidentify=self.reidentify(obs)
@@ -122,7 +153,7 @@ class FixedGain(Policy):
 
     def __init__(self, env, gain: float = 0.8):
         super().__init__(env)
-        self.gain = float(gain)
+        self.gain = _real(gain, "FixedGain: gain")
         self.name = f"fixed {self.gain:g}"
 
     def gains(self, obs):
@@ -155,7 +186,10 @@ class DecreasingGain(Policy):
 
     def __init__(self, env, start: float = 1.2, decay: float = 0.85, floor: float = 0.5):
         super().__init__(env)
-        self.start, self.decay, self.floor = float(start), float(decay), float(floor)
+        self.start, self.decay, self.floor = (
+            _real(v, f"DecreasingGain: {k}")
+            for k, v in (("start", start), ("decay", decay), ("floor", floor))
+        )
         self.name = f"decreasing {self.start:g}x{self.decay:g}^n"
 
     def gains(self, obs):
@@ -200,8 +234,10 @@ class AdaptiveBandGain(Policy):
         high: float = 1.2,
     ):
         super().__init__(env)
-        self.start, self.shrink, self.grow = float(start), float(shrink), float(grow)
-        self.low, self.high = float(low), float(high)
+        given = {"start": start, "shrink": shrink, "grow": grow, "low": low, "high": high}
+        real = {k: _real(v, f"AdaptiveBandGain: {k}") for k, v in given.items()}
+        self.start, self.shrink, self.grow = real["start"], real["shrink"], real["grow"]
+        self.low, self.high = real["low"], real["high"]
         self.name = "adaptive per band"
         self.reset()
 
@@ -251,7 +287,7 @@ class BandRatioPolicy(Policy):
 
     def __init__(self, env, params):
         super().__init__(env)
-        p = np.asarray(params, dtype=float)
+        p = _real_array(params, "BandRatioPolicy: params")
         if p.shape != (self.n_params(env),):
             raise ValueError(f"params must have shape ({self.n_params(env)},), got {p.shape}")
         self.params = p
@@ -283,6 +319,9 @@ class BandRatioPolicy(Policy):
         gain : float, optional
             The fixed gain the parameters reproduce.
         """
+        gain = _real(gain, "BandRatioPolicy.initial: gain")
+        if gain <= 0:
+            raise ValueError(f"BandRatioPolicy.initial: gain must be > 0 (its log), got {gain:g}")
         p = np.zeros(BandRatioPolicy.n_params(env))
         p[: env.unwrapped.layout.n_bands] = np.log(gain)
         return p

@@ -11,6 +11,8 @@ from collections.abc import Callable
 
 import numpy as np
 
+from .gains import _real_array
+
 __all__ = ["cross_entropy_search"]
 
 
@@ -60,8 +62,8 @@ def cross_entropy_search(
     elite, best score so far)
     """
     rng = np.random.default_rng(seed)
-    mean = np.asarray(mean, dtype=float).copy()
-    std = np.broadcast_to(np.asarray(std, dtype=float), mean.shape).copy()
+    mean = _real_array(mean, "cross_entropy_search: mean").copy()
+    std = np.broadcast_to(_real_array(std, "cross_entropy_search: std"), mean.shape).copy()
     std_min = 0.05 * std
     best, best_score, history = mean.copy(), float(objective(mean)), []
     for gen in range(generations):

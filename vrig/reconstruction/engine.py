@@ -31,6 +31,7 @@ from .vocabulary import method_spec
 __all__ = ["DriveIteration", "play_batch"]
 
 _PLAY_ERRORS = (RigLimitError, SimulationInstabilityError, SimulationDivergedError)
+_ID_ATTEMPTS = 11  # the default identification level halved up to ten times: 1/1024 (60 dB)
 """What :func:`play_batch` returns in a drive's slot (what :meth:`DriveIteration.play` raises
 for a drive the rig refuses, trips on or cannot simulate)."""
 
@@ -229,8 +230,10 @@ class DriveIteration:
         """IDDRV -> IDRES -> inverse model (after :meth:`check_length`).
 
         Default: IDDRV from ``id_psd`` (triangular over the identification band) at ``id_rms``
-        (5 % of full scale), the RMS halved (up to three times) while the rig refuses or trips
-        on it. With ``id_match`` the drive is matched to DESRES's spectrum and amplitude range
+        (5 % of full scale), the RMS halved (up to ten times: 1/1024) while the rig refuses or
+        trips on it (a level set from the drives' full scales knows nothing of the responses'
+        ranges: a user's rig may take only a small fraction of it, as vrig.field.pseudo_field
+        says). With ``id_match`` the drive is matched to DESRES's spectrum and amplitude range
         (:func:`~vrig.reconstruction.matching.identify_matched`; what it did is kept in
         ``id_matching``). Either way ``id_report`` says which level was used and why, and how
         the identification response's RMS and peak compare with DESRES's; a default
@@ -252,7 +255,7 @@ class DriveIteration:
         shape = self.id_psd
         if shape is None:
             shape = triangular_psd((max(self.id_band[0], 0.0), self.id_band[1]))
-        for attempt in range(4):
+        for attempt in range(_ID_ATTEMPTS):
             level = 100 * np.max(rms / [c.full_scale for c in rig.inputs])
             status(
                 f"identifying: IDDRV {self.id_samples / rig.fs:g} s ({level:.3g} % of full "
@@ -276,7 +279,7 @@ class DriveIteration:
             except RigLimitError as exc:  # halve the amplitude and try again
                 rms, last_trip = rms / 2, exc
         else:
-            raise last_trip  # even at 1/8 of the amplitude the identification drive trips
+            raise last_trip  # even at 1/1024 of the amplitude the identification drive trips
         given = self.settings.id_rms is not None
         self.id_report = {
             "mode": "default",

@@ -102,8 +102,8 @@ def reconstruct(
         default the desired record) too short for the method
         (:meth:`~vrig.reconstruction.DriveIteration.check_length` states the rule).
     ReconstructionError
-        Nothing could be played: the identification drive tripped the rig even at 1/8 of its
-        amplitude, the inverse model could not be fitted or diverged on DESRES, or IT00DRV was
+        Nothing could be played: the identification drive tripped the rig even at 1/1024 of
+        its amplitude, the inverse model could not be fitted or diverged on DESRES, or IT00DRV was
         refused or tripped. ``exc.result`` holds what was made (identification records, model,
         the rejected drive); ``exc.cause`` the original error.
     ReconstructionInterrupted

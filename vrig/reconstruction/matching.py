@@ -26,8 +26,9 @@ the identification band and spectrum follow the desired response (§3.3: rig-spe
    progressive or softening specimen);
 4. checks every level against the drives' **full scale** before it is played (the drive's peak
    is kept at or below :data:`PEAK_MARGIN` of full scale: a target that needs more is reported,
-   not played) and keeps the default engine's fallback: a level that trips an interlock is halved
-   (up to three times) and never exceeded again.
+   not played) and a level that trips an interlock is halved (up to three times: the matched
+   level is measured, near the target's; the default identification halves up to ten times)
+   and never exceeded again.
 
 The identification run kept is the one whose response came closest to the target's level;
 :class:`MatchedIdentification` records the probe, the FRF, the target and drive PSDs, every
@@ -76,7 +77,7 @@ LEVEL_STATISTICS = ("rms_ratio", "peak_ratio", "half_energy_ratio")
 """The statistics of the identification response that must reach the target's."""
 PEAK_MARGIN = 0.95
 """The matched drive's peak stays at or below this fraction of each drive's full scale."""
-_MAX_HALVINGS = 3  # as the default identification: full, 1/2, 1/4, 1/8 of a tripping level
+_MAX_HALVINGS = 3  # full, 1/2, 1/4, 1/8 of a tripping level
 _PROBE_SEED, _DRIVE_SEED = 1, 2  # streams of np.random.default_rng([id_seed, stream])
 
 
