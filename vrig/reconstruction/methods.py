@@ -44,6 +44,8 @@ __all__ = [
     "InverseNarx",
     "SplitSpectra",
     "cross_spectra",
+    "frf_filter",
+    "h1_from_spectra",
     "h1_spectra",
     "make_method",
 ]
@@ -606,14 +608,30 @@ class InverseFrf:
         """
         fs = iddrv.fs
         h1 = h1_spectra(iddrv.data, idres.data, fs, min(self.nperseg, iddrv.n_samples // 4))
-        self.f, H = h1["f"], h1["H"]
+        self.set_frf(h1["f"], h1["H"], fs)
+        self.coherence = h1["coherence"]
+
+    def set_frf(self, f: np.ndarray, H: np.ndarray, fs: float) -> None:
+        """Take the FRF matrix ``H`` (drive -> response) and invert it per line, by the
+        truncated-SVD / Tikhonov pseudo-inverse of the class docstring (``rcond``,
+        ``tikhonov``); :meth:`identify` calls it with its H1 estimate, the ``"frf"`` update
+        (:mod:`vrig.reconstruction.updates`) with its iteration-updated one.
+
+        Parameters
+        ----------
+        f : ndarray (F,)
+            Frequency lines [Hz].
+        H : ndarray (F, n_responses, n_drives), complex
+            The FRF per line (response unit per drive unit).
+        fs : float
+            Sample rate [Hz] of the records the drive is computed for.
+        """
         U, s, Vh = np.linalg.svd(H, full_matrices=False)
         keep = s >= self.rcond * s[:, :1]
         lam = self.tikhonov * s[:, :1]
         sinv = np.where(keep, s / (s**2 + lam**2), 0.0)
         self.Hinv = np.einsum("fji,fj,fkj->fik", Vh.conj(), sinv, U.conj())  # (F, nu, ny)
-        self.coherence = h1["coherence"]
-        self.fs = fs
+        self.f, self.H, self.fs = f, H, fs
 
     def min_samples(self, n_drives: int, n_responses: int) -> int:
         """The shortest identification record [samples at the model rate]:
@@ -635,19 +653,7 @@ class InverseFrf:
         response : TimeHistory
             The response (desired, or an iteration's correction target) to compute a drive for.
         """
-        r = response.data
-        n = r.shape[0]
-        n_fft = 2 * n
-        R = np.fft.rfft(r, n=n_fft, axis=0)
-        fr = np.fft.rfftfreq(n_fft, 1.0 / self.fs)
-        Hi = np.empty((fr.size, *self.Hinv.shape[1:]), dtype=complex)
-        for i in range(self.Hinv.shape[1]):
-            for j in range(self.Hinv.shape[2]):
-                Hi[:, i, j] = np.interp(fr, self.f, self.Hinv[:, i, j].real) + 1j * np.interp(
-                    fr, self.f, self.Hinv[:, i, j].imag
-                )
-        Hi[0] = 0.0
-        return np.fft.irfft(np.einsum("fij,fj->fi", Hi, R), n=n_fft, axis=0)[:n]
+        return frf_filter(self.Hinv, self.f, self.fs, response.data, dc=False)
 
     def describe(self) -> str:
         """One line: the number of frequency lines and the inverse used."""
@@ -691,14 +697,71 @@ def h1_spectra(u: np.ndarray, y: np.ndarray, fs: float, nperseg: int) -> dict:
     """
     f, suu = cross_spectra(u, u, fs, nperseg)
     _, syu = cross_spectra(y, u, fs, nperseg)
+    _, syy = cross_spectra(y, y, fs, nperseg)
+    return h1_from_spectra(f, suu, syu, syy)
+
+
+def h1_from_spectra(f: np.ndarray, suu: np.ndarray, syu: np.ndarray, syy: np.ndarray) -> dict:
+    """:func:`h1_spectra` from given cross-spectral matrices (e.g. spectra accumulated over
+    several records, as the ``"frf"`` update does: :mod:`vrig.reconstruction.updates`).
+
+    Parameters
+    ----------
+    f : ndarray (F,)
+        Frequency lines [Hz].
+    suu, syu, syy : ndarray (F, nu, nu), (F, ny, nu), (F, ny, ny), complex
+        Cross-spectral matrices of drives and responses (:func:`cross_spectra`).
+
+    Returns
+    -------
+    dict
+        As :func:`h1_spectra`'s: ``f``, ``suu``, ``syu``, ``syy``, ``H`` (F, ny, nu) and
+        ``coherence`` (F, ny).
+    """
     suu_inv = np.linalg.pinv(suu)
     H = np.einsum("fij,fjk->fik", syu, suu_inv)  # (F, ny, nu)
-    _, syy = cross_spectra(y, y, fs, nperseg)
     coherence = np.real(
         np.einsum("fij,fjk,fki->fi", syu, suu_inv, syu.conj().transpose(0, 2, 1))
         / np.maximum(np.real(np.einsum("fii->fi", syy)), 1e-300)
     )
     return {"f": f, "suu": suu, "syu": syu, "syy": syy, "H": H, "coherence": coherence}
+
+
+def frf_filter(M: np.ndarray, f: np.ndarray, fs: float, x: np.ndarray, *, dc: bool = True):
+    """Filter a record by a frequency-response matrix given on a grid of lines.
+
+    The record is zero-padded to twice its length (no circular wrap-around of the filter's
+    impulse response), ``M`` is interpolated linearly (real and imaginary parts) onto the padded
+    record's lines and applied per line: ``Y(f) = M(f) X(f)``.
+
+    Parameters
+    ----------
+    M : ndarray (F, n_out, n_in), complex
+        The frequency response per line of ``f``.
+    f : ndarray (F,)
+        Its frequency lines [Hz].
+    fs : float
+        Sample rate of ``x`` [Hz].
+    x : ndarray (n_samples, n_in)
+        The record.
+    dc : bool
+        ``False`` leaves the DC line out (sets it to 0).
+
+    Returns
+    -------
+    ndarray (n_samples, n_out)
+    """
+    n = x.shape[0]
+    n_fft = 2 * n
+    X = np.fft.rfft(x, n=n_fft, axis=0)
+    fr = np.fft.rfftfreq(n_fft, 1.0 / fs)
+    Mi = np.empty((fr.size, *M.shape[1:]), dtype=complex)
+    for i in range(M.shape[1]):
+        for j in range(M.shape[2]):
+            Mi[:, i, j] = np.interp(fr, f, M[:, i, j].real) + 1j * np.interp(fr, f, M[:, i, j].imag)
+    if not dc:
+        Mi[0] = 0.0
+    return np.fft.irfft(np.einsum("fij,fj->fi", Mi, X), n=n_fft, axis=0)[:n]
 
 
 def cross_spectra(a: np.ndarray, b: np.ndarray, fs: float, nperseg: int):
