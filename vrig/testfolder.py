@@ -362,6 +362,7 @@ def _summary(result, rig, fmt: str, files: dict, models: dict, model_note: str, 
         "model_note": model_note,
         "settings": _plain(dict(settings or {})),
         "identification": _plain(getattr(result, "identification", None)),
+        "updates": _plain(list(getattr(result, "updates", None) or [])),
     }
 
 

@@ -24,12 +24,13 @@ from .protocol import InverseModelMethod, Method, ObservingMethod, SavableMethod
 from .rattlesnake import RattlesnakeLaw
 from .result import ReconstructionResult
 from .scores import pseudo_damage
-from .settings import IterationSettings
+from .settings import UPDATES, IterationSettings
 from .vocabulary import MethodOptionError, MethodSpec, method_spec
 
 __all__ = [
     "MAX_ITERATIONS",
     "METHODS",
+    "UPDATES",
     "DriveIteration",
     "InverseArx",
     "InverseErrorSignal",

@@ -26,6 +26,7 @@ from .methods import make_method
 from .protocol import ObservingMethod
 from .scores import scores
 from .settings import IterationSettings
+from .updates import make_update
 from .vocabulary import method_spec
 
 __all__ = ["DriveIteration", "play_batch"]
@@ -194,6 +195,7 @@ class DriveIteration:
         self.rejected: tuple[str, TimeHistory] | None = None
         self.id_matching = None  # MatchedIdentification of an id_match identification
         self.id_report: dict | None = None  # which identification level was used and why
+        self.updater = make_update(s.update, s.update_options)  # None: update="none"
 
     # -- resampling between the rig rate and the model rate
     def down(self, th: TimeHistory) -> TimeHistory:
@@ -412,6 +414,8 @@ class DriveIteration:
         if self.target is None:
             raise RuntimeError("identify() first")
         self.check_desired()
+        if self.updater is not None:  # the update rule starts from the identification
+            self.updater.start(self)
         return self.shape(self.up(self.target))
 
     def play(self, drive: np.ndarray, iteration: int):
@@ -443,7 +447,10 @@ class DriveIteration:
         return f"{iteration:02d}", f"IT{iteration:02d}DRV", self.settings.rig_run_seed + 1 + iteration
 
     def _processed(self, drv: TimeHistory, raw: TimeHistory):
-        """(ITxxDRV, RITxxRES, ITxxRES, scores) of a played drive (see :meth:`play`)."""
+        """(ITxxDRV, RITxxRES, ITxxRES, scores) of a played drive (see :meth:`play`); the
+        update rule, if any, observes the pair."""
+        if self.updater is not None:
+            self.updater.observe(self, drv, raw)
         res = gprepro(raw, self.band)
         if isinstance(self.method, ObservingMethod):  # e.g. a Rattlesnake law's last signals
             self.method.observe(self.down(drv), self.down(res))
@@ -479,7 +486,29 @@ class DriveIteration:
     def _th(self, data: np.ndarray) -> TimeHistory:
         return TimeHistory(data, self.rig.fs, self.names, self.units)
 
+    @property
+    def update_log(self) -> list:
+        """What the update rule did (one dict per event, :mod:`.updates`); ``[]`` without one."""
+        return [] if self.updater is None else self.updater.log
+
     def correction(self, response: TimeHistory) -> np.ndarray:
+        """The un-scaled update for ITxxRES: the update rule's (``settings.update``,
+        :mod:`.updates`), else :meth:`base_correction`.
+
+        Parameters
+        ----------
+        response : TimeHistory
+            The processed response of the last iteration (ITxxRES).
+
+        Returns
+        -------
+        ndarray (n, n_inputs)
+        """
+        if self.updater is not None:
+            return self.updater.correction(self, response)
+        return self.base_correction(response)
+
+    def base_correction(self, response: TimeHistory) -> np.ndarray:
         """``inverse(DESRES) - inverse(ITxxRES)`` at the rig rate (the un-scaled update),
         band-limited and tapered like the drive (:meth:`shape`).
 

@@ -135,6 +135,7 @@ def _reconstruct(rig, desired, settings, progress: bool, options) -> Reconstruct
         strategy=settings.strategy,
         seed=settings.id_seed,
         settings=settings,
+        updates=engine.update_log,  # the rule's own list: filled as the loop runs
     )
     bar = None
     try:

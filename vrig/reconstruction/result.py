@@ -94,6 +94,11 @@ class ReconstructionResult:
         identification response's RMS and peak over DESRES's per channel, and for a matched
         identification the probe and every level played); ``None`` when the identification
         drive could not be played.
+    updates : list of dict
+        What the update rule (``settings.update``, :mod:`~vrig.reconstruction.updates`) did,
+        one entry per event (start, each observed iteration, each correction); ``[]`` for
+        ``update="none"``. With ``"reidentify"`` ``method`` stays the model identified before
+        IT00 (the refits are described here).
     """
 
     desired: TimeHistory
@@ -119,6 +124,7 @@ class ReconstructionResult:
     rejected_drive: TimeHistory | None = None
     stop_kind: str = ""
     identification: dict | None = None
+    updates: list = field(default_factory=list)
 
     @property
     def final_drive(self) -> TimeHistory:

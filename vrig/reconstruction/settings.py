@@ -21,7 +21,7 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["MAX_ITERATIONS", "STRATEGIES", "IterationSettings", "cache_key"]
+__all__ = ["MAX_ITERATIONS", "STRATEGIES", "UPDATES", "IterationSettings", "cache_key"]
 
 MAX_ITERATIONS = 99
 """Most iterations after IT00 (the records are named IT00 .. IT99)."""
@@ -29,6 +29,11 @@ MAX_ITERATIONS = 99
 STRATEGIES = ("fixed", "adaptive")
 """``"fixed"``: one inverse model for the whole iteration; ``"adaptive"``: re-identified from the
 latest drive / raw response pair before every update."""
+
+UPDATES = ("none", "frf", "secant", "reidentify", "ilc")
+"""How the correction model learns from the iteration's data (:mod:`.updates`): ``"none"``
+(the inverse identified before IT00, as is), ``"frf"``, ``"secant"``, ``"reidentify"``,
+``"ilc"``."""
 
 
 def _check_seed(seed, name: str) -> int:
@@ -109,6 +114,19 @@ class IterationSettings:
         Stop as soon as every channel's η0 is at or below ``tolerance`` [%] (``result.stopped``
         says "converged"); ``None`` (default): play all ``iterations``. The iteration kept is
         still chosen by :func:`~vrig.reconstruction.result.best_iteration`.
+    update : {"none", "frf", "secant", "reidentify", "ilc"}
+        How the correction model learns from the iteration's drives and responses
+        (:mod:`vrig.reconstruction.updates`; :data:`UPDATES`): ``"none"`` (default) keeps the
+        inverse identified before IT00; ``"frf"`` corrects through an H1 FRF updated from the
+        identification and every iteration record (forgetting factor, coherence guard);
+        ``"secant"`` corrects the inverse per band by a Broyden (secant) update; ``"reidentify"``
+        refits the method on the identification and the iteration records; ``"ilc"``:
+        norm-optimal ILC with the identified forward FRF. Not with ``strategy="adaptive"``.
+    update_options : mapping
+        Parameters of the update (stored read-only; checked by
+        :func:`vrig.reconstruction.updates.check_update_options`): ``forgetting``,
+        ``coherence``, ``nperseg`` (frf, ilc), ``n_bands``, ``clip``, ``min_change`` (secant),
+        ``records`` (reidentify), ``q``, ``r`` (ilc).
     """
 
     method: Any = "arx"
@@ -128,10 +146,16 @@ class IterationSettings:
     divergence: float = 1.5
     min_increase: float = 1.0
     tolerance: float | None = None
+    update: str = "none"
+    update_options: Mapping[str, Any] = field(default_factory=dict)
 
     def __post_init__(self):
         put = object.__setattr__
         put(self, "method_options", MappingProxyType(dict(self.method_options)))
+        opts = self.update_options
+        if not isinstance(opts, Mapping):
+            raise ValueError(f"update_options must be a mapping, got {type(opts).__name__}")
+        put(self, "update_options", MappingProxyType({k: _frozen(v) for k, v in opts.items()}))
         for name in ("gain", "bandwidth", "id_rms", "id_psd"):
             put(self, name, _frozen(getattr(self, name)))
         self._check()
@@ -195,6 +219,20 @@ class IterationSettings:
         _check_seed(self.id_seed, "id_seed")
         if self.run_seed is not None:
             _check_seed(self.run_seed, "run_seed")
+        self._check_update()
+
+    def _check_update(self) -> None:
+        """``update`` one of :data:`UPDATES`, its options known and in range."""
+        from .updates import check_update_options  # the rules own their options
+
+        if not isinstance(self.update, str) or self.update not in UPDATES:
+            raise ValueError(f"update must be one of {', '.join(UPDATES)}, got {self.update!r}")
+        if self.update != "none" and self.strategy == "adaptive":
+            raise ValueError(
+                f"update={self.update!r} and strategy='adaptive' both re-fit the correction "
+                "model from the iteration's data: choose one (strategy='fixed' with an update)"
+            )
+        check_update_options(self.update, self.update_options)
 
     # ------------------------------------------------------------------ construction
     @classmethod
