@@ -376,6 +376,16 @@ def _add_model_arguments(rec) -> None:
         "re-identified from the latest drive and response before every update",
     )
     rec.add_argument(
+        "--update",
+        choices=("none", "frf", "secant", "reidentify", "ilc"),
+        default="none",
+        help="how the correction model learns from the iteration (vrig.reconstruction.updates): "
+        "none (default: the inverse identified before IT00), frf (H1 FRF updated from every "
+        "record, TWR-style), secant (per-band Broyden update), reidentify (the method refitted "
+        "on identification + iteration records), ilc (norm-optimal ILC); not with --strategy "
+        "adaptive",
+    )
+    rec.add_argument(
         "--tolerance",
         type=float,
         metavar="PCT",
@@ -967,6 +977,7 @@ def _reconstruct(rig, field, method, band, args, out: Path, save: dict, extra: d
             bandwidth=band,
             id_seed=args.seed,
             run_seed=args.seed,
+            update=getattr(args, "update", "none"),
             **extra,
         )
         return reconstruct(rig, field, iteration, progress=is_enabled())
