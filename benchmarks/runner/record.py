@@ -108,9 +108,12 @@ class Settings:
         if not 0.1 <= self.holdout <= 0.5:
             raise ValueError(f"holdout must be 0.1..0.5, got {self.holdout}")
 
-    def iteration(self, method, band: tuple[float, float], seed: int) -> IterationSettings:
+    def iteration(
+        self, method, band: tuple[float, float], seed: int, *, update: str = "none"
+    ) -> IterationSettings:
         """The :class:`vrig.IterationSettings` of a record: this run's iterations and gain, the
-        record's method object and band, ``seed`` for the identification and the rig runs."""
+        record's method object, band and model update (the method row's), ``seed`` for the
+        identification and the rig runs."""
         return IterationSettings(
             method=method,
             iterations=self.iterations,
@@ -118,6 +121,7 @@ class Settings:
             bandwidth=band,
             id_seed=seed,
             run_seed=seed,
+            update=update,
         )
 
 
@@ -510,7 +514,8 @@ def compute_record(key: RecordKey, settings: Settings, plugin_specs=()) -> dict:
         stage = "reconstruction"
         t = time.perf_counter()
         try:
-            result = vrig.reconstruct(rig, desired, settings.iteration(timed, band, key.seed))
+            iteration = settings.iteration(timed, band, key.seed, update=plugin.update)
+            result = vrig.reconstruct(rig, desired, iteration)
         finally:
             timing["reconstruction_s"] = time.perf_counter() - t
             timing["fit_s"], timing["model_sim_s"] = timed.fit_s, timed.sim_s

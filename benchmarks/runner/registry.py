@@ -64,6 +64,8 @@ class MethodPlugin:
     ``linear``: True for a linear model (ARX, FIR, FRF, split spectra of ARX), False for a
     non-linear one (NARX), None when the plugin did not say; the leaderboard's severity section
     compares the best non-linear with the best linear method (unclassified ones are left out).
+    ``update``: the iteration's model update (``vrig.IterationSettings.update``, default
+    ``"none"``) the record runs the method with.
     """
 
     name: str
@@ -73,6 +75,7 @@ class MethodPlugin:
     forward: Callable | None = None
     origin: str = "builtin"
     linear: bool | None = None
+    update: str = "none"
 
     def make(self, rig, band):
         return _call(self.factory, rig, band)
@@ -101,6 +104,7 @@ def register_method(
     quick: bool = True,
     forward: Callable | None = None,
     linear: bool | None = None,
+    update: str = "none",
 ) -> MethodPlugin:
     """Register a reconstruction method under ``name`` (re-registering replaces it).
 
@@ -122,6 +126,9 @@ def register_method(
         True if the method's model is linear in the response (ARX, FIR, FRF), False if it is
         non-linear (NARX); None (default): unclassified, left out of the severity crossover
         (the lowest severity at which the best non-linear method beats the best linear one).
+    update : str
+        The drive iteration's model update (``vrig.IterationSettings.update``: ``"none"``,
+        ``"frf"``, ``"secant"``, ``"reidentify"``, ``"ilc"``) the method's records run with.
     """
     if not name or not all(c.isalnum() or c in "-_" for c in name):
         raise ValueError(f"method name {name!r}: use letters, digits, '-' and '_' only")
@@ -129,7 +136,13 @@ def register_method(
         raise TypeError(f"factory of method {name!r} must be callable")
     if linear is not None and not isinstance(linear, bool):
         raise TypeError(f"linear of method {name!r} must be True, False or None, got {linear!r}")
-    plugin = MethodPlugin(name, factory, description, bool(quick), forward, _LOADING[-1], linear)
+    from vrig.reconstruction import UPDATES
+
+    if update not in UPDATES:
+        raise ValueError(f"update of method {name!r} must be one of {UPDATES}, got {update!r}")
+    plugin = MethodPlugin(
+        name, factory, description, bool(quick), forward, _LOADING[-1], linear, update
+    )
     _REGISTRY[name] = plugin
     return plugin
 
@@ -263,6 +276,30 @@ def _register_builtins() -> None:
         description="H1 FRF, regularised inverse (RPC)",
         forward=lambda: ForwardFrf(),
         linear=True,
+    )
+    _register_updates()
+
+
+def _register_updates() -> None:
+    """The model-updating iterations (``vrig.IterationSettings.update``) as method rows: not in
+    ``--quick`` (each adds a full reconstruction per rig; the rows compare iteration schemes)."""
+    from vrig.reconstruction import InverseArx, InverseNarx
+
+    for name, update, text in (
+        ("arx-frf-update", "frf", "H1 FRF updated from every iteration record (TWR-style)"),
+        ("arx-secant", "secant", "per-band Broyden (secant) update of the correction"),
+        ("arx-ilc", "ilc", "norm-optimal ILC with the identified H1 FRF"),
+    ):
+        register_method(name, lambda: InverseArx(4), description=f"inverse ARX(4), {text}",
+                        quick=False, linear=True, update=update)  # fmt: skip
+    register_method(
+        "narx-reidentify",
+        lambda: InverseNarx(4, 2, kind="input-polynomial"),
+        description="inverse NARX(4), quadratic input-polynomial, refitted on identification + "
+        "iteration records before every correction",
+        quick=False,
+        linear=False,
+        update="reidentify",
     )
 
 

@@ -210,6 +210,12 @@ def _model_records(engine, drive: TimeHistory, response: TimeHistory):
     return engine.down(gprepro(drive, band)), engine.down(gprepro(response, band))
 
 
+def _describe(method) -> str:
+    """The method's one line (``describe()`` is optional for a method object)."""
+    describe = getattr(method, "describe", None)
+    return describe() if callable(describe) else type(method).__name__
+
+
 def _error(engine, response: TimeHistory) -> TimeHistory:
     """``DESRES - ITnRES`` (processed, at the rig rate)."""
     return engine.desres.with_data(engine.desres.data - response.data)
@@ -360,6 +366,7 @@ class SecantUpdate:
         self.drives: list[np.ndarray] = []
         self.base: np.ndarray | None = None
         self.log.clear()
+        self.log.append({"rule": "secant", "event": "start", "edges_hz": self.edges.tolist()})
 
     def observe(self, engine, drive: TimeHistory, raw: TimeHistory) -> None:
         """Keep the drive (the last two make the drive change).
@@ -466,6 +473,8 @@ class ReidentifyUpdate:
         self.recent: list = []
         self.fresh = False
         self.log.clear()
+        self.log.append({"rule": "reidentify", "event": "start", "records": 1,
+                         "model": _describe(engine.method)})  # fmt: skip
 
     def observe(self, engine, drive: TimeHistory, raw: TimeHistory) -> None:
         """Add a played drive and its raw response to the records the next fit uses.
@@ -514,7 +523,7 @@ class ReidentifyUpdate:
             return
         self.log.append({"rule": "reidentify", "event": "refit",
                          "records": 1 + len(self.recent), "samples": int(samples),
-                         "model": engine.method.describe()})  # fmt: skip
+                         "model": _describe(engine.method)})  # fmt: skip
 
     def _kept(self, exc: BaseException) -> None:
         self.log.append({"rule": "reidentify", "event": "kept previous model",
