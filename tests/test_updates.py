@@ -194,6 +194,9 @@ def test_ilc_error_decreases_monotonically_under_its_condition(desired):
     eta = res.errors[:, 0]
     assert np.all(np.diff(eta) < 0), eta
     assert np.all(eta[1:] / eta[:-1] <= rho[band].max() + 0.02)  # Parseval: the line bound
+    # SISO with G0 = 3 G: L G0 = 3 / (1 + r) on every line, the error map 1 - 3 / 2 = -0.5
+    np.testing.assert_allclose(rho[band], 0.5, atol=0.05)
+    np.testing.assert_allclose(eta[1:] / eta[:-1], 0.5, atol=0.03)
 
 
 def test_ilc_with_a_weak_drive_weight_violates_the_condition_and_does_not_decrease(desired):

@@ -83,8 +83,8 @@ def reconstruct(
         names are built by :func:`~vrig.reconstruction.method_spec`), ``iterations``, ``gain``,
         ``strategy``, ``bandwidth``, ``id_duration``, ``id_rms``, ``id_psd``, ``id_match``,
         ``decimation``, ``taper``, ``id_seed``, ``run_seed``, ``divergence``, ``min_increase``,
-        ``tolerance``; ``seed`` sets both seeds; any other name is a method option
-        (``order``, ``degree``, ``split_hz``, ...).
+        ``tolerance``, ``update``, ``update_options``; ``seed`` sets both seeds; any other
+        name is a method option (``order``, ``degree``, ``split_hz``, ...).
         See :class:`~vrig.reconstruction.IterationSettings` for their meaning and defaults.
 
     Returns
