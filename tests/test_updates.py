@@ -309,3 +309,78 @@ def test_a_runner_record_runs_with_its_rows_update():
     key = record.RecordKey("shock-absorber", "arx-secant", 0, 0)
     rec = record.compute_record(key, record.Settings(seconds=4.0, iterations=2, fidelity="fast"))
     assert rec["status"] == "ok", rec["error"]
+
+
+# ------------------------------------------------------------------------------------- MIMO
+FIR = np.array(  # responses x drives x taps: a well-conditioned 2 x 2 system
+    [[[1.0, 0.5, 0.2], [0.3, -0.4, 0.1]], [[0.2, 0.1, 0.0], [1.0, -0.6, 0.3]]]
+)
+
+
+class _DriftRig2x2:
+    """Two drives, two responses: ``y_j = k sum_i fir[j, i] * u_i`` (FIR filters), ``k = 1`` in
+    the first run (the identification) and ``factor`` after it."""
+
+    name = "drift-2x2"
+    fs = FS
+    bandwidth = (0.0, 40.0)
+    defaults = None
+
+    def __init__(self, factor: float = FACTOR, runs: int = 0):
+        from vrig.rigs import ChannelSpec
+
+        self.inputs = tuple(ChannelSpec(f"u{i}", "m", 1.0, "direct") for i in range(2))
+        self.outputs = tuple(ChannelSpec(f"y{j}", "N", 1e3, "load_cell") for j in range(2))
+        self.factor, self.runs = factor, runs
+
+    def frf(self, f: np.ndarray) -> np.ndarray:
+        """(F, 2, 2) FRF of the runs after the identification at ``f`` [Hz]."""
+        z = np.exp(-2j * np.pi * np.asarray(f)[:, None] / FS) ** np.arange(FIR.shape[2])
+        return self.factor * np.einsum("jit,ft->fji", FIR, z)
+
+    def run(self, drive, *, seed=None):
+        u = np.asarray(getattr(drive, "data", drive), float)
+        k = 1.0 if self.runs == 0 else self.factor
+        self.runs += 1
+        y = np.stack([sum(signal.lfilter(FIR[j, i], 1.0, u[:, i]) for i in range(2))
+                      for j in range(2)], axis=1)  # fmt: skip
+        return vrig.TimeHistory(k * y, FS, ["y0", "y1"], ["N", "N"])
+
+
+@pytest.fixture(scope="module")
+def desired_2x2():
+    drive = random_drive(triangular_psd((0.0, 30.0)), round(20 * FS), FS, channels=2, rms=0.05,
+                         seed=8, names=["u0", "u1"], unit="m")  # fmt: skip
+    return _DriftRig2x2(runs=1).run(drive)
+
+
+def _run_2x2(desired, update, iterations=4, **options):
+    return reconstruct(_DriftRig2x2(), desired, method="arx", gain=1.0, iterations=iterations,
+                       seed=0, divergence=np.inf, update=update, **options)  # fmt: skip
+
+
+def test_mimo_frf_update_estimates_the_frf_matrix_and_converges(desired_2x2):
+    engine = DriveIteration(_DriftRig2x2(), desired_2x2, method="arx", seed=0, update="frf",
+                            update_options={"forgetting": 0.0})  # fmt: skip
+    engine.identify()
+    engine.play(engine.first_drive(), 0)
+    rule = engine.updater
+    band = (rule.frf.f >= 1.0) & (rule.frf.f <= 25.0)
+    truth = engine.rig.frf(rule.frf.f[band])
+    err = np.abs(rule.frf.H[band] - truth).max(axis=(1, 2)) / np.abs(truth).max(axis=(1, 2))
+    assert err.max() < 0.03
+    plain = _run_2x2(desired_2x2, "none", iterations=1).errors
+    assert np.all(plain[1] > 1.8 * plain[0])  # 1 - 3 = -2 on every line
+    eta = _run_2x2(desired_2x2, "frf", update_options={"forgetting": 0.0}).errors
+    assert np.all(eta[1] < 3.0) and np.all(eta[-1] < eta[1])  # one step, then the floor
+
+
+def test_mimo_secant_update_is_exact_after_one_pair(desired_2x2):
+    res = _run_2x2(desired_2x2, "secant", iterations=4)
+    first = res.updates[1]  # the pair (IT00, IT01): S_b = I / 3 in every band it updates
+    assert len(first["bands_updated"]) >= 6
+    np.testing.assert_allclose(np.array(first["scale"])[first["bands_updated"]], 1 / FACTOR,
+                               rtol=0.03)  # fmt: skip
+    eta = res.errors.max(axis=1)
+    assert eta[1] > 1.8 * eta[0]  # IT01: the model's own correction, 1 - 3 = -2
+    assert eta[2] < 3.0 and eta[-1] < 2.0

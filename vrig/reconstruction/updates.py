@@ -22,13 +22,15 @@ bracket, the *correction*, by one that learns from the drives played and the res
     drive channels; 1 x 1 per channel pair on a SISO rig: a complex gain), starting at the
     identity. After each iteration the realised change, seen through the model
     (``z = c_{n-1} - c_n``, the model's drive for the response change), is compared with the
-    drive change actually played (``du = ITnDRV - ITn-1DRV``), and ``S_b`` gets the Broyden
-    (secant) update that makes ``S_b z(f) = du(f)`` hold in the least-squares sense over the
+    drive change actually played (``du = ITnDRV - ITn-1DRV``), and ``S_b`` gets the (multi-)secant
+    Broyden update that makes ``S_b z(f) = du(f)`` hold in the least-squares sense over the
     band's lines with the smallest change of ``S_b``:
-    ``S_b += sum_f (du - S_b z) z^H / sum_f |z|^2``. SISO: ``S_b`` becomes the complex ratio of
-    the drive change to the realised response change through the model, i.e. it divides out the
-    ratio of realised to predicted response change. On an LTI rig whose FRF is the model's times
-    a constant per band the update is exact after one pair. Safeguards: a band whose realised
+    ``S_b += [sum_f (du - S_b z) z^H] [sum_f z z^H]^+`` (the pseudo-inverse: directions the band's
+    changes did not excite keep their value; one excited direction gives Broyden's rank-one
+    update). SISO: ``S_b`` becomes the complex ratio of the drive change to the realised response
+    change through the model, i.e. it divides out the ratio of realised to predicted response
+    change. On an LTI rig whose FRF is the model's times a constant matrix per band, the update
+    is exact after one pair whose changes span the drives. Safeguards: a band whose realised
     change carries less than ``min_change`` (default 1e-4) of the largest band's energy, or
     whose drive change carries less than ``min_change`` of the drive's energy in the band (an
     iteration that changed the band by less than 1 % in RMS, e.g. once the error is at its floor,
@@ -395,7 +397,8 @@ class SecantUpdate:
         ``DU`` (drive change); returns whether the step was clipped."""
         S = self.S[b]
         residual = DU - Z @ S.T  # rows: lines; S z = du is the secant condition
-        S_new = S + residual.T @ Z.conj() / energy
+        gram = Z.T @ Z.conj()  # sum over the lines of z z^H
+        S_new = S + residual.T @ Z.conj() @ np.linalg.pinv(gram, rcond=1e-9, hermitian=True)
         U, s, Vh = np.linalg.svd(S_new @ np.linalg.inv(S))
         clipped = np.clip(s, 1 / self.clip, self.clip)
         self.S[b] = (U * clipped) @ Vh @ S
