@@ -282,19 +282,18 @@ def _register_builtins() -> None:
 
 def _register_updates() -> None:
     """The model-updating iterations (``vrig.IterationSettings.update``) as method rows: not in
-    ``--quick`` (each adds a full reconstruction per rig; the rows compare iteration schemes)."""
-    from vrig.reconstruction import InverseArx, InverseNarx
-
+    ``--quick`` (each adds a full reconstruction per rig; the rows compare iteration schemes);
+    their methods built by the one method vocabulary, as the built-ins."""
     for name, update, text in (
         ("arx-frf-update", "frf", "H1 FRF updated from every iteration record (TWR-style)"),
         ("arx-secant", "secant", "per-band Broyden (secant) update of the correction"),
         ("arx-ilc", "ilc", "norm-optimal ILC with the identified H1 FRF"),
     ):
-        register_method(name, lambda: InverseArx(4), description=f"inverse ARX(4), {text}",
+        register_method(name, _built("arx"), description=f"inverse ARX(4), {text}",
                         quick=False, linear=True, update=update)  # fmt: skip
     register_method(
         "narx-reidentify",
-        lambda: InverseNarx(4, 2, kind="input-polynomial"),
+        _built("narx", kind="input-polynomial"),
         description="inverse NARX(4), quadratic input-polynomial, refitted on identification + "
         "iteration records before every correction",
         quick=False,

@@ -82,7 +82,7 @@ import numpy as np
 
 from ..processing import gprepro
 from ..timehistory import TimeHistory
-from .methods import InverseFrf, cross_spectra, frf_filter, h1_estimate
+from .methods import InverseFrf, cross_spectra, frf_filter, h1_from_spectra
 
 __all__ = [
     "DEFAULT_OPTIONS",
@@ -251,7 +251,8 @@ class _Spectra:
         self.syy = lam * self.syy + w * syy
 
     def h1(self):
-        return h1_estimate(self.suu, self.syu, self.syy)
+        h1 = h1_from_spectra(self.f, self.suu, self.syu, self.syy)
+        return h1["H"], h1["coherence"]
 
 
 def _segment(engine, nperseg: int, id_samples: int) -> int:
