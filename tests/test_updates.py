@@ -384,3 +384,12 @@ def test_mimo_secant_update_is_exact_after_one_pair(desired_2x2):
     eta = res.errors.max(axis=1)
     assert eta[1] > 1.8 * eta[0]  # IT01: the model's own correction, 1 - 3 = -2
     assert eta[2] < 3.0 and eta[-1] < 2.0
+
+
+def test_secant_band_edges_are_octaves_up_to_seven_bands_and_finer_beyond():
+    from vrig.reconstruction.updates import log_band_edges
+
+    np.testing.assert_allclose(log_band_edges((0.0, 40.0), 3), [0.0, 10.0, 20.0, 40.0])
+    fine = log_band_edges((0.0, 40.0), 13)  # six octaves in 12 half-octave bands
+    np.testing.assert_allclose(fine[1:], 40.0 / 2.0 ** np.arange(6, -0.5, -0.5))
+    np.testing.assert_allclose(log_band_edges((2.0, 32.0), 4), [2.0, 4.0, 8.0, 16.0, 32.0])

@@ -189,10 +189,12 @@ def make_update(update: str, options: Mapping | None = None):
 
 
 def log_band_edges(band: tuple[float, float], n_bands: int) -> np.ndarray:
-    """``n_bands + 1`` log-spaced band edges [Hz] over ``band``: octaves below the upper edge
-    when the band starts at 0 Hz (the first band reaching down to DC), else geometric spacing
-    (the rule of the gym environments' bands). The first band also holds every line below
-    ``edges[1]``, the last every line above ``edges[-2]``.
+    """``n_bands + 1`` log-spaced band edges [Hz] over ``band``. A band from 0 Hz: the first band
+    reaches down to DC, the others split geometrically the (at most) six octaves below the upper
+    edge (up to 7 bands: octaves, the rule of the gym environments' bands; more bands split the
+    six octaves finer, rather than piling up near DC). A band from ``low > 0``: geometric
+    spacing. The first band also holds every line below ``edges[1]``, the last every line above
+    ``edges[-2]``.
 
     Parameters
     ----------
@@ -207,7 +209,10 @@ def log_band_edges(band: tuple[float, float], n_bands: int) -> np.ndarray:
     """
     lo, hi = float(band[0]), float(band[1])
     if lo <= 0:
-        return np.concatenate([[0.0], hi / 2.0 ** np.arange(n_bands - 1, -1, -1)])
+        if n_bands == 1:
+            return np.array([0.0, hi])
+        low = hi / 2.0 ** min(n_bands - 1, 6)
+        return np.concatenate([[0.0], np.geomspace(low, hi, n_bands)])
     return np.geomspace(lo, hi, n_bands + 1)
 
 
