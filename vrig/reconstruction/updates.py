@@ -19,7 +19,7 @@ bracket, the *correction*, by one that learns from the drives played and the res
 ``"secant"`` (:class:`SecantUpdate`)
     The method's correction ``c`` is multiplied, per band ``b`` of ``n_bands`` log-spaced bands
     over the simulation band (:func:`log_band_edges`), by a matrix ``S_b`` (drive channels x
-    drive channels; 1 x 1 per channel pair on a SISO rig: a complex gain), starting at the
+    drive channels; on a SISO rig 1 x 1, a complex gain), starting at the
     identity. After each iteration the realised change, seen through the model
     (``z = c_{n-1} - c_n``, the model's drive for the response change), is compared with the
     drive change actually played (``du = ITnDRV - ITn-1DRV``), and ``S_b`` gets the (multi-)secant
@@ -30,12 +30,13 @@ bracket, the *correction*, by one that learns from the drives played and the res
     update). SISO: ``S_b`` becomes the complex ratio of the drive change to the realised response
     change through the model, i.e. it divides out the ratio of realised to predicted response
     change. On an LTI rig whose FRF is the model's times a constant matrix per band, the update
-    is exact after one pair whose changes span the drives. Safeguards: a band whose realised
-    change carries less than ``min_change`` (default 1e-4) of the largest band's energy, or
-    whose drive change carries less than ``min_change`` of the drive's energy in the band (an
-    iteration that changed the band by less than 1 % in RMS, e.g. once the error is at its floor,
-    where what changes is no longer what the drive change caused), is skipped; the step ``M = S_b,new S_b^-1`` has its singular values (SISO: the ratio's
-    magnitude) clipped to ``[1 / clip, clip]`` (default 4), phase kept.
+    is exact after one pair whose changes span the drives. Safeguards: a band is skipped when
+    its realised change carries less than ``min_change`` (default 1e-4) of the largest band's
+    energy, or its drive change less than ``min_change`` of the drive's energy in the band (a
+    change of less than 1 % RMS, e.g. once the error is at its floor, where what changes is no
+    longer what the drive change caused); the step ``M = S_b,new S_b^-1`` has its singular
+    values (SISO: the ratio's magnitude) clipped to ``[1 / clip, clip]`` (default 4), phase
+    kept.
 ``"reidentify"`` (:class:`ReidentifyUpdate`)
     Before each correction the method is refitted on the identification record and the
     iteration records (drive ITxxDRV, raw response RITxxRES), each processed as the
@@ -398,7 +399,7 @@ class SecantUpdate:
         f = np.fft.rfftfreq(n_fft, 1.0 / fs)
         return np.clip(np.searchsorted(self.edges, f, side="right") - 1, 0, self.n_bands - 1)
 
-    def _step(self, b: int, Z: np.ndarray, DU: np.ndarray, energy: float) -> bool:
+    def _step(self, b: int, Z: np.ndarray, DU: np.ndarray) -> bool:
         """Broyden step of band ``b`` from its lines ``Z`` (realised, through the model) and
         ``DU`` (drive change); returns whether the step was clipped."""
         S = self.S[b]
@@ -426,7 +427,7 @@ class SecantUpdate:
                 skipped.append(b)
                 continue
             sel = band == b
-            (clipped if self._step(b, Z[sel], DU[sel], energy[b]) else updated).append(b)
+            (clipped if self._step(b, Z[sel], DU[sel]) else updated).append(b)
         self.log.append({
             "rule": "secant", "event": "update", "bands_updated": updated,
             "bands_clipped": clipped, "bands_skipped": skipped,
