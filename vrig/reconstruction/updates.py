@@ -436,7 +436,8 @@ class SecantUpdate:
 
     def correction(self, engine, response: TimeHistory) -> np.ndarray:
         """The method's correction with each band multiplied by its matrix, after the secant
-        update from the last drive change (tapered again like a drive).
+        update from the last drive change (tapered again like a drive); while every matrix is the
+        identity, the method's correction itself.
 
         Parameters
         ----------
@@ -454,6 +455,8 @@ class SecantUpdate:
             u, du = self.drives[1], self.drives[1] - self.drives[0]
             self._update(engine.rig.fs, u, du, self.base - base)
         self.base = base
+        if np.array_equal(self.S, np.broadcast_to(np.eye(self.S.shape[1]), self.S.shape)):
+            return base  # no band updated yet: the method's correction as it is
         n = base.shape[0]
         X = np.fft.rfft(base, n=2 * n, axis=0)
         M = self.S[self._bands(2 * n, engine.rig.fs)]
