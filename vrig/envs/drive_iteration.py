@@ -377,6 +377,11 @@ class DriveIterationEnv(gym.Env):
        ``env.finish_reset(outcome)`` -> ``(obs, info)``, or None when the drawn target tripped
        at IT00 and another was drawn: play ``env.pending`` (its IT00 drive) and finish again.
 
+    ``prepare_reset`` is itself ``draw_reset`` (seed, draw the field and run seeds; it returns
+    the seed of the target record the reset needs) then ``start_reset``: a vector env draws
+    every resetting sub-env, makes their records in one batch
+    (:meth:`~vrig.envs.IterationPhysics.target_records`), then starts each.
+
     The split methods are the unwrapped env's: a vector env calling them applies the step budget
     itself (as ``TimeLimit`` would) and the passive checker is not in the way.
 

@@ -10,7 +10,10 @@ threads), and then lets ``SyncVectorEnv`` do exactly what it always does - with 
 vector semantics (autoreset mode, ``reset_mask``, info merging, ``TimeLimit`` truncation) are
 gymnasium's own, and the results are those of ``gymnasium.make_vec(id, n,
 vectorization_mode="sync")`` (and ``"async"``) bit for bit (``tests/test_vector_env.py``). The
-sub-envs share one rig and one identified inverse model.
+sub-envs share one rig and one identified inverse model. The new target records of the resetting
+sub-envs (pseudo-field or service records: rig runs too) are made before, all in one batch per
+level (:meth:`~vrig.envs.IterationPhysics.target_records`), and a step's IT00 and iteration
+drives are played in one batch.
 
 Every registered ``vrig/`` id names it as its ``vector_entry_point``, so
 ``gymnasium.make_vec("vrig/ShockAbsorber-v1", num_envs=8)`` builds it (pass
@@ -86,8 +89,9 @@ class DriveIterationVectorEnv(SyncVectorEnv):
 
     Results equal ``gymnasium.make_vec(id, num_envs, vectorization_mode="sync")`` bit for bit
     (same seeds, same actions); only the rig runs of a step (and of a reset) are played together
-    (:func:`vrig.reconstruction.engine.play_batch`). A sub-env whose drawn target trips at IT00
-    redraws on its own, as in a single env. ``AutoresetMode.SAME_STEP`` works but its resets
+    (:func:`vrig.reconstruction.engine.play_batch`), and the target records of the resetting
+    sub-envs are made in one batch (:meth:`~vrig.envs.IterationPhysics.target_records`). A
+    sub-env whose drawn target trips at IT00 redraws on its own, as in a single env. ``AutoresetMode.SAME_STEP`` works but its resets
     are played one by one.
 
     Parameters
