@@ -110,6 +110,10 @@ class DriveIterationVectorEnv(SyncVectorEnv):
         As :class:`gymnasium.vector.SyncVectorEnv`'s (return copies of the observations).
     autoreset_mode : str or AutoresetMode
         As :class:`gymnasium.vector.SyncVectorEnv`'s (default ``NEXT_STEP``).
+    batch_targets : bool
+        Make the target records of the resetting sub-envs in one batch (default); False: each
+        sub-env makes its own in turn, in the calling thread (the same records: for
+        comparison, ``benchmarks.rig_batch``).
     **env_kwargs
         Keyword arguments of every :class:`DriveIterationEnv` (``fast``, ``action_mode``,
         ``n_bands``, ``tolerance``, ``target``, ...); the physics' own
@@ -127,6 +131,7 @@ class DriveIterationVectorEnv(SyncVectorEnv):
         threads: int | None = None,
         copy: bool = True,
         autoreset_mode: str | AutoresetMode = AutoresetMode.NEXT_STEP,
+        batch_targets: bool = True,
         **env_kwargs,
     ):
         if not isinstance(num_envs, (int, np.integer)) or num_envs < 1:
@@ -146,6 +151,7 @@ class DriveIterationVectorEnv(SyncVectorEnv):
         )
         self.max_episode_steps = int(max_episode_steps)
         self.threads = threads if threads is not None else min(num_envs, os.cpu_count() or 1)
+        self.batch_targets = bool(batch_targets)
 
     # ------------------------------------------------------------------ batching
     def _play_staged(self, prepared: dict, kinds: dict) -> None:
@@ -179,7 +185,7 @@ class DriveIterationVectorEnv(SyncVectorEnv):
             envs = {i: self._staged[i].unwrapped for i in resets}
             drawn = [e.draw_reset(seed=resets[i][0], options=resets[i][1]) for i, e in envs.items()]
             wanted = [s for s in drawn if s is not None]
-            if wanted:  # each start_reset then finds its record made
+            if wanted and self.batch_targets:  # each start_reset then finds its record made
                 self._staged[0].unwrapped.physics.target_records(wanted, threads=self.threads)
             for i, env in envs.items():
                 prepared[i] = env.start_reset()
