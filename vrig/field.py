@@ -360,7 +360,7 @@ def desired_response(rig, target: str = "pseudo-field", seconds: float = 30.0, *
 
 def desired_responses(rig, target: str, seconds: float, seeds, *, band=None,
                       threads: int | None = None, twin=None) -> list:  # fmt: skip
-    """:func:`desired_response` of many seeds, their rig runs in one batch per level
+    """:func:`desired_response` of many seeds, their rig runs batched level by level
     (:func:`pseudo_fields`; a service target: :func:`vrig.service.field_records`).
 
     Result ``i`` is bit for bit ``desired_response(rig, target, seconds, seed=seeds[i],

@@ -228,8 +228,8 @@ class IterationPhysics:
         return self._record("pseudo-field", seed)
 
     def target_records(self, seeds, *, threads: int | None = None) -> list:
-        """:meth:`target_record` of many seeds, those not kept yet made in one batch of rig runs
-        per level (:func:`vrig.field.desired_responses`, across threads).
+        """:meth:`target_record` of many seeds, those not kept yet made together, their rig runs
+        batched (:func:`vrig.field.desired_responses`, across threads).
 
         Record ``i`` is bit for bit ``target_record(seeds[i])``; a seed whose record cannot be
         made (its last pseudo-field level trips, say) gets the exception in its slot, and

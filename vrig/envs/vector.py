@@ -11,9 +11,9 @@ vector semantics (autoreset mode, ``reset_mask``, info merging, ``TimeLimit`` tr
 gymnasium's own, and the results are those of ``gymnasium.make_vec(id, n,
 vectorization_mode="sync")`` (and ``"async"``) bit for bit (``tests/test_vector_env.py``). The
 sub-envs share one rig and one identified inverse model. The new target records of the resetting
-sub-envs (pseudo-field or service records: rig runs too) are made before, all in one batch per
-level (:meth:`~vrig.envs.IterationPhysics.target_records`), and a step's IT00 and iteration
-drives are played in one batch.
+sub-envs (pseudo-field or service records: rig runs too) are made before, together, their rig
+runs batched (:meth:`~vrig.envs.IterationPhysics.target_records`), and a step's IT00 and
+iteration drives are played in one batch.
 
 Every registered ``vrig/`` id names it as its ``vector_entry_point``, so
 ``gymnasium.make_vec("vrig/ShockAbsorber-v1", num_envs=8)`` builds it (pass
