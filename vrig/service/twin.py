@@ -344,6 +344,7 @@ def field_records(rig, scenario_name: str, seconds: float, seeds, *, threads: in
     rig = _rig(rig)
     sc = scenario(rig, scenario_name)
     _check_record(seconds, sc.road.speed_kmh)
+    seeds = list(seeds)
     for s in seeds:
         if isinstance(s, bool) or not isinstance(s, (int, np.integer)) or s < 0:
             raise ValueError(f"each seed must be an integer >= 0, got {s!r}")
