@@ -19,7 +19,9 @@ with each resetting sub-env making its target in turn (``batch_targets=False``, 
 26) and with the targets of all resetting sub-envs in one batch (the default,
 ``gymnasium.make_vec``'s for a vrig id). The modes of a rig run one after another in one
 process, so their ratios (``x one env``, ``x serial targets``) are the figures to compare on a
-shared box.
+shared box; beside the wall-clock rate each row has the CPU time per iteration of the process and
+of the calling thread (the serial part: with ``T`` threads on free cores an iteration takes about
+``main + (cpu - main) / T``).
 
     python -m benchmarks.rig_batch [--quick] [--rigs shock-absorber fuel-tank-7ch] [--no-env]
 """
@@ -98,21 +100,26 @@ def _plays(rig, xs, threads_list, fraction) -> list[tuple[str, float, bool]]:
     return rows
 
 
-def _env_rate(env, n: int, steps: int) -> float:
+def _env_rate(env, n: int, steps: int) -> tuple[float, float, float]:
     """Drive iterations per minute of ``steps`` vector steps of ``env`` (n sub-envs) after a reset
     (the first reset, identification included, is not timed; the autoresets of the timed steps
-    are: a new target and its IT00 play, one iteration)."""
+    are: a new target and its IT00 play, one iteration), and the CPU time per iteration [ms] of
+    the process (every thread) and of the calling thread alone (the part no worker thread
+    shares: on a loaded box these two say more than the wall clock)."""
     env.reset(seed=0)
     action = np.full(env.action_space.shape, 0.8)
-    t0 = time.perf_counter()
+    t0, cpu0, main0 = time.perf_counter(), time.process_time(), time.thread_time()
     for _ in range(steps):
         env.step(action)
-    return _per_minute(n * steps, time.perf_counter() - t0)
+    wall, cpu, main = (time.perf_counter() - t0, time.process_time() - cpu0,
+                       time.thread_time() - main0)  # fmt: skip
+    return _per_minute(n * steps, wall), 1e3 * cpu / (n * steps), 1e3 * main / (n * steps)
 
 
-def env_throughput(rig: str, n: int, steps: int) -> list[tuple[str, float]]:
-    """(mode, drive iterations per minute) of one env and of ``n`` envs: sync, batched with the
-    targets made in turn, batched with the targets batched (episodes of 10 iterations)."""
+def env_throughput(rig: str, n: int, steps: int) -> list[tuple[str, float, float, float]]:
+    """(mode, drive iterations per minute, CPU ms per iteration, calling-thread CPU ms per
+    iteration) of one env and of ``n`` envs: sync, batched with the targets made in turn,
+    batched with the targets batched (episodes of 10 iterations)."""
     import gymnasium as gym
 
     from vrig.envs import ENV_IDS
@@ -133,7 +140,7 @@ def env_throughput(rig: str, n: int, steps: int) -> list[tuple[str, float]]:
         try:
             k = env.num_envs
             cycles = max(1, round(steps / (k * (EPISODE_STEPS + 1))))  # whole episodes:
-            rows.append((label, _env_rate(env, k, cycles * (EPISODE_STEPS + 1))))  # resets too
+            rows.append((label, *_env_rate(env, k, cycles * (EPISODE_STEPS + 1))))  # resets too
         finally:
             env.close()
     return rows
@@ -170,12 +177,13 @@ def main(argv=None) -> int:
               f"{os.getloadavg()[0]:.1f}):")  # fmt: skip
         for name in args.rigs:
             base = serial = None
-            for label, rate in env_throughput(name, n, steps):
+            for label, rate, cpu, main in env_throughput(name, n, steps):
                 base = base or rate
                 serial = rate if "serial targets" in label else serial
                 ratio = f"x{rate / serial:.2f} serial targets" if serial and rate != serial else ""
-                print(f"{name:<16} {label:<28} {rate:>7.0f} iterations/min  "
-                      f"x{rate / base:.2f} one env  {ratio}", flush=True)  # fmt: skip
+                print(f"{name:<16} {label:<28} {rate:>7.0f} iterations/min  cpu {cpu:5.1f} "
+                      f"ms/it, main thread {main:5.1f} ms/it  x{rate / base:.2f} one env  {ratio}",
+                      flush=True)  # fmt: skip
     return 0
 
 
