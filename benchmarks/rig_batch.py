@@ -12,9 +12,16 @@ free cores only share them).
 
 The gym section (``--env``, on by default) counts drive iterations per minute of the gymnasium
 environments (fast, 4 s targets, gain 0.8 every step, the tolerance out of reach so every
-episode runs its 10 iterations; a reset plays IT00 and counts as an iteration): one env, and
-``num_envs`` envs as gymnasium's ``SyncVectorEnv`` and as vrig's batched
-:class:`~vrig.envs.DriveIterationVectorEnv` (``gymnasium.make_vec``'s default for a vrig id).
+episode runs its ``max_episode_steps=10`` iterations and resets: a reset makes a new pseudo-field
+target, rig runs too, plays IT00 and counts as an iteration): one env, and ``num_envs`` envs as
+gymnasium's ``SyncVectorEnv``, as vrig's batched :class:`~vrig.envs.DriveIterationVectorEnv`
+with each resetting sub-env making its target in turn (``batch_targets=False``, as before issue
+26) and with the targets of all resetting sub-envs in one batch (the default,
+``gymnasium.make_vec``'s for a vrig id). The modes of a rig run one after another in one
+process, so their ratios (``x one env``, ``x serial targets``) are the figures to compare on a
+shared box; beside the wall-clock rate each row has the CPU time per iteration of the process and
+of the calling thread (the serial part: with ``T`` threads on free cores an iteration takes about
+``main + (cpu - main) / T``).
 
     python -m benchmarks.rig_batch [--quick] [--rigs shock-absorber fuel-tank-7ch] [--no-env]
 """
@@ -32,6 +39,7 @@ from identification import band_limited_noise
 from vrig.reconstruction.engine import DriveIteration, play_batch
 
 SECONDS = 4.0
+EPISODE_STEPS = 10  # the gym section's episodes: a reset (new target, IT00) every 11th step
 
 
 def _fraction(rig) -> float:
@@ -92,35 +100,47 @@ def _plays(rig, xs, threads_list, fraction) -> list[tuple[str, float, bool]]:
     return rows
 
 
-def _env_rate(env, n: int, steps: int) -> float:
+def _env_rate(env, n: int, steps: int) -> tuple[float, float, float]:
     """Drive iterations per minute of ``steps`` vector steps of ``env`` (n sub-envs) after a reset
-    (the reset, identification included, is not timed)."""
+    (the first reset, identification included, is not timed; the autoresets of the timed steps
+    are: a new target and its IT00 play, one iteration), and the CPU time per iteration [ms] of
+    the process (every thread) and of the calling thread alone (the part no worker thread
+    shares: on a loaded box these two say more than the wall clock)."""
     env.reset(seed=0)
     action = np.full(env.action_space.shape, 0.8)
-    t0 = time.perf_counter()
+    t0, cpu0, main0 = time.perf_counter(), time.process_time(), time.thread_time()
     for _ in range(steps):
         env.step(action)
-    return _per_minute(n * steps, time.perf_counter() - t0)
+    wall, cpu, main = (time.perf_counter() - t0, time.process_time() - cpu0,
+                       time.thread_time() - main0)  # fmt: skip
+    return _per_minute(n * steps, wall), 1e3 * cpu / (n * steps), 1e3 * main / (n * steps)
 
 
-def env_throughput(rig: str, n: int, steps: int) -> list[tuple[str, float]]:
-    """(mode, drive iterations per minute) of one env and of ``n`` envs, sync and batched."""
+def env_throughput(rig: str, n: int, steps: int) -> list[tuple[str, float, float, float]]:
+    """(mode, drive iterations per minute, CPU ms per iteration, calling-thread CPU ms per
+    iteration) of one env and of ``n`` envs: sync, batched with the targets made in turn,
+    batched with the targets batched (episodes of 10 iterations)."""
     import gymnasium as gym
 
     from vrig.envs import ENV_IDS
 
     env_id = next(i for i, kw in ENV_IDS.items() if kw.get("rig") == rig)
-    kw = {"fast": True, "tolerance": 1e-9}
+    kw = {"fast": True, "tolerance": 1e-9, "max_episode_steps": EPISODE_STEPS}
     rows = []
     for label, make in (
         ("one env", lambda: gym.make_vec(env_id, 1, vectorization_mode="sync", **kw)),
         (f"sync x{n}", lambda: gym.make_vec(env_id, n, vectorization_mode="sync", **kw)),
+        (
+            f"batched x{n}, serial targets",
+            lambda: gym.make_vec(env_id, n, batch_targets=False, **kw),
+        ),
         (f"batched x{n}", lambda: gym.make_vec(env_id, n, **kw)),
     ):
         env = make()
         try:
             k = env.num_envs
-            rows.append((label, _env_rate(env, k, max(2, steps // k))))
+            cycles = max(1, round(steps / (k * (EPISODE_STEPS + 1))))  # whole episodes:
+            rows.append((label, *_env_rate(env, k, cycles * (EPISODE_STEPS + 1))))  # resets too
         finally:
             env.close()
     return rows
@@ -151,12 +171,19 @@ def main(argv=None) -> int:
                 same = "yes" if same_r and same_p else "NO"
                 print(f"{name:<16} {size:>5}  {mode:<18} {rpm:>9.0f} {ipm:>9.0f}  {same}")
     if not args.no_env:
-        n, steps = (4, 24) if args.quick else (8, 80)
+        n, steps = (4, 44) if args.quick else (8, 176)
         print(f"\ngym drive iterations per minute (fast, 4 s targets, {n} envs, gain 0.8, "
-              f"load average {os.getloadavg()[0]:.1f}):")  # fmt: skip
+              f"episodes of {EPISODE_STEPS} iterations, load average "
+              f"{os.getloadavg()[0]:.1f}):")  # fmt: skip
         for name in args.rigs:
-            for label, rate in env_throughput(name, n, steps):
-                print(f"{name:<16} {label:<14} {rate:>9.0f} iterations/min", flush=True)
+            base = serial = None
+            for label, rate, cpu, main in env_throughput(name, n, steps):
+                base = base or rate
+                serial = rate if "serial targets" in label else serial
+                ratio = f"x{rate / serial:.2f} serial targets" if serial and rate != serial else ""
+                print(f"{name:<16} {label:<28} {rate:>7.0f} iterations/min  cpu {cpu:5.1f} "
+                      f"ms/it, main thread {main:5.1f} ms/it  x{rate / base:.2f} one env  {ratio}",
+                      flush=True)  # fmt: skip
     return 0
 
 

@@ -29,11 +29,12 @@ KW = {"fast": True, "seconds": 2.0}
 
 @pytest.fixture
 def fake_field(monkeypatch):
-    """``desired_response`` of the physics replaced: a field target gives half the
-    pseudo-field record of the same seed (reachable, and known); every call is logged."""
+    """``desired_responses`` of the physics replaced: a field target gives half the
+    pseudo-field record of the same seed (reachable, and known); every seed is logged."""
+    from vrig import field
     from vrig.envs import physics
 
-    real, calls = physics.desired_response, []
+    real, calls = field.desired_response, []
 
     def fake(rig, target, seconds, *, seed=0, band=None):
         calls.append((rig, target, seconds, seed))
@@ -43,7 +44,10 @@ def fake_field(monkeypatch):
         half = TimeHistory(0.5 * field.data, field.fs, field.names, field.units)
         return half, f"stand-in for {target}", {}
 
-    monkeypatch.setattr(physics, "desired_response", fake)
+    def fake_batch(rig, target, seconds, seeds, *, band=None, threads=None, twin=None):
+        return [fake(rig, target, seconds, seed=s, band=band) for s in seeds]
+
+    monkeypatch.setattr(physics, "desired_responses", fake_batch)
     return calls
 
 

@@ -66,3 +66,21 @@ def test_bad_bands():
         gprepro(_tones([1.0]), (150.0, 200.0))
     with pytest.raises(ValueError, match="split frequency"):
         band_split(_tones([1.0]), 150.0)
+
+
+def test_the_filter_designed_once_is_scipys_design_every_time():
+    """gprepro keeps each band's Butterworth design (issue 26: one design per iteration was a
+    visible part of a gym step): the result is the textbook pipeline with a fresh
+    ``scipy.signal.butter`` design, bit for bit, on every call and for every band kind."""
+    th = _tones([1.0, 5.0, 40.0, 90.0], offset=1.0, trend=0.3)
+    for band, kind, edges in (
+        ((2.0, 30.0), "bandpass", [2.0, 30.0]),
+        ((0.0, 30.0), "lowpass", 30.0),
+        ((2.0, 100.0), "highpass", 2.0),
+    ):
+        sos = signal.butter(4, edges, btype=kind, fs=FS, output="sos")
+        x = signal.detrend(th.data, axis=0, type="linear")
+        x = signal.sosfiltfilt(sos, x, axis=0, padlen=3 * (2 * len(sos) + 1))
+        truth = x - x.mean(axis=0)
+        for _ in range(2):
+            np.testing.assert_array_equal(gprepro(th, band).data, truth)

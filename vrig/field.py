@@ -12,6 +12,8 @@ gymnasium environments and the benchmarks choose their targets through it.
 
 from __future__ import annotations
 
+from functools import partial
+
 import numpy as np
 
 __all__ = [
@@ -19,8 +21,10 @@ __all__ = [
     "default_band",
     "default_split_hz",
     "desired_response",
+    "desired_responses",
     "parse_target",
     "pseudo_field",
+    "pseudo_fields",
 ]
 
 TARGET_KINDS = ("pseudo-field", "field")
@@ -115,16 +119,10 @@ def pseudo_field(rig, band: tuple[float, float], seconds: float, *, seed: int = 
     (drive, response) : TimeHistory, TimeHistory
         DESDRV and the raw response (FIELD) at the rig's fs.
     """
-    from scipy.signal.windows import tukey
-
     from .errors import RigLimitError
     from .progress import status
-    from .signals import random_drive, triangular_psd
 
-    n = round(seconds * rig.fs)
-    full = np.array([c.full_scale for c in rig.inputs])
     out_full = np.array([c.full_scale for c in rig.outputs])
-    fade = tukey(n, min(1.0, 2 * _FADE_S / seconds))[:, None]
     fraction = _FIELD_FRACTION
     last_error = None
     for attempt in range(_FIELD_ATTEMPTS):
@@ -137,18 +135,7 @@ def pseudo_field(rig, band: tuple[float, float], seconds: float, *, seed: int = 
                 else ""
             )
         )
-        drive = random_drive(
-            triangular_psd(band),
-            n,
-            rig.fs,
-            channels=len(rig.inputs),
-            rms=fraction * full,
-            seed=seed,
-            names=[c.name for c in rig.inputs],
-            unit=rig.inputs[0].unit,
-        )
-        drive = drive.with_data((drive.data - drive.data.mean(axis=0)) * fade)
-        drive = type(drive)(drive.data, drive.fs, drive.names, [c.unit for c in rig.inputs])
+        drive = _field_drive(rig, band, seconds, fraction, seed)
         try:
             response = rig.run(drive, seed=seed + 10_000)
         except RigLimitError as exc:
@@ -169,6 +156,136 @@ def pseudo_field(rig, band: tuple[float, float], seconds: float, *, seed: int = 
     if last_error is not None:
         raise last_error
     return drive, response
+
+
+def _field_drive(rig, band, seconds: float, fraction: float, seed: int):
+    """The pseudo-field drive of ``seed`` at ``fraction`` of full scale rms: triangular PSD over
+    ``band``, mean removed, faded in and out over :data:`_FADE_S` (``seconds`` long)."""
+    from scipy.signal.windows import tukey
+
+    from .signals import random_drive, triangular_psd
+
+    n = round(seconds * rig.fs)
+    full = np.array([c.full_scale for c in rig.inputs])
+    fade = tukey(n, min(1.0, 2 * _FADE_S / seconds))[:, None]
+    drive = random_drive(
+        triangular_psd(band),
+        n,
+        rig.fs,
+        channels=len(rig.inputs),
+        rms=fraction * full,
+        seed=seed,
+        names=[c.name for c in rig.inputs],
+        unit=rig.inputs[0].unit,
+    )
+    drive = drive.with_data((drive.data - drive.data.mean(axis=0)) * fade)
+    return type(drive)(drive.data, drive.fs, drive.names, [c.unit for c in rig.inputs])
+
+
+def pseudo_fields(rig, band: tuple[float, float], seconds: float, seeds, *,
+                  threads: int | None = None) -> list:  # fmt: skip
+    """:func:`pseudo_field` of many seeds, their rig runs batched (:func:`vrig.rigs.run_batch`).
+
+    Result ``i`` is bit for bit ``pseudo_field(rig, band, seconds, seed=seeds[i])``: the same
+    levels tried in the same order, the same drives, runs and run seeds, the same record or the
+    same exception. Each level is two batches over the seeds still without a record: their
+    drives, then 1.5 times the drives that ran within the headroom (the interlock check), so
+    no run is played that :func:`pseudo_field` would not play.
+
+    Parameters
+    ----------
+    rig : Rig
+        The rig that makes the records (any rig; a :class:`~vrig.rigs.MujocoRig` plays each
+        batch across threads).
+    band : (float, float)
+        Frequency band (low, high) of the triangular drive PSD [Hz].
+    seconds : float
+        Record length [s], fades included.
+    seeds : sequence of int
+        Seeds of the random drives (each >= 0), as :func:`pseudo_field`'s ``seed``.
+    threads : int, optional
+        Worker threads of the batched rig runs (:meth:`vrig.rigs.MujocoRig.run_batch`).
+
+    Returns
+    -------
+    list
+        Per seed, in order: ``(drive, response)`` as :func:`pseudo_field` returns it, or the
+        exception it raises (a :class:`~vrig.errors.RigLimitError` after the last level, a
+        simulation error, ...), in its slot.
+    """
+    from .progress import status
+
+    seeds = [_seed(s) for s in seeds]
+    out_full = np.array([c.full_scale for c in rig.outputs])
+    results: list = [None] * len(seeds)
+    last: dict = {}  # seed index -> (error, drive, response) of its last level
+    pending = list(range(len(seeds)))
+    fraction = _FIELD_FRACTION
+    for _ in range(_FIELD_ATTEMPTS):
+        if not pending:
+            break
+        status(f"desired responses: {len(pending)} x {seconds:g} s pseudo-field drives at "
+               f"{100 * fraction:.3g} % of full scale rms -> {rig.name} (batched)")  # fmt: skip
+        drives = {i: _field_drive(rig, band, seconds, fraction, seeds[i]) for i in pending}
+        runs = _runs(rig, drives, seeds, threads)
+        within = {}  # the seeds whose run swung within the headroom: their 1.5x check
+        for i, response in runs.items():
+            verdict, error = _field_verdict(response, out_full)
+            if verdict == "fail":
+                results[i] = error
+            elif verdict == "retry":
+                last[i] = (error, drives[i], response)
+            else:
+                within[i] = drives[i].with_data(drives[i].data / _FIELD_HEADROOM)
+        for i, check in _runs(rig, within, seeds, threads).items():
+            verdict, error = _field_verdict(check, None)
+            if verdict == "fail":
+                results[i] = error
+            elif verdict == "retry":
+                last[i] = (error, drives[i], runs[i])
+            else:
+                results[i] = (drives[i], runs[i])
+        pending = [i for i in pending if results[i] is None]
+        fraction /= 2
+    for i in pending:
+        error, drive, response = last[i]
+        results[i] = error if error is not None else (drive, response)
+    return results
+
+
+def _runs(rig, drives: dict, seeds: list, threads) -> dict:
+    """``{i: rig.run(drives[i], seed=seeds[i] + 10_000)}`` (the response or the exception) in
+    one batch (:func:`vrig.rigs.run_batch`)."""
+    from .rigs import run_batch
+
+    if not drives:
+        return {}
+    out = run_batch(rig, list(drives.values()), seeds=[seeds[i] + 10_000 for i in drives],
+                    threads=threads, return_exceptions=True)  # fmt: skip
+    return dict(zip(drives, out, strict=True))
+
+
+def _seed(seed) -> int:
+    """A checked record seed (an integer >= 0)."""
+    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
+        raise ValueError(f"each seed must be an integer >= 0, got {seed!r}")
+    return int(seed)
+
+
+def _field_verdict(run, out_full) -> tuple[str, object]:
+    """A pseudo-field run judged as :func:`pseudo_field` judges it (``run``: the response or the
+    exception it raised; ``out_full``: the transducer ranges, None for the 1.5x check run, whose
+    swing is not looked at): ``("done", None)``, ``("retry", the level's error or None)`` or
+    ``("fail", the exception pseudo_field does not catch)``."""
+    from .errors import RigLimitError
+
+    if isinstance(run, BaseException):
+        return ("retry" if isinstance(run, RigLimitError) else "fail"), run
+    if out_full is not None:
+        swing = np.abs(run.data - run.data.mean(axis=0)).max(axis=0)
+        if not np.all(swing <= _FIELD_HEADROOM * out_full):
+            return "retry", None
+    return "done", None
 
 
 def parse_target(rig, target: str) -> tuple[str, str | None]:
@@ -240,19 +357,83 @@ def desired_response(rig, target: str = "pseudo-field", seconds: float = 30.0, *
     if kind == "pseudo-field":
         band = default_band(rig) if band is None else tuple(band)
         desdrv, field = pseudo_field(rig, band, seconds, seed=seed)
-        rms = np.sqrt(np.mean(desdrv.data**2, axis=0)) / [c.full_scale for c in rig.inputs]
-        source = (
-            f"pseudo-field response to a {seconds:g} s random drive (triangular PSD "
-            f"{band[0]:g}-{band[1]:g} Hz, {100 * rms.max():.3g} % of full scale rms, seed {seed})"
-        )
-        return field, source, {"DESDRV": desdrv}
+        return _pseudo_field_made(rig, band, seconds, seed, desdrv, field)
     from .progress import status
     from .service import field_record
+
+    status(f"desired response: {seconds:g} s service record {rig.name}:{scenario} ...")
+    road, field = field_record(rig, scenario, seconds, seed=seed, with_road=True)
+    return _service_made(rig, scenario, seconds, seed, road, field)
+
+
+def desired_responses(rig, target: str, seconds: float, seeds, *, band=None,
+                      threads: int | None = None, twin=None) -> list:  # fmt: skip
+    """:func:`desired_response` of many seeds, their rig runs batched level by level
+    (:func:`pseudo_fields`; a service target: :func:`vrig.service.field_records`).
+
+    Result ``i`` is bit for bit ``desired_response(rig, target, seconds, seed=seeds[i],
+    band=band)``, or the exception that call raises, in its slot.
+
+    Parameters
+    ----------
+    rig : Rig
+        The rig to reconstruct on.
+    target : str
+        As :func:`desired_response`'s (checked with :func:`parse_target`: a bad name raises).
+    seconds : float
+        Record length [s].
+    seeds : sequence of int
+        Seeds of the random drives (pseudo-field) or of the roads (field), each >= 0.
+    band : (float, float), optional
+        Drive band of a pseudo-field record [Hz] (default :func:`default_band`).
+    threads : int, optional
+        Worker threads of the batched rig runs (:meth:`vrig.rigs.MujocoRig.run_batch`).
+    twin : MujocoRig, optional
+        A service target's field twin already built (:func:`vrig.service.field_twin`; its
+        construction is the costly part of a short record): default, built here.
+
+    Returns
+    -------
+    list
+        Per seed: ``(field, source, extra)`` as :func:`desired_response` returns it, or the
+        exception it raises.
+    """
+    kind, scenario = parse_target(rig, target)
+    seeds = [_seed(s) for s in seeds]
+    if kind == "pseudo-field":
+        band = default_band(rig) if band is None else tuple(band)
+        made = pseudo_fields(rig, band, seconds, seeds, threads=threads)
+        finish = partial(_pseudo_field_made, rig, band, seconds)
+    else:
+        from .progress import status
+        from .service import field_records
+
+        status(f"desired responses: {len(seeds)} x {seconds:g} s service records "
+               f"{rig.name}:{scenario} (batched) ...")  # fmt: skip
+        made = field_records(rig, scenario, seconds, seeds, threads=threads, twin=twin,
+                             with_road=True)  # fmt: skip
+        finish = partial(_service_made, rig, scenario, seconds)
+    return [
+        m if isinstance(m, BaseException) else finish(s, *m)
+        for s, m in zip(seeds, made, strict=True)
+    ]
+
+
+def _pseudo_field_made(rig, band, seconds: float, seed: int, desdrv, field) -> tuple:
+    """:func:`desired_response`'s ``(field, source, extra)`` of a pseudo-field record."""
+    rms = np.sqrt(np.mean(desdrv.data**2, axis=0)) / [c.full_scale for c in rig.inputs]
+    source = (
+        f"pseudo-field response to a {seconds:g} s random drive (triangular PSD "
+        f"{band[0]:g}-{band[1]:g} Hz, {100 * rms.max():.3g} % of full scale rms, seed {seed})"
+    )
+    return field, source, {"DESDRV": desdrv}
+
+
+def _service_made(rig, scenario: str, seconds: float, seed: int, road, field) -> tuple:
+    """:func:`desired_response`'s ``(field, source, extra)`` of a service record."""
     from .service import scenario as get_scenario
 
     sc = get_scenario(rig, scenario)
-    status(f"desired response: {seconds:g} s service record {rig.name}:{scenario} ...")
-    road, field = field_record(rig, scenario, seconds, seed=seed, with_road=True)
     source = (
         f"service record '{scenario}' ({seconds:g} s): the specimen in its vehicle on an ISO "
         f"8608 class-{sc.road.road_class} road at {sc.road.speed_kmh:g} km/h"

@@ -8,6 +8,7 @@ Filters are zero-phase (forward-backward Butterworth, scipy ``sosfiltfilt``), ti
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Callable
 
 import numpy as np
@@ -34,11 +35,20 @@ def _sos(band, fs, order):
         raise ValueError(f"band {band} Hz lies above Nyquist ({nyq:g} Hz)")
     if lo <= 0 and hi >= nyq:
         return None
+    return _butter(float(lo), float(hi), float(fs), int(order)).copy()  # the cache's stays
+
+
+@functools.lru_cache(maxsize=64)
+def _butter(lo: float, hi: float, fs: float, order: int) -> np.ndarray:
+    """The Butterworth SOS of :func:`_sos` (a checked band), designed once per band, rate and
+    order (a drive iteration processes every record over one band)."""
     if lo <= 0:
-        return signal.butter(order, hi, btype="lowpass", fs=fs, output="sos")
-    if hi >= nyq:
-        return signal.butter(order, lo, btype="highpass", fs=fs, output="sos")
-    return signal.butter(order, [lo, hi], btype="bandpass", fs=fs, output="sos")
+        sos = signal.butter(order, hi, btype="lowpass", fs=fs, output="sos")
+    elif hi >= fs / 2:
+        sos = signal.butter(order, lo, btype="highpass", fs=fs, output="sos")
+    else:
+        sos = signal.butter(order, [lo, hi], btype="bandpass", fs=fs, output="sos")
+    return sos
 
 
 def gprepro(

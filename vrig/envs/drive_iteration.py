@@ -377,6 +377,11 @@ class DriveIterationEnv(gym.Env):
        ``env.finish_reset(outcome)`` -> ``(obs, info)``, or None when the drawn target tripped
        at IT00 and another was drawn: play ``env.pending`` (its IT00 drive) and finish again.
 
+    ``prepare_reset`` is itself ``draw_reset`` (seed, draw the field and run seeds; it returns
+    the seed of the target record the reset needs) then ``start_reset``: a vector env draws
+    every resetting sub-env, makes their records in one batch
+    (:meth:`~vrig.envs.IterationPhysics.target_records`), then starts each.
+
     The split methods are the unwrapped env's: a vector env calling them applies the step budget
     itself (as ``TimeLimit`` would) and the passive checker is not in the way.
 
@@ -639,7 +644,7 @@ class DriveIterationEnv(gym.Env):
     def pending(self):
         """The prepared play ``(drive, iteration)`` waiting for its finish (``drive`` None: the
         update failed, nothing to play), or None when nothing is pending."""
-        if self._pending is None:
+        if self._pending is None or self._pending["kind"] == "draw":
             return None
         return self._pending["drive"], self.iteration
 
@@ -713,6 +718,29 @@ class DriveIterationEnv(gym.Env):
             IT00DRV and 0: play it on ``self.engine`` and pass the outcome to
             :meth:`finish_reset`.
         """
+        self.draw_reset(seed=seed, options=options)
+        return self.start_reset()
+
+    def draw_reset(self, *, seed: int | None = None, options: dict | None = None):
+        """First part of :meth:`prepare_reset`: check the options, seed, draw the field and run
+        seeds; :meth:`start_reset` then starts the target. A vector env draws every resetting
+        sub-env first, makes their target records in one batch
+        (:meth:`~vrig.envs.IterationPhysics.target_records`), then starts each.
+
+        Parameters
+        ----------
+        seed : int, optional
+            As :meth:`reset`'s.
+        options : dict, optional
+            As :meth:`reset`'s.
+
+        Returns
+        -------
+        int or None
+            The seed of the target record the reset starts on
+            (:meth:`~vrig.envs.IterationPhysics.target_record`), or None when it plays a given
+            ``desired`` or one of the env's ``desired`` set.
+        """
         # the episode is over until this reset succeeds: a reset that raises leaves no episode
         # for ``step`` to continue (it would mix the old drive with the new target)
         self._abandon()
@@ -722,8 +750,29 @@ class DriveIterationEnv(gym.Env):
         self.field_seed = int(options.get("field_seed", draw[0]))
         self.run_seed = int(options.get("run_seed", draw[1]))
         drawn = not ("desired" in options or "field_seed" in options or self.desired_set)
+        self._pending = {"kind": "draw", "drive": None, "options": options, "drawn": drawn}
+        given = "desired" in options or self.desired_set is not None
+        return None if given else self.field_seed
+
+    def start_reset(self):
+        """Second part of :meth:`prepare_reset` (after :meth:`draw_reset`): start the engine on
+        the drawn target and compute its IT00 drive.
+
+        Returns
+        -------
+        (drive, iteration) : (ndarray (n, n_inputs), int)
+            As :meth:`prepare_reset`'s.
+
+        Raises
+        ------
+        RuntimeError
+            No :meth:`draw_reset` pending.
+        """
+        pending = self._pending
+        if pending is None or pending["kind"] != "draw":
+            raise RuntimeError("start_reset without a pending draw_reset")
         try:
-            return self._start_target(options, drawn, 0)
+            return self._start_target(pending["options"], pending["drawn"], 0)
         except BaseException:
             self._abandon()
             raise

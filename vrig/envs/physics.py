@@ -22,7 +22,7 @@ import numpy as np
 from identification.errors import SimulationDivergedError
 
 from ..errors import RigLimitError, SimulationInstabilityError
-from ..field import default_band, desired_response, parse_target
+from ..field import default_band, desired_responses, parse_target
 from ..reconstruction import DriveIteration, IterationSettings
 from ..reconstruction.settings import cache_key
 from ..reconstruction.vocabulary import side_car_options
@@ -159,6 +159,8 @@ class IterationPhysics:
         kind, scenario = parse_target(self.rig, target)
         self.target = kind if scenario is None else f"{kind}:{scenario}"
         self._fields: OrderedDict = OrderedDict()
+        self._failed: OrderedDict = OrderedDict()  # seeds whose record raised
+        self._twins: dict = {}  # field target -> its field twin
         self.inputs = list(self.rig.inputs)
         self.outputs = list(self.rig.outputs)
         self.fs = float(self.rig.fs)
@@ -203,17 +205,70 @@ class IterationPhysics:
         """
         return self._record("pseudo-field", seed)
 
+    def target_records(self, seeds, *, threads: int | None = None) -> list:
+        """:meth:`target_record` of many seeds, those not kept yet made together, their rig runs
+        batched (:func:`vrig.field.desired_responses`, across threads).
+
+        Record ``i`` is bit for bit ``target_record(seeds[i])``; a seed whose record cannot be
+        made (its last pseudo-field level trips, say) gets the exception in its slot, and
+        :meth:`target_record` of that seed raises it (once: then it is made again). A vector env
+        calls this with the seeds of every resetting sub-env before they start.
+
+        Parameters
+        ----------
+        seeds : sequence of int
+            Seeds of the records (each >= 0).
+        threads : int, optional
+            Worker threads of the batched rig runs (:meth:`vrig.rigs.MujocoRig.run_batch`).
+
+        Returns
+        -------
+        list of TimeHistory (or Exception)
+        """
+        return self._records(self.target, seeds, threads)
+
     def _record(self, target: str, seed: int) -> TimeHistory:
-        """:func:`vrig.field.desired_response`'s record of ``target`` and ``seed`` (cached)."""
-        key = (target, int(seed))
-        record = self._fields.get(key)
-        if record is None:
-            made = desired_response(self.rig, target, self.seconds, seed=key[1], band=self.band)
-            record = made[0]
-            self._fields[key] = record
+        """:func:`vrig.field.desired_response`'s record of ``target`` and ``seed`` (cached; a
+        failure left by :meth:`target_records` is raised once)."""
+        record = self._records(target, [seed], None)[0]
+        if isinstance(record, BaseException):
+            self._failed.pop((target, int(seed)), None)
+            raise record
+        return record
+
+    def _records(self, target: str, seeds, threads) -> list:
+        """The records of ``target`` and ``seeds``: kept, failed before, or made in one batch
+        (:func:`vrig.field.desired_responses`), the made ones kept (the last 256) and the
+        failures noted (for the next :meth:`_record`: they are made again after that)."""
+        keys = [(target, int(s)) for s in seeds]
+        found = {k: self._fields.get(k, self._failed.get(k)) for k in keys}
+        missing = list(dict.fromkeys(k[1] for k, v in found.items() if v is None))
+        if missing:
+            twin = None if target == "pseudo-field" else self._field_twin(target)
+            made = desired_responses(self.rig, target, self.seconds, missing, band=self.band,
+                                     threads=threads, twin=twin)  # fmt: skip
+            for s, m in zip(missing, made, strict=True):
+                key = (target, s)
+                found[key] = m if isinstance(m, BaseException) else m[0]
+                if isinstance(m, BaseException):
+                    self._failed[key] = m
+                else:
+                    self._fields[key] = m[0]
             while len(self._fields) > _FIELD_CACHE_SIZE:
                 self._fields.popitem(last=False)
-        return record
+            while len(self._failed) > _FIELD_CACHE_SIZE:
+                self._failed.popitem(last=False)
+        return [found[k] for k in keys]
+
+    def _field_twin(self, target: str):
+        """The field twin of a ``"field:<scenario>"`` target (built once per physics: its
+        construction costs about as much as a short record)."""
+        twin = self._twins.get(target)
+        if twin is None:
+            from ..service import field_twin
+
+            twin = self._twins[target] = field_twin(self.rig, target.partition(":")[2])
+        return twin
 
     def start(self, desired: TimeHistory, run_seed: int) -> DriveIteration:
         """An engine for ``desired`` with the (cached) identified inverse model; its rig runs use

@@ -10,7 +10,10 @@ threads), and then lets ``SyncVectorEnv`` do exactly what it always does - with 
 vector semantics (autoreset mode, ``reset_mask``, info merging, ``TimeLimit`` truncation) are
 gymnasium's own, and the results are those of ``gymnasium.make_vec(id, n,
 vectorization_mode="sync")`` (and ``"async"``) bit for bit (``tests/test_vector_env.py``). The
-sub-envs share one rig and one identified inverse model.
+sub-envs share one rig and one identified inverse model. The new target records of the resetting
+sub-envs (pseudo-field or service records: rig runs too) are made before, together, their rig
+runs batched (:meth:`~vrig.envs.IterationPhysics.target_records`), and a step's IT00 and
+iteration drives are played in one batch.
 
 Every registered ``vrig/`` id names it as its ``vector_entry_point``, so
 ``gymnasium.make_vec("vrig/ShockAbsorber-v1", num_envs=8)`` builds it (pass
@@ -86,8 +89,9 @@ class DriveIterationVectorEnv(SyncVectorEnv):
 
     Results equal ``gymnasium.make_vec(id, num_envs, vectorization_mode="sync")`` bit for bit
     (same seeds, same actions); only the rig runs of a step (and of a reset) are played together
-    (:func:`vrig.reconstruction.engine.play_batch`). A sub-env whose drawn target trips at IT00
-    redraws on its own, as in a single env. ``AutoresetMode.SAME_STEP`` works but its resets
+    (:func:`vrig.reconstruction.engine.play_batch`), and the target records of the resetting
+    sub-envs are made in one batch (:meth:`~vrig.envs.IterationPhysics.target_records`). A
+    sub-env whose drawn target trips at IT00 redraws on its own, as in a single env. ``AutoresetMode.SAME_STEP`` works but its resets
     are played one by one.
 
     Parameters
@@ -106,6 +110,10 @@ class DriveIterationVectorEnv(SyncVectorEnv):
         As :class:`gymnasium.vector.SyncVectorEnv`'s (return copies of the observations).
     autoreset_mode : str or AutoresetMode
         As :class:`gymnasium.vector.SyncVectorEnv`'s (default ``NEXT_STEP``).
+    batch_targets : bool
+        Make the target records of the resetting sub-envs in one batch (default); False: each
+        sub-env makes its own in turn, in the calling thread (the same records: for
+        comparison, ``benchmarks.rig_batch``).
     **env_kwargs
         Keyword arguments of every :class:`DriveIterationEnv` (``fast``, ``action_mode``,
         ``n_bands``, ``tolerance``, ``target``, ...); the physics' own
@@ -123,6 +131,7 @@ class DriveIterationVectorEnv(SyncVectorEnv):
         threads: int | None = None,
         copy: bool = True,
         autoreset_mode: str | AutoresetMode = AutoresetMode.NEXT_STEP,
+        batch_targets: bool = True,
         **env_kwargs,
     ):
         if not isinstance(num_envs, (int, np.integer)) or num_envs < 1:
@@ -142,10 +151,12 @@ class DriveIterationVectorEnv(SyncVectorEnv):
         )
         self.max_episode_steps = int(max_episode_steps)
         self.threads = threads if threads is not None else min(num_envs, os.cpu_count() or 1)
+        self.batch_targets = bool(batch_targets)
 
     # ------------------------------------------------------------------ batching
-    def _play_staged(self, prepared: dict, kind: str) -> None:
-        """Play the prepared ``{i: (drive, n)}`` in one batch and stage each outcome."""
+    def _play_staged(self, prepared: dict, kinds: dict) -> None:
+        """Play the prepared ``{i: (drive, n)}`` in one batch and stage each outcome (as
+        ``(kinds[i], outcome)``: resets' IT00 drives and steps' drives in the same batch)."""
         live = [i for i, (drive, _) in prepared.items() if drive is not None]
         envs = [self._staged[i].unwrapped for i in live]
         outcomes = play_batch(
@@ -155,30 +166,40 @@ class DriveIterationVectorEnv(SyncVectorEnv):
             threads=self.threads,
         )
         for i in prepared:
-            self._staged[i].outcome = (kind, None)
+            self._staged[i].outcome = (kinds[i], None)
         for i, outcome in zip(live, outcomes, strict=True):
-            self._staged[i].outcome = (kind, outcome)
+            self._staged[i].outcome = (kinds[i], outcome)
 
-    def _prepare(self, prepare) -> dict:
-        """``{i: prepare(i)}`` (None results left out). An error (a bad action, say) ends every
-        sub-env's episode - some were prepared already, so no consistent batch is left to
-        finish - and goes on: ``reset()`` the vector env then."""
+    def _prepare(self, steps: dict, resets: dict) -> dict:
+        """Prepare the sub-envs: ``steps`` ``{i: action}`` (:meth:`~DriveIterationEnv.
+        prepare_step`) and ``resets`` ``{i: (seed, options)}`` (:meth:`~DriveIterationEnv.
+        draw_reset`, then the drawn target records of all of them in one batch,
+        :meth:`~vrig.envs.IterationPhysics.target_records`, then :meth:`~DriveIterationEnv.
+        start_reset`); ``{i: (drive, n)}``. An error (a bad action, say) ends every sub-env's
+        episode - some were prepared already, so no consistent batch is left to finish - and
+        goes on: ``reset()`` the vector env then."""
         prepared = {}
         try:
-            for i in range(self.num_envs):
-                out = prepare(i)
-                if out is not None:
-                    prepared[i] = out
+            for i, action in steps.items():
+                prepared[i] = self._staged[i].unwrapped.prepare_step(action)
+            envs = {i: self._staged[i].unwrapped for i in resets}
+            drawn = [e.draw_reset(seed=resets[i][0], options=resets[i][1]) for i, e in envs.items()]
+            wanted = [s for s in drawn if s is not None]
+            if wanted and self.batch_targets:  # each start_reset then finds its record made
+                self._staged[0].unwrapped.physics.target_records(wanted, threads=self.threads)
+            for i, env in envs.items():
+                prepared[i] = env.start_reset()
         except BaseException:
             for staged in self._staged:
                 staged.outcome = None
                 staged.unwrapped.close()
             raise
-        return prepared
+        return dict(sorted(prepared.items()))
 
     def step(self, actions):
         """Step every sub-env (resetting those that ended, in ``NEXT_STEP`` mode), their rig
-        runs batched; as :meth:`gymnasium.vector.SyncVectorEnv.step`.
+        runs batched (the resetting sub-envs' target records first, then every drive in one
+        batch); as :meth:`gymnasium.vector.SyncVectorEnv.step`.
 
         Parameters
         ----------
@@ -187,21 +208,13 @@ class DriveIterationVectorEnv(SyncVectorEnv):
         """
         acts = list(iterate(self.action_space, actions))
         next_step = self.autoreset_mode == AutoresetMode.NEXT_STEP
-
-        def prepare(i):
-            env = self._staged[i].unwrapped
-            if next_step and self._autoreset_envs[i]:
-                self._kinds[i] = "reset"
-                return env.prepare_reset()
-            self._kinds[i] = "step"
-            return env.prepare_step(acts[i])
-
-        self._kinds = {}
-        prepared = self._prepare(prepare)
-        for kind in ("reset", "step"):
-            part = {i: p for i, p in prepared.items() if self._kinds[i] == kind}
-            if part:
-                self._play_staged(part, kind)
+        kinds = {
+            i: "reset" if next_step and self._autoreset_envs[i] else "step"
+            for i in range(self.num_envs)
+        }
+        steps = {i: acts[i] for i, k in kinds.items() if k == "step"}
+        resets = {i: (None, None) for i, k in kinds.items() if k == "reset"}
+        self._play_staged(self._prepare(steps, resets), kinds)
         return super().step(actions)
 
     def reset(self, *, seed=None, options=None):
@@ -227,10 +240,9 @@ class DriveIterationVectorEnv(SyncVectorEnv):
         mask = (options or {}).get("reset_mask")
         mask = np.ones(self.num_envs, bool) if not isinstance(mask, np.ndarray) else mask
 
-        def prepare(i):
-            if mask.shape == (self.num_envs,) and mask.dtype == np.bool_ and not mask[i]:
-                return None
-            return self._staged[i].unwrapped.prepare_reset(seed=seeds[i], options=env_options)
-
-        self._play_staged(self._prepare(prepare), "reset")
+        masked = mask.shape == (self.num_envs,) and mask.dtype == np.bool_
+        resets = {
+            i: (seeds[i], env_options) for i in range(self.num_envs) if not masked or mask[i]
+        }
+        self._play_staged(self._prepare({}, resets), dict.fromkeys(resets, "reset"))
         return super().reset(seed=seed, options=options)

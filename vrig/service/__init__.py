@@ -8,11 +8,12 @@
 from __future__ import annotations
 
 from .scenario import Scenario, read_scenarios
-from .twin import field_record, field_scenarios, field_twin, road_drive, scenario
+from .twin import field_record, field_records, field_scenarios, field_twin, road_drive, scenario
 
 __all__ = [
     "Scenario",
     "field_record",
+    "field_records",
     "field_scenarios",
     "field_twin",
     "read_scenarios",

@@ -19,7 +19,7 @@ from ..timehistory import TimeHistory
 from .mount import mount
 from .scenario import Scenario, read_scenarios
 
-__all__ = ["field_record", "field_scenarios", "field_twin", "scenario"]
+__all__ = ["field_record", "field_records", "field_scenarios", "field_twin", "scenario"]
 
 _FADE_S = 1.0  # road fade-in and fade-out [s]
 _EDGE_S = 0.5  # rise and fall of a manoeuvre pulse [s]
@@ -301,3 +301,68 @@ def field_record(
     field = twin.run(drive, seed=seed + 20_000)
     field = TimeHistory(field.data, field.fs, field.names, field.units)
     return (drive, field) if with_road else field
+
+
+def field_records(rig, scenario_name: str, seconds: float, seeds, *, threads: int | None = None,
+                  twin=None, with_road: bool = False) -> list:  # fmt: skip
+    """:func:`field_record` of many road seeds (the scenario's default speed and road class),
+    the twin's runs in one batch (:meth:`vrig.rigs.MujocoRig.run_batch`, across threads).
+
+    Result ``i`` is bit for bit ``field_record(rig, scenario_name, seconds, seed=seeds[i],
+    with_road=with_road)``, or the exception it raises, in its slot. One twin plays every road:
+    a twin's construction seed only seeds its generator of unseeded runs, and each record is
+    played with its own run seed (``seed + 20_000``).
+
+    Parameters
+    ----------
+    rig : str or MujocoRig
+        A shipped rig's name or a loaded rig.
+    scenario_name : str
+        The service scenario (:func:`field_scenarios`).
+    seconds : float
+        Record length [s] (a 1 s fade-in and fade-out of the road included).
+    seeds : sequence of int
+        Seeds of the road profiles (each >= 0).
+    threads : int, optional
+        Worker threads of the batch (:meth:`vrig.rigs.MujocoRig.run_batch`).
+    twin : MujocoRig, optional
+        The scenario's field twin (:func:`field_twin` of ``rig`` and ``scenario_name``), when
+        the caller keeps one; default: built here.
+    with_road : bool
+        Each result ``(road, field)`` instead of ``field``.
+
+    Returns
+    -------
+    list
+        Per seed: the field record (with ``with_road``: ``(road, field)``) or the exception.
+
+    Raises
+    ------
+    ValueError
+        Unknown scenario, ``seconds`` out of range, a seed that is not an integer >= 0.
+    """
+    rig = _rig(rig)
+    sc = scenario(rig, scenario_name)
+    _check_record(seconds, sc.road.speed_kmh)
+    seeds = list(seeds)
+    for s in seeds:
+        if isinstance(s, bool) or not isinstance(s, (int, np.integer)) or s < 0:
+            raise ValueError(f"each seed must be an integer >= 0, got {s!r}")
+    roads: list = []
+    for s in seeds:
+        try:
+            roads.append(road_drive(sc, rig.fs, seconds, speed_kmh=sc.road.speed_kmh,
+                                    road_class=sc.road.road_class, seed=int(s)))  # fmt: skip
+        except Exception as exc:  # this seed's own error, in its slot
+            roads.append(exc)
+    twin = field_twin(rig, scenario_name) if twin is None else twin
+    played = [i for i, r in enumerate(roads) if not isinstance(r, BaseException)]
+    runs = twin.run_batch([roads[i] for i in played], seeds=[int(seeds[i]) + 20_000 for i in played],
+                          threads=threads, return_exceptions=True)  # fmt: skip
+    out: list = list(roads)
+    for i, field in zip(played, runs, strict=True):
+        if not isinstance(field, BaseException):
+            field = TimeHistory(field.data, field.fs, field.names, field.units)
+            field = (roads[i], field) if with_road else field
+        out[i] = field
+    return out
