@@ -35,10 +35,10 @@ tolerance :data:`FAST_TOLERANCE`, budget 10 iterations):
    the tolerance applies to every channel.
 
     python -m benchmarks.learned_iteration            # full (see below for the time)
-    python -m benchmarks.learned_iteration --quick    # a smoke run: tiny CEM, 5 held-out targets
+    python -m benchmarks.learned_iteration --quick    # a smoke run: tiny CEM, 3 held-out targets
     python -m benchmarks.learned_iteration --timing   # 10-iteration episode times, fast/default
 
-``--quick`` trains CEM on 2 targets for 1 generation of 4 and scores 5 held-out targets per
+``--quick`` trains CEM on 2 targets for 1 generation of 4 and scores 3 held-out targets per
 rig and target kind (no phase variant, no schedule): a smoke run of every code path, not a
 result. Episodes run in ``--workers`` processes (default 2), each with its own environment.
 
@@ -93,26 +93,27 @@ UPDATE_METHODS = ("frf", "secant", "reidentify", "ilc")
 """The model-updating iteration methods (``IterationSettings(update=...)``, issue 26) scored as
 rows ``update <method>`` when the settings have that field (:func:`update_methods`)."""
 FAST_TOLERANCE = {
-    "shock-absorber": 1.1,
-    "elastomeric-damper": 1.6,
-    "fuel-tank-2ch": 1.9,
+    "shock-absorber": 5.2,
+    "elastomeric-damper": 1.4,
+    "fuel-tank-2ch": 17.0,
     "fuel-tank-7ch": 6.5,
 }
 """η0 tolerance [%, every channel] of each scored rig's *fast* env, by the rule of :mod:`vrig.envs`.
 
 The side-car tolerances were measured by the rule on the full-fidelity env (20 s targets); this
 benchmark runs the fast env (reduced fidelity, 4 s targets), where the same rule - the largest
-max-channel η0 at IT07 over ``reset(seed=0..2)`` at the rule's fixed gain, rounded up to two
-significant figures - gives other figures: shock absorber (gain 0.8) 0.89 / 1.08 / 0.74 % ->
-1.1 % (side-car 1.7 %: met at IT04 by a fixed gain); elastomeric damper (gain 0.5, its
-side-car gain) 1.52 / 1.04 / 1.27 % -> 1.6 % (side-car 0.91 %: at the edge of reach in 10 fast
-iterations, met by fixed 0.5 on 80 % of the targets); two-channel fuel tank (gain 0.8) 1.38 /
-1.85 / 1.24 % -> 1.9 % (side-car 22 %, the full-fidelity stall level: met in 1-2 fast
-iterations); seven-channel fuel tank (frf, gain 0.5, issue 26) 6.48 / 3.02 / 3.08 % -> 6.5 %
-(side-car 14 %, the full-fidelity stall level: met at IT01 by a fixed gain in the fast env).
-The same tolerance applies to the rig's field targets, which may never reach it (a service
-record is not reachable by construction). ``--side-car-tolerance`` scores with the side-car
-tolerances instead."""
+max-channel η0 at IT07 over ``reset(seed=0..2)`` at the rule's fixed gain (:func:`rule_gain`),
+rounded up to two significant figures - gives other figures. Re-measured in issue 26 on the
+current twins (the issue-16 figures, 1.1 / 1.6 / 1.9 %, predate the controller noise of issue
+23, and no policy met 1.1 % on the shock absorber any more): shock absorber (gain 0.8) 5.14 /
+3.96 / 4.85 % -> 5.2 % (side-car 6.1 %); elastomeric damper (gain 0.5) 1.31 / 0.93 / 1.12 % ->
+1.4 % (side-car 0.65 %); two-channel fuel tank (split, gain 0.3, its ``gym.gain``) 10.25 /
+16.79 / 11.31 % -> 17 % (side-car 8.5 %, measured at full fidelity; at 0.8 the fast env trips
+on seed 1 at IT01, 6.07 / 3.60 % on seeds 0 and 2); seven-channel fuel tank (frf, gain 0.5)
+6.48 / 3.02 / 3.08 % -> 6.5 % (side-car 14 %, the full-fidelity stall level). The same
+tolerance applies to the rig's field targets, which may never reach it (a service record is
+not reachable by construction). ``--side-car-tolerance`` scores with the side-car tolerances
+instead."""
 
 
 def env_kwargs_of(rig: str, *, side_car_tolerance: bool = False) -> dict:
@@ -556,7 +557,7 @@ def compare(rows: dict) -> dict:
     dict
         ``best_fixed``, ``best_learned`` (the best challenger), ``basis`` (``"iterations"`` or
         ``"final η0"``), ``iteration_reduction`` and ``eta0_reduction`` (fractions, > 0: the
-        challenger is better), ``target`` (in words) and ``target_met``.
+        challenger is better), ``goal`` (the target in words) and ``target_met``.
     """
 
     def best(names):
@@ -571,17 +572,17 @@ def compare(rows: dict) -> dict:
     unreached = f.get("success_rate", 1.0) == 0 and lrn.get("success_rate", 1.0) == 0
     if unreached:
         met = eta_reduction >= TARGET
-        target = f">= {100 * TARGET:.0f} % lower final η0 (the tolerance was never met)"
+        goal = f">= {100 * TARGET:.0f} % lower final η0 (the tolerance was never met)"
     else:
         met = lrn["mean_final_eta0"] <= f["mean_final_eta0"] + 1e-12 and reduction >= TARGET
-        target = f">= {100 * TARGET:.0f} % fewer iterations at equal or lower final η0"
+        goal = f">= {100 * TARGET:.0f} % fewer iterations at equal or lower final η0"
     return {
         "best_fixed": best_fixed,
         "best_learned": best_learned,
         "basis": "final η0" if unreached else "iterations",
         "iteration_reduction": reduction,
         "eta0_reduction": eta_reduction,
-        "target": target,
+        "goal": goal,
         "target_met": bool(met),
     }
 
@@ -728,7 +729,7 @@ def _print(res):
         f"best learned or model-updating ({res['best_learned']}) vs best fixed "
         f"({res['best_fixed']}): {100 * res['iteration_reduction']:+.1f} % fewer iterations, "
         f"{100 * res['eta0_reduction']:+.1f} % lower final η0; compared on {res['basis']}; "
-        f"target ({res['target']}) {'MET' if res['target_met'] else 'MISSED'}; CEM training "
+        f"target ({res['goal']}) {'MET' if res['target_met'] else 'MISSED'}; CEM training "
         f"{res['train_s']:.0f} s, evaluation {res['eval_s']:.0f} s"
     )
 
@@ -785,7 +786,7 @@ def main(argv=None):
         help="target kinds scored (default: pseudo-field field)",
     )  # fmt: skip
     ap.add_argument("--train", type=int, help="CEM training targets (default 10, quick 2)")
-    ap.add_argument("--held-out", type=int, help="held-out targets (default 20, quick 5)")
+    ap.add_argument("--held-out", type=int, help="held-out targets (default 20, quick 3)")
     ap.add_argument("--generations", type=int, help="CEM generations (default 6, quick 1)")
     ap.add_argument("--population", type=int, help="CEM population (default 10, quick 4)")
     ap.add_argument("--workers", type=int, default=2, help="processes (default 2)")
@@ -800,7 +801,7 @@ def main(argv=None):
         print("episode wall time (min / median of 3; this machine is shared, so noisy):")
         episode_times()
         return
-    args.held_out = args.held_out if args.held_out is not None else (5 if quick else 20)
+    args.held_out = args.held_out if args.held_out is not None else (3 if quick else 20)
     if args.held_out < 1:
         ap.error(f"--held-out must be at least 1, got {args.held_out}")
     args.train = args.train or (2 if quick else 10)
