@@ -14,7 +14,8 @@ tolerance :data:`FAST_TOLERANCE`, budget 10 iterations):
    on the ``action_mode="complex"`` env (a learned phase per band besides the gains, 11
    parameters: "learned (CEM, phase)"; ``--no-phase`` or ``--quick`` leave it out);
 2. evaluates fixed gain 0.5, 0.8, 1.0, the decreasing schedule, the per-band adaptive rule, the
-   learned policy, every Stable-Baselines3 model trained for the rig
+   per-band secant step of the observed response-change ratio (:class:`vrig.policies.SecantBandGain`,
+   "secant gain (observed)"), the learned policy, every Stable-Baselines3 model trained for the rig
    (``results/rl/<rig>-sac.zip`` / ``-ppo.zip`` from ``python -m benchmarks.train_rl``, through
    :class:`SB3Policy`; without one the table says how to train it; a model trained on the v1
    observation must be retrained) and - when :class:`vrig.IterationSettings` has the
@@ -75,6 +76,7 @@ from vrig.policies import (
     EpisodeResult,
     FixedGain,
     Policy,
+    SecantBandGain,
     cross_entropy_search,
     run_episode,
 )
@@ -252,9 +254,7 @@ def _make(env_id, side_car_tolerance=False, target="pseudo-field", **kwargs):
     # TimeLimit owns truncation: the budget is max_episode_steps
     rig = ENV_IDS[env_id].get("rig")
     extra = env_kwargs_of(rig, side_car_tolerance=side_car_tolerance)
-    return gym.make(
-        env_id, fast=True, max_episode_steps=BUDGET, target=target, **extra, **kwargs
-    )
+    return gym.make(env_id, fast=True, max_episode_steps=BUDGET, target=target, **extra, **kwargs)
 
 
 def _env(spec):
@@ -288,6 +288,8 @@ def _policy(env, spec):
         return DecreasingGain(env)
     if kind == "adaptive":
         return AdaptiveBandGain(env)
+    if kind == "secant":
+        return SecantBandGain(env)
     if kind == "sb3":
         key = ("sb3", arg[0])
         if key not in _WORKER:
@@ -503,6 +505,7 @@ def _specs(rig, best, args, best_complex=None):
         "fixed 1": ("fixed", 1.0),
         "decreasing": ("decreasing",),
         "adaptive per band": ("adaptive",),
+        "secant gain (observed)": ("secant",),
         "learned (CEM)": ("learned", tuple(best)),
     }
     if best_complex is not None:
@@ -532,8 +535,10 @@ def _has_sb3() -> bool:
     return importlib.util.find_spec("stable_baselines3") is not None
 
 
-CHALLENGERS = ("learned", "SB3", "update")
-"""Row-name prefixes of the learned and model-updating methods compared with the fixed gains."""
+CHALLENGERS = ("learned", "SB3", "update", "secant")
+"""Row-name prefixes of the learned and model-updating methods compared with the fixed gains
+(``secant gain (observed)``: :class:`vrig.policies.SecantBandGain`, the per-band secant step of
+the env's observed response-change ratio, a model update through the gains)."""
 
 
 def compare(rows: dict) -> dict:
@@ -550,7 +555,7 @@ def compare(rows: dict) -> dict:
     rows : dict
         Policy name -> summary (``mean_iterations``, ``mean_final_eta0``, ``success_rate``);
         fixed gains are named ``fixed ...``, the challengers ``learned ...``, ``SB3 ...`` or
-        ``update ...`` (:data:`CHALLENGERS`).
+        ``update ...`` or ``secant ...`` (:data:`CHALLENGERS`).
 
     Returns
     -------

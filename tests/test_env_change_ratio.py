@@ -14,6 +14,7 @@ import pytest
 import vrig
 from vrig.envs import DriveIterationEnv, band_edges
 from vrig.envs.task import IterationTask, response_change_ratios
+from vrig.policies import SecantBandGain
 from vrig.reconstruction import IterationSettings
 from vrig.rigs.spec import ChannelSpec
 
@@ -167,3 +168,24 @@ def test_the_success_bonus_is_paid_exactly_on_the_step_that_meets_the_tolerance(
 def test_the_success_bonus_must_be_finite_and_non_negative(value):
     with pytest.raises(ValueError, match="success_bonus must be a finite number >= 0"):
         IterationTask(edges=band_edges((0.0, 10.0), 4), success_bonus=value)
+
+
+def test_the_secant_gain_of_the_observed_ratio_removes_the_error_in_one_step(unshaped):
+    """Model off by c = 0.8: the first update (gain 0.8) leaves 1 - 0.64 = 36 % of the error and
+    observes rho = 0.8; the secant gain 1 / 0.8 then removes the rest (a linear rig)."""
+    env = _static_env(2.0, 2.5, tolerance=1e-3)  # IT01 at 36 % of IT00's error: not met
+    obs, info = env.reset(seed=0)
+    policy = SecantBandGain(env, start=0.8)
+    policy.reset()
+    np.testing.assert_allclose(policy(obs), 0.8)  # IT00: nothing observed yet
+    desres = env.engine.desres.data
+    e0 = desres - env.response.data
+    obs, _r, term, _t, _info = env.step(policy(obs))
+    assert not term
+    e1 = desres - env.response.data
+    np.testing.assert_allclose(e1, 0.36 * e0, atol=1e-9 * np.abs(e0).max())
+    np.testing.assert_allclose(policy(obs), 1.25, rtol=1e-5)  # 1 / rho
+    obs, _r, term, _t, info = env.step(policy(obs))
+    # what is left: the gain's error, the float32 observation's rounding of log10(rho) (~1e-7)
+    assert np.abs(desres - env.response.data).max() < 1e-6 * np.abs(e1).max()
+    assert term and info["reason"] == "tolerance"
