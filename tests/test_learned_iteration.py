@@ -38,8 +38,9 @@ def env():
 def test_without_an_update_the_runner_plays_the_envs_fixed_gain_episode(env):
     """Same model, target, run seed, tolerance and budget: the reconstruction's errors are the
     env's, iteration for iteration, and it stops where the env terminates."""
-    for seed in (3, 4):
-        mine = li.play_update(env, None, field_seed=seed, run_seed=seed, gain=0.8)
+    plain = [None, "none"] if HAS_UPDATE else [None]  # "none": today's loop, bit for bit
+    for seed, update in ((3, plain[-1]), (4, None)):
+        mine = li.play_update(env, update, field_seed=seed, run_seed=seed, gain=0.8)
         theirs = run_episode(
             env, FixedGain(env, 0.8), options={"field_seed": seed, "run_seed": seed}
         )
@@ -118,6 +119,9 @@ def test_the_runner_passes_the_update_method_to_the_reconstruction(env):
             env, update, field_seed=2, run_seed=2, reconstruct=_fake([[3.0]], "converged", seen)
         )
     assert [s.update for s in seen] == list(li.UPDATE_METHODS)
+    from vrig.reconstruction import UPDATES
+
+    assert set(li.UPDATE_METHODS) == set(UPDATES) - {"none"}  # every method, each once
 
 
 def test_the_rule_gain_follows_the_side_car():
