@@ -274,8 +274,9 @@ def test_policies_in_complex_mode():
 
 @pytest.mark.parametrize("rig,n_in,n_out", [("radiator", 1, 2), ("light-truck-front", 6, 10)])
 def test_the_spaces_are_the_documented_sizes(rig, n_in, n_out):
-    """The table of DriveIterationEnv's docstring: flat observation 2 n_out n_bands + 2 n_out +
-    2 n_in + 1; actions n_in n_bands, n_in, 1, 2 n_in n_bands (+1 with the flag)."""
+    """The table of DriveIterationEnv's docstring: flat observation 4 n_out n_bands + 2 n_out +
+    2 n_in + 1 (v2: band_error, band_error_change, change_ratio, change_phase per output and
+    band); actions n_in n_bands, n_in, 1, 2 n_in n_bands (+1 with the flag)."""
     from gymnasium.spaces.utils import flatdim
 
     sizes = {"bands": 4 * n_in, "channels": n_in, "scalar": 1, "complex": 8 * n_in}
@@ -283,4 +284,6 @@ def test_the_spaces_are_the_documented_sizes(rig, n_in, n_out):
         e = DriveIterationEnv(rig, fast=True, seconds=2.0, action_mode=mode, reidentify_action=True)
         assert e.action_space.shape == (size + 1,), mode
     assert e.observation_space["band_error"].shape == (n_out, 4)
-    assert flatdim(e.observation_space) == 8 * n_out + 2 * n_out + 2 * n_in + 1
+    for key in ("band_error_change", "change_ratio", "change_phase"):
+        assert e.observation_space[key].shape == (n_out, 4)
+    assert flatdim(e.observation_space) == 4 * 4 * n_out + 2 * n_out + 2 * n_in + 1

@@ -57,11 +57,13 @@ print(f"IT00 eta0 {info['eta0']} %, tolerance {env.unwrapped.task.tolerance} %")
 # cheap: `reset()` draws a new pseudo-field desired response and plays IT00, each `step(gains)`
 # plays one more iteration. The observation holds, per output and band, the log10 ratio of the
 # band's RMS error to the desired response's (`band_error`), its change since the last iteration,
-# η0 and drive levels. The episode **terminates** when every channel's η0 is within the rig's
+# the realised / predicted response-change ratio of the last correction (`change_ratio`,
+# `change_phase`: what a model update uses), η0 and drive levels. The episode **terminates** when every channel's η0 is within the rig's
 # tolerance and is **truncated** after 10 iterations (by gymnasium's `TimeLimit` wrapper:
 # `max_episode_steps` of `gym.make`; the environment itself never truncates and
 # `run_episode` reports the reason `"budget"`); the reward is the log reduction of the
-# mean η0 (minus a small drive-energy penalty; −5 for a refused or tripping drive).
+# mean η0 (minus a small drive-energy penalty; −5 for a refused or tripping drive; +1 on the
+# step that meets the tolerance).
 #
 # ## Baselines
 #

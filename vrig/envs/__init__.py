@@ -115,7 +115,7 @@ from ..rigs.spec import read_defaults
 from .checker import ResetSafeEnvChecker, make_checked
 from .drive_iteration import FALLBACK_TOLERANCE, ActionLayout, DriveIterationEnv
 from .physics import IterationPhysics, clear_model_cache
-from .task import IterationTask, band_edges, band_error_ratios
+from .task import IterationTask, band_edges, band_error_ratios, response_change_ratios
 from .vector import DriveIterationVectorEnv
 
 __all__ = [
@@ -131,6 +131,7 @@ __all__ = [
     "band_error_ratios",
     "clear_model_cache",
     "make_checked",
+    "response_change_ratios",
 ]
 
 _ENTRY_POINT = "vrig.envs.checker:make_checked"

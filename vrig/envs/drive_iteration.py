@@ -19,7 +19,7 @@ from ..errors import RigLimitError
 from ..reconstruction import IterationSettings
 from ..timehistory import TimeHistory
 from .physics import FAILURES, IterationPhysics
-from .task import IterationTask, band_edges
+from .task import IterationTask, band_edges, response_change_ratios
 
 __all__ = [
     "FALLBACK_TOLERANCE",
@@ -288,6 +288,15 @@ class DriveIterationEnv(gym.Env):
       RMS of DESRES, bands ``self.edges`` (log-spaced over the simulation band), in [-6, 3];
     * ``band_error_change`` (outputs, bands): ``band_error`` now minus at the previous
       iteration (0 at IT00), in [-3, 3] (> 0: the band's error grew);
+    * ``change_ratio``, ``change_phase`` (outputs, bands): log10 magnitude, in [-3, 3], and
+      phase [rad], in [-pi, pi], of the realised / predicted response-change ratio of the last
+      iteration (v2; :func:`~vrig.envs.task.response_change_ratios`): per band the
+      least-squares complex factor ``rho`` with ``ITnRES - ITn-1RES ~ rho * g_b * (DESRES -
+      ITn-1RES)``, ``g_b`` the band's gain of the last action (mean over drive channels,
+      complex in ``"complex"`` mode). 0 and 0 (``rho = 1``: the model predicted the change) at
+      IT00, after a failed step, and in a band with no predicted change (gain 0 or no error);
+      ``rho < 1``: the response moved less than the correction aimed at. What a secant / model
+      update uses, so a policy can learn an update rule;
     * ``eta0``, ``rms_error`` (outputs,): η0 (eq. 5-28) and RMS error [%], in [0, 1000];
     * ``drive_rms``, ``drive_peak`` (inputs,): of ITnDRV, as fractions of the full scale;
     * ``iteration`` (1,): n, in [0, 99] (:data:`~vrig.envs.task.ITERATION_MAX`: the records are
@@ -307,25 +316,29 @@ class DriveIterationEnv(gym.Env):
 
     **Spaces by rig size** (default ``n_bands=4``; ``n_inputs x n_outputs``; the flat
     observation is ``gymnasium.wrappers.FlattenObservation``'s length,
-    ``2 * n_outputs * n_bands + 2 * n_outputs + 2 * n_inputs + 1``; the action lengths are
+    ``4 * n_outputs * n_bands + 2 * n_outputs + 2 * n_inputs + 1``; the action lengths are
     without the re-identify flag, +1 with it; ``"scalar"`` is always 1):
 
     | inputs x outputs: rigs                  | band_error | flat obs | bands | channels | complex |
     |-----------------------------------------|------------|----------|-------|----------|---------|
-    | 1 x 1: shock absorber, damper, shaker   | (1, 4)     | 13       | 4     | 1        | 8       |
-    | 1 x 2: radiator, motorcycle rear        | (2, 4)     | 23       | 4     | 1        | 8       |
-    | 1 x 3: pneumatic trailer                | (3, 4)     | 33       | 4     | 1        | 8       |
-    | 2 x 2: fuel tank 2ch                    | (2, 4)     | 25       | 8     | 2        | 16      |
-    | 6 x 10: light-truck front               | (10, 4)    | 113      | 24    | 6        | 48      |
-    | 7 x 7: fuel tank 7ch                    | (7, 4)     | 85       | 28    | 7        | 56      |
+    | 1 x 1: shock absorber, damper, shaker   | (1, 4)     | 21       | 4     | 1        | 8       |
+    | 1 x 2: radiator, motorcycle rear        | (2, 4)     | 39       | 4     | 1        | 8       |
+    | 1 x 3: pneumatic trailer                | (3, 4)     | 57       | 4     | 1        | 8       |
+    | 2 x 2: fuel tank 2ch                    | (2, 4)     | 41       | 8     | 2        | 16      |
+    | 6 x 10: light-truck front               | (10, 4)    | 193      | 24    | 6        | 48      |
+    | 7 x 7: fuel tank 7ch                    | (7, 4)     | 141      | 28    | 7        | 56      |
 
-    In general ``band_error`` / ``band_error_change`` are ``(n_outputs, n_bands)``, ``eta0`` /
+    In general ``band_error`` / ``band_error_change`` / ``change_ratio`` / ``change_phase`` are
+    ``(n_outputs, n_bands)``, ``eta0`` /
     ``rms_error`` ``(n_outputs,)``, ``drive_rms`` / ``drive_peak`` ``(n_inputs,)``; the action
     is ``n_inputs * n_bands`` (``"bands"``), ``n_inputs`` (``"channels"``), 1 (``"scalar"``) or
     ``2 * n_inputs * n_bands`` (``"complex"``) long.
 
     **Reward**: ``ln(mean η0 before) - ln(mean η0 after) - energy_penalty * max(0, ln(drive
-    energy growth)) - step_penalty``; a drive beyond the limits (never sent), a rig trip or a
+    energy growth)) - step_penalty``, plus ``success_bonus`` (default 1) on the step that meets
+    the tolerance (v2: the return pays for reaching it, which the iterations-to-tolerance
+    benchmark counts; with a discount < 1 or a ``step_penalty`` > 0 it pays more the sooner);
+    a drive beyond the limits (never sent), a rig trip or a
     non-finite drive gives ``-trip_penalty`` and terminates (``info["reason"] == "limit"``; a
     diverging inverse-model free run or an unstable simulation: ``"unstable"``).
 
@@ -387,6 +400,12 @@ class DriveIterationEnv(gym.Env):
 
     **Version History**
 
+    * v2 (issue 26): the observation gains ``change_ratio`` and ``change_phase`` (the realised /
+      predicted response-change ratio per output and band; the flat observation grows by
+      ``2 * n_outputs * n_bands``), the reward the ``success_bonus`` term (default 1, paid on
+      the step that meets the tolerance). Drives, responses, errors and terminations are v1's:
+      fixed-gain episodes are identical in their records; only the rewards of a successful step
+      and the observation differ. The registered ids keep their ``-v1`` suffix.
     * v1 (issue 16): ``TimeLimit`` alone owns truncation (the env never truncates;
       ``max_iterations`` removed: a ``TypeError`` says to use ``max_episode_steps``; the
       ``iteration`` observation is bounded by 99 instead of the budget; ``info["reason"]`` is
@@ -453,6 +472,11 @@ class DriveIterationEnv(gym.Env):
         ``E = sum_channels (drive RMS / full scale)^2`` (default 0.1, >= 0).
     step_penalty : float
         Constant subtracted from every step's reward (default 0, >= 0).
+    success_bonus : float
+        Added to the reward of the step that meets the tolerance (every channel's η0 <=
+        ``tolerance``; the episode terminates there; default 1, >= 0): the return then pays for
+        reaching the tolerance, as the benchmark's iterations to tolerance count (see
+        **Reward**).
     model_seed : int, optional
         Identification seed (``settings.id_seed``, default 0; fixed per env, so the identified
         model is reused).
@@ -497,6 +521,7 @@ class DriveIterationEnv(gym.Env):
         trip_penalty: float = 5.0,
         energy_penalty: float = 0.1,
         step_penalty: float = 0.0,
+        success_bonus: float = 1.0,
         model_seed: int | None = None,
         id_duration: float | None = None,
         id_rms=None,
@@ -533,6 +558,7 @@ class DriveIterationEnv(gym.Env):
             trip_penalty=trip_penalty,
             energy_penalty=energy_penalty,
             step_penalty=step_penalty,
+            success_bonus=success_bonus,
         )
         self.layout = ActionLayout(
             action_mode, ph.n_inputs, n_bands, bool(reidentify_action), lo, hi, float(phase_max)
@@ -543,6 +569,7 @@ class DriveIterationEnv(gym.Env):
         if self.desired_set is not None and not self.desired_set:
             raise ValueError("desired must hold at least one record")
         self.engine = None
+        self.change_ratio = None
         self._pending = None
         self._done = True
 
@@ -623,6 +650,7 @@ class DriveIterationEnv(gym.Env):
             drive=self.drive,
             full_scale=self.physics.drive_full_scale,
             iteration=self.iteration,
+            change_ratio=self.change_ratio,
         )
 
     def _play(self, drive, iteration: int):
@@ -856,6 +884,7 @@ class DriveIterationEnv(gym.Env):
             self.engine.desres.data, self.response.data, self.physics.fs
         )
         self.errors = [np.asarray(self.scores[0], dtype=float)]
+        self.change_ratio = None  # IT00: no change yet
         self._done = False
         return self._observe(None), self._info(self.scores)
 
@@ -946,6 +975,8 @@ class DriveIterationEnv(gym.Env):
             "eta_before": self.scores[0],
             "energy_before": task.drive_energy(self.drive, ph.drive_full_scale),
             "previous": self.log_band_error,
+            "previous_response": self.response.data,
+            "gains": gains,
         }
         self.iteration += 1
         try:
@@ -982,6 +1013,7 @@ class DriveIterationEnv(gym.Env):
             failure = outcome
         if failure is not None:
             self._done = True
+            self.change_ratio = None  # nothing played: no realised change
             obs = self._observe(pending["previous"])
             reason = "limit" if isinstance(failure, RigLimitError) else "unstable"
             info = self._info(
@@ -997,6 +1029,10 @@ class DriveIterationEnv(gym.Env):
             self.engine.desres.data, self.response.data, self.physics.fs
         )
         self.errors.append(np.asarray(scores[0], dtype=float))
+        self.change_ratio = response_change_ratios(
+            self.engine.desres.data, pending["previous_response"], self.response.data,
+            self.physics.fs, self.edges, pending["gains"],
+        )  # fmt: skip
         reward = task.reward(
             pending["eta_before"],
             scores[0],

@@ -3,7 +3,8 @@
 One concept per module:
 
 * :mod:`vrig.policies.gains` - the policies (the gains of each iteration): :class:`Policy`,
-  :class:`FixedGain`, :class:`DecreasingGain`, :class:`AdaptiveBandGain` and the learned
+  :class:`FixedGain`, :class:`DecreasingGain`, :class:`AdaptiveBandGain`, the secant step of
+  the observed response-change ratio :class:`SecantBandGain` and the learned
   :class:`BandRatioPolicy`;
 * :mod:`vrig.policies.episodes` - :func:`run_episode` plays one episode and returns an
   :class:`EpisodeResult`;
@@ -17,7 +18,14 @@ cross_entropy_search, run_episode``).
 from __future__ import annotations
 
 from .episodes import EpisodeResult, run_episode
-from .gains import AdaptiveBandGain, BandRatioPolicy, DecreasingGain, FixedGain, Policy
+from .gains import (
+    AdaptiveBandGain,
+    BandRatioPolicy,
+    DecreasingGain,
+    FixedGain,
+    Policy,
+    SecantBandGain,
+)
 from .search import cross_entropy_search
 
 __all__ = [
@@ -27,6 +35,7 @@ __all__ = [
     "EpisodeResult",
     "FixedGain",
     "Policy",
+    "SecantBandGain",
     "cross_entropy_search",
     "run_episode",
 ]

@@ -11,6 +11,9 @@ then the episode is the ``bands`` one, bit for bit).
 * :class:`DecreasingGain` - ``max(floor, start * decay**n)``.
 * :class:`AdaptiveBandGain` - per band: cut the gain when the band's error grew, raise it
   slowly while it falls.
+* :class:`SecantBandGain` - per band the secant step from the observed realised / predicted
+  response-change ratio (``change_ratio``, ``change_phase``, env v2): ``g_b = scale / |rho_b|``
+  (and the phase ``-arg rho_b`` in ``complex`` mode), a model update through the gains.
 * :class:`BandRatioPolicy` - the learned one: per band ``g_b = exp(theta_b + alpha * change_b +
   beta * (error_b + 1) + gamma * n)`` from the observed log10 band-error ratio (``error_b``), its
   change over the last iteration (``change_b``) and the iteration index ``n`` (in ``complex``
@@ -37,6 +40,7 @@ __all__ = [
     "DecreasingGain",
     "FixedGain",
     "Policy",
+    "SecantBandGain",
 ]
 
 
@@ -263,6 +267,74 @@ class AdaptiveBandGain(Policy):
             self._g * np.where(grew, self.shrink, self.grow)[None, :], self.low, self.high
         )
         return self._g.copy()
+
+
+class SecantBandGain(Policy):
+    """Per band the secant step of the observed response-change ratio (env v2's
+    ``change_ratio`` and ``change_phase``).
+
+    The last correction moved the response by ``rho_b`` times what it aimed at in band ``b``
+    (:func:`vrig.envs.task.response_change_ratios`); on a linear rig ``rho_b`` is the
+    rig-to-model mismatch there, whatever the gain was, so the gain ``1 / rho_b`` would remove
+    the band's error in one step. The policy plays ``g_b = clip(scale / |rho_b|, low, high)``,
+    ``|rho_b|`` the geometric mean over the output channels (the same gain for every drive
+    channel), and in the ``"complex"`` action mode the phase ``-arg rho_b`` (mean over the
+    outputs; clipped to the env's ``phase_max``). Nothing is remembered between iterations: at
+    IT00 (nothing observed yet: ``rho = 1``) and in a band with no predicted change it plays
+    ``start``.
+
+    Parameters
+    ----------
+    env : gymnasium.Env
+        A :class:`vrig.envs.DriveIterationEnv` (v2, or a wrapper of one); its action layout
+        sets the shape of the actions.
+    start : float, optional
+        Gain of every band at the first update (after IT00).
+    scale : float, optional
+        Fraction of the secant step (1: the full step; < 1 under-relaxed).
+    low, high : float, optional
+        Range the gains are kept in.
+    """
+
+    def __init__(
+        self, env, start: float = 0.8, scale: float = 1.0, low: float = 0.1, high: float = 2.0
+    ):
+        super().__init__(env)
+        if not (0 < low <= high) or scale <= 0 or start <= 0:
+            raise ValueError(
+                f"need start > 0, scale > 0 and 0 < low <= high, got start={start}, "
+                f"scale={scale}, low={low}, high={high}"
+            )
+        self.start, self.scale = float(start), float(scale)
+        self.low, self.high = float(low), float(high)
+        self.name = "secant gain (observed)"
+
+    def gains(self, obs):
+        """``scale / |rho_b|`` per band (``start`` at IT00 and where nothing was predicted).
+
+        Parameters
+        ----------
+        obs : dict of str to ndarray
+            The environment's observation (``iteration``, ``change_ratio``, ...; see
+            :class:`vrig.envs.DriveIterationEnv`).
+        """
+        log_rho = np.asarray(obs["change_ratio"], float).mean(axis=0)  # (n_bands,)
+        phase = np.asarray(obs["change_phase"], float)
+        # IT00, a failed step, a band with nothing predicted: observed as 0 and 0 (rho = 1)
+        unobserved = ~np.any(obs["change_ratio"], axis=0) & ~np.any(phase, axis=0)
+        g = np.where(unobserved, self.start, self.scale * 10.0 ** (-log_rho))
+        return np.clip(g, self.low, self.high)[None, :]
+
+    def phases(self, obs):
+        """``-arg rho_b`` per band (mean over the outputs), the phase of the secant step.
+
+        Parameters
+        ----------
+        obs : dict of str to ndarray
+            The environment's observation (``change_phase``, ...; see
+            :class:`vrig.envs.DriveIterationEnv`).
+        """
+        return -np.asarray(obs["change_phase"], float).mean(axis=0)[None, :]
 
 
 class BandRatioPolicy(Policy):
