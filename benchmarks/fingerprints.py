@@ -28,7 +28,7 @@ CASES = (
     ("elastomeric-damper", "arx", "adaptive"),
 )
 OPTIONS = {"split": {"split_hz": 3.0}}
-ENVS = ("vrig/ShockAbsorber-v1", "vrig/ElastomericDamper-v1")
+ENVS = ("vrig/ShockAbsorber-v2", "vrig/ElastomericDamper-v2")
 
 
 def _hash(a) -> str:

@@ -751,7 +751,7 @@ def episode_times(rigs=("shock-absorber", "elastomeric-damper", "shaker"), repea
     out = {}
     for rig in rigs:
         for label, kw in (("fast", {"fast": True}), ("default", {})):
-            env = gym.make("vrig/DriveIteration-v1", rig=rig, tolerance=1e-9, **kw)
+            env = gym.make("vrig/DriveIteration-v2", rig=rig, tolerance=1e-9, **kw)
             env.reset(seed=0)  # identifies the model (cached) and warms up
             times = []
             for r in range(repeats):

@@ -55,15 +55,15 @@ def test_the_default_target_is_the_pseudo_field_record_of_the_drawn_seed_bit_for
     """The default env's desired response is ``vrig.pseudo_field`` of the drawn seed over the
     rig's band (what the envs drew before the target option), and its IT00 observation is that
     of the same record passed explicitly."""
-    env = gym.make("vrig/ShockAbsorber-v1", **KW)
-    named = gym.make("vrig/ShockAbsorber-v1", target="pseudo-field", **KW)
+    env = gym.make("vrig/ShockAbsorber-v2", **KW)
+    named = gym.make("vrig/ShockAbsorber-v2", target="pseudo-field", **KW)
     obs, info = env.reset(seed=3)
     obs_named, info_named = named.reset(seed=3)
     ph = env.unwrapped.physics
     assert ph.target == "pseudo-field"
     _drive, truth = vrig.pseudo_field(ph.rig, ph.band, 2.0, seed=info["field_seed"])
     np.testing.assert_array_equal(env.unwrapped.desired.data, truth.data)
-    explicit = gym.make("vrig/ShockAbsorber-v1", **KW)
+    explicit = gym.make("vrig/ShockAbsorber-v2", **KW)
     obs_explicit, _ = explicit.reset(seed=3, options={"desired": truth, "run_seed": info["run_seed"]})
     for key in obs:
         np.testing.assert_array_equal(obs[key], obs_explicit[key], err_msg=key)
@@ -76,7 +76,7 @@ def test_the_default_target_is_the_pseudo_field_record_of_the_drawn_seed_bit_for
 
 def test_an_unknown_scenario_or_target_is_a_value_error_at_make_time():
     with pytest.raises(ValueError, match=r"no service scenario 'nope'.*rough-road"):
-        gym.make("vrig/ShockAbsorber-v1", target="field:nope", **KW)
+        gym.make("vrig/ShockAbsorber-v2", target="field:nope", **KW)
     with pytest.raises(ValueError, match="no service scenario"):
         DriveIterationEnv("shaker", target="field", **KW)  # the shaker has none
     with pytest.raises(ValueError, match="unknown target 'road'"):
@@ -113,7 +113,7 @@ def test_a_field_target_draws_each_reset_through_desired_response_with_its_seed(
 
 
 def test_the_checker_passes_on_a_field_target(fake_field):
-    env = gym.make("vrig/ShockAbsorber-v1", target="field:rough-road", **KW)
+    env = gym.make("vrig/ShockAbsorber-v2", target="field:rough-road", **KW)
     with warnings.catch_warnings():
         warnings.filterwarnings("ignore", message=".*symmetric and normalized.*")
         check_env(env.unwrapped)
@@ -134,7 +134,7 @@ def test_the_vector_env_shares_one_field_target(fake_field):
     finally:
         env.close()
     with pytest.raises(ValueError, match="nope"):
-        gym.make_vec("vrig/ShockAbsorber-v1", num_envs=2, target="field:nope", **KW)
+        gym.make_vec("vrig/ShockAbsorber-v2", num_envs=2, target="field:nope", **KW)
 
 
 @needs_roads
@@ -144,7 +144,7 @@ def test_a_field_target_env_resets_on_a_service_record_and_steps():
     radiator in its truck front end: its IT00 drive stays inside the rig's limits)."""
     from vrig.service import field_record
 
-    env = gym.make("vrig/Radiator-v1", target="field:truck-front", fast=True, seconds=4.0)
+    env = gym.make("vrig/Radiator-v2", target="field:truck-front", fast=True, seconds=4.0)
     env = env.unwrapped
     obs, info = env.reset(seed=0)
     truth = field_record(env.physics.rig, "truck-front", 4.0, seed=info["field_seed"])

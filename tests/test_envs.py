@@ -16,11 +16,11 @@ from vrig.io import write
 from vrig.reconstruction import reconstruct
 
 
-def make(env_id="vrig/ShockAbsorber-v1", **kw):
+def make(env_id="vrig/ShockAbsorber-v2", **kw):
     return gym.make(env_id, fast=True, **kw)
 
 
-def make_short(env_id="vrig/ShockAbsorber-v1", **kw):
+def make_short(env_id="vrig/ShockAbsorber-v2", **kw):
     """API checks only: 2 s targets (the shortest allowed) keep them quick."""
     return make(env_id, seconds=2.0, **kw)
 
@@ -50,8 +50,8 @@ def test_environments_are_registered_on_import_vrig():
         spec = gym.spec(env_id)
         assert spec.max_episode_steps == 10
         assert spec.entry_point == "vrig.envs.checker:make_checked"
-    assert gym.spec("vrig/ElastomericDamper-v1").kwargs["rig"] == "elastomeric-damper"
-    assert gym.spec("vrig/LightTruckFront-v1").kwargs["rig"] == "light-truck-front"
+    assert gym.spec("vrig/ElastomericDamper-v2").kwargs["rig"] == "elastomeric-damper"
+    assert gym.spec("vrig/LightTruckFront-v2").kwargs["rig"] == "light-truck-front"
     # every per-rig id has a measured tolerance (its side-car's), not the 2 % fallback
     for env_id, kwargs in ENV_IDS.items():
         if "rig" in kwargs:
@@ -345,7 +345,7 @@ def test_a_drawn_target_whose_it00_trips_is_redrawn_an_explicit_one_raises(monke
 
 @pytest.mark.slow
 @pytest.mark.parametrize(
-    "env_id,seed", [("vrig/LightTruckFront-v1", 0), ("vrig/ShockAbsorber-v1", 1)]
+    "env_id,seed", [("vrig/LightTruckFront-v2", 0), ("vrig/ShockAbsorber-v2", 1)]
 )
 def test_the_default_tolerance_is_reached_at_gain_08_but_not_at_it00(env_id, seed):
     """The tolerance rule (vrig.envs) on the default (full-fidelity, 20 s) env: the slowest of the

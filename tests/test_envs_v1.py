@@ -20,7 +20,7 @@ from vrig.policies import BandRatioPolicy, FixedGain, run_episode
 from vrig.processing import band_gains
 
 
-def make_short(env_id="vrig/ShockAbsorber-v1", **kw):
+def make_short(env_id="vrig/ShockAbsorber-v2", **kw):
     """2 s targets on the fast rig: quick."""
     return gym.make(env_id, fast=True, seconds=2.0, **kw)
 

@@ -189,7 +189,7 @@ def test_fast_and_full_shock_absorber_agree_within_the_documented_tolerance():
 def test_fast_shock_absorber_env_resets_for_seeds_0_to_9():
     """With either mounting (the threaded one failed every reset at the old fast timestep)."""
     for options in ({}, {"rig_options": {"mounting": "threaded"}}):
-        env = gym.make("vrig/ShockAbsorber-v1", fast=True, **options)
+        env = gym.make("vrig/ShockAbsorber-v2", fast=True, **options)
         for seed in range(10):
             obs, _ = env.reset(seed=seed)
             assert np.all(np.isfinite(obs["eta0"]))
@@ -198,7 +198,7 @@ def test_fast_shock_absorber_env_resets_for_seeds_0_to_9():
 
 @pytest.mark.slow
 def test_fast_shock_absorber_env_resets_with_20_s_targets():
-    env = gym.make("vrig/ShockAbsorber-v1", fast=True, seconds=20.0)
+    env = gym.make("vrig/ShockAbsorber-v2", fast=True, seconds=20.0)
     for seed in range(10):
         env.reset(seed=seed)
     env.close()

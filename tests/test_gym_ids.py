@@ -1,4 +1,4 @@
-"""Every shipped rig has one gymnasium id (``vrig/<Name>-v1``, from its side-car), and the env of
+"""Every shipped rig has one gymnasium id (``vrig/<Name>-v2``, from its side-car), and the env of
 an id takes the rig's own defaults from the side-car: the method (``gym.method``), its options and
 identification level (``methods.METHOD``) and the band, unless the caller passes them.
 
@@ -21,7 +21,7 @@ import vrig
 from vrig.envs import ENV_IDS
 
 MODELS = Path(__file__).resolve().parents[1] / "models"
-GENERIC_ID = "vrig/DriveIteration-v1"
+GENERIC_ID = "vrig/DriveIteration-v2"
 SLOW_RIGS = {"fuel-tank-7ch"}  # check_env > 30 s (7 drives x 7 responses)
 
 # the side-car's method fields -> the method's keyword (``vrig reconstruct`` builds them so:
@@ -65,14 +65,14 @@ def _unsupported() -> list:
 
 
 # ---------------------------------------------------------------------------------------------
-# one id per rig, -v1, from the side-car
+# one id per rig, -v2, from the side-car
 # ---------------------------------------------------------------------------------------------
-def test_every_shipped_rig_has_exactly_one_v1_id():
+def test_every_shipped_rig_has_exactly_one_v2_id():
     assert sorted(CARS) == sorted(vrig.list_rigs())
     ids = {name: _gym(name)["id"] for name in CARS}  # KeyError: a rig without an id
     assert len(set(ids.values())) == len(ids)
     for name, env_id in ids.items():
-        assert re.fullmatch(r"vrig/[A-Z][A-Za-z0-9]*-v1", env_id), env_id
+        assert re.fullmatch(r"vrig/[A-Z][A-Za-z0-9]*-v2", env_id), env_id
         spec = gym.spec(env_id)
         assert spec.kwargs["rig"] == name and spec.max_episode_steps == 10
         assert spec.kwargs.get("method") == _gym(name).get("method")
@@ -81,9 +81,10 @@ def test_every_shipped_rig_has_exactly_one_v1_id():
     assert set(ENV_IDS) == registered
 
 
+@pytest.mark.parametrize("old_version", ["-v0", "-v1"])
 @pytest.mark.parametrize("env_id", sorted(ENV_IDS))
-def test_the_old_v0_ids_tell_the_user_to_use_v1(env_id):
-    old = env_id.replace("-v1", "-v0")
+def test_the_old_ids_tell_the_user_to_use_v2(env_id, old_version):
+    old = env_id.replace("-v2", old_version)
     with pytest.raises(gym.error.DeprecatedEnv, match=re.escape(f"use `{env_id}`")):
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", DeprecationWarning)
@@ -147,7 +148,7 @@ def test_split_on_a_rig_without_a_split_frequency_uses_the_commands_default():
     # the shock absorber's side-car names no split: vrig reconstruct's default, the geometric
     # mean of the band, or a quarter of its upper edge when the band starts at 0 Hz
     assert "split" not in CARS["shock-absorber"]["reconstruction"].get("methods", {})
-    env = gym.make("vrig/ShockAbsorber-v1", method="split", fast=True).unwrapped
+    env = gym.make("vrig/ShockAbsorber-v2", method="split", fast=True).unwrapped
     lo, hi = env.physics.band
     want = np.sqrt(lo * hi) if lo > 0 else hi / 4
     assert env.physics.settings.method_options["split_hz"] == pytest.approx(want)

@@ -25,7 +25,7 @@ HAS_UPDATE = "update" in IterationSettings.field_names()
 @pytest.fixture(scope="module")
 def env():
     e = gym.make(
-        "vrig/ShockAbsorber-v1",
+        "vrig/ShockAbsorber-v2",
         fast=True,
         seconds=2.0,
         id_duration=4.0,

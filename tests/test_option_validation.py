@@ -92,11 +92,11 @@ def test_penalties_must_be_finite_and_non_negative(name, value):
     with pytest.raises(ValueError, match=f"{name} must be a finite number >= 0"):
         IterationTask(edges=band_edges((0.0, 10.0), 4), **{name: value})
     with pytest.raises(ValueError, match=name):
-        gym.make("vrig/Shaker-v1", fast=True, seconds=2.0, **{name: value})
+        gym.make("vrig/Shaker-v2", fast=True, seconds=2.0, **{name: value})
 
 
 def test_step_after_a_reset_that_raised_raises_until_the_next_good_reset():
-    env = gym.make("vrig/ShockAbsorber-v1", fast=True, seconds=2.0).unwrapped
+    env = gym.make("vrig/ShockAbsorber-v2", fast=True, seconds=2.0).unwrapped
     env.reset(seed=0)
     action = np.full(env.action_space.shape, 0.8)
     env.step(action)  # an episode in progress

@@ -100,7 +100,7 @@ def test_cross_entropy_search_finds_the_minimum_of_a_quadratic():
 
 
 def test_run_episode_follows_the_env():
-    env = gym.make("vrig/ShockAbsorber-v1", fast=True, max_episode_steps=3)
+    env = gym.make("vrig/ShockAbsorber-v2", fast=True, max_episode_steps=3)
     res = run_episode(env, FixedGain(env, 1.0), seed=5)
     assert 1 <= res.iterations <= 3 and len(res.mean_eta0) == res.iterations + 1
     assert res.reason in ("tolerance", "budget")

@@ -20,7 +20,7 @@ from vrig.rigs import ChannelSpec, FileRig, OutputSubset, RigDefaults
 from vrig.rigs.spec import MethodDefaults, read_defaults
 
 MODELS = Path(__file__).resolve().parents[1] / "models"
-GENERIC_ID = "vrig/DriveIteration-v1"
+GENERIC_ID = "vrig/DriveIteration-v2"
 
 
 def _side_cars() -> dict:
@@ -120,21 +120,21 @@ def test_variant_severity_and_overrides_do_not_change_the_defaults(name):
         ({"description": "x", "band": [-1.0, 10.0]}, r"reconstruction.band\[0\]"),
         ({"band": [10.0, 60.0]}, "description"),  # a band says why
         ({"gym": {"id": "Shaker", "tolerance": 1.0, "description": "x"}}, "reconstruction.gym.id"),
-        ({"gym": {"id": "vrig/X-v1", "tolerance": 0.0, "description": "x"}}, "tolerance"),
-        ({"gym": {"id": "vrig/X-v1", "description": "x"}}, "tolerance"),
-        ({"gym": {"id": "vrig/X-v1", "tolerance": 1.0, "description": "x", "tol": 1}}, "tol"),
+        ({"gym": {"id": "vrig/X-v2", "tolerance": 0.0, "description": "x"}}, "tolerance"),
+        ({"gym": {"id": "vrig/X-v2", "description": "x"}}, "tolerance"),
+        ({"gym": {"id": "vrig/X-v2", "tolerance": 1.0, "description": "x", "tol": 1}}, "tol"),
         (
-            {"gym": {"id": "vrig/X-v1", "method": "ARX", "tolerance": 1.0, "description": "x"}},
+            {"gym": {"id": "vrig/X-v2", "method": "ARX", "tolerance": 1.0, "description": "x"}},
             "reconstruction.gym.method",
         ),
         (
-            {"gym": {"id": "vrig/X-v1", "gain": 2.5, "tolerance": 1.0, "description": "x"}},
+            {"gym": {"id": "vrig/X-v2", "gain": 2.5, "tolerance": 1.0, "description": "x"}},
             "reconstruction.gym.gain",
         ),
         (  # the env's default method cannot be one the side-car marks unsupported
             {
                 "methods": {"narx": {"description": "x", "unsupported": "the text says so"}},
-                "gym": {"id": "vrig/X-v1", "method": "narx", "tolerance": 1.0, "description": "x"},
+                "gym": {"id": "vrig/X-v2", "method": "narx", "tolerance": 1.0, "description": "x"},
             },
             "reconstruction.gym.method",
         ),
@@ -239,7 +239,7 @@ def test_the_env_tolerance_is_the_side_cars(tmp_path):
     env = gym.make(documented["id"], fast=True)
     assert env.unwrapped.task.tolerance == documented["tolerance"]
     env.close()
-    # the side-car's tolerance, also for a user side-car and under vrig/DriveIteration-v1
+    # the side-car's tolerance, also for a user side-car and under vrig/DriveIteration-v2
     user = _user_side_car(
         tmp_path,
         "shock-absorber",

@@ -44,7 +44,7 @@ from vrig.policies import (
 )
 
 t0 = time.perf_counter()
-env = gym.make("vrig/ShockAbsorber-v1", fast=True)
+env = gym.make("vrig/ShockAbsorber-v2", fast=True)
 obs, info = env.reset(seed=0)
 print(f"environment ready in {time.perf_counter() - t0:.1f} s")
 print("observation:", {k: v.shape for k, v in obs.items()})

@@ -1,6 +1,6 @@
 """Gymnasium environments for learned drive-iteration strategies (registered on ``import vrig``).
 
-``vrig/DriveIteration-v1`` takes any rig: ``gymnasium.make("vrig/DriveIteration-v1", rig=...)``
+``vrig/DriveIteration-v2`` takes any rig: ``gymnasium.make("vrig/DriveIteration-v2", rig=...)``
 (other ``make`` keywords as :class:`DriveIterationEnv`). Every shipped rig has an id of its own
 from its side-car (``"reconstruction": {"gym": {"id": ..., "method": ..., "tolerance": ...}}``,
 ``models/README.md``; ``rig.defaults.gym_id``), with the rig fixed and, where the side-car names
@@ -9,9 +9,9 @@ Every id has ``max_episode_steps=10``: the ``TimeLimit`` wrapper owns the iterat
 env itself never truncates; pass ``max_episode_steps`` to change it), and names
 :class:`DriveIterationVectorEnv` as its ``vector_entry_point``: ``gymnasium.make_vec(id, n)``
 plays the rig runs of the n sub-envs in one batch across threads (``vectorization_mode="sync"``
-or ``"async"`` for gymnasium's own; the results are the same bit for bit). The ``-v0`` ids are
-not registered any more: ``gymnasium.make("vrig/Shaker-v0")`` raises gymnasium's
-``DeprecatedEnv`` naming ``vrig/Shaker-v1``. ``gymnasium.make(id)`` gives
+or ``"async"`` for gymnasium's own; the results are the same bit for bit). The ``-v0`` and
+``-v1`` ids are not registered any more: ``gymnasium.make("vrig/Shaker-v0")`` raises gymnasium's
+``DeprecatedEnv`` naming ``vrig/Shaker-v2``. ``gymnasium.make(id)`` gives
 ``TimeLimit<OrderEnforcing<ResetSafeEnvChecker<DriveIterationEnv>>>``: the entry point
 :func:`~vrig.envs.checker.make_checked` applies gymnasium's passive checker in a form that
 survives a reset that raises (:mod:`vrig.envs.checker`: the stock one is broken for good by a
@@ -45,29 +45,29 @@ and the known difficulty):
 =========================== ====== ============================= ====== =========================
 id                          size   method, band, gain            tol.   rule / difficulty
 =========================== ====== ============================= ====== =========================
-vrig/ShockAbsorber-v1       1 x 1  arx, 0-10, 0.8                6.1    6.01 % (thesis: damper law,
+vrig/ShockAbsorber-v2       1 x 1  arx, 0-10, 0.8                6.1    6.01 % (thesis: damper law,
                                                                         controller noise; 1.61 %
                                                                         before issue 23)
-vrig/ElastomericDamper-v1   1 x 1  arx, 0-25, 0.5                0.65   0.645 % (thesis with the
+vrig/ElastomericDamper-v2   1 x 1  arx, 0-25, 0.5                0.65   0.645 % (thesis with the
                                                                         Maxwell chain); at 0.8
                                                                         the force interlock trips
-vrig/Shaker-v1              1 x 1  arx, 10-60, 0.8               0.5    0.20 % (set at 0.5)
-vrig/Radiator-v1            1 x 2  arx, 2-30, 0.8                5.6    5.52 % (thesis with the
+vrig/Shaker-v2              1 x 1  arx, 10-60, 0.8               0.5    0.20 % (set at 0.5)
+vrig/Radiator-v2            1 x 2  arx, 2-30, 0.8                5.6    5.52 % (thesis with the
                                                                         controller noise; 1.68 %
                                                                         without it)
-vrig/LightTruckFront-v1     6 x 10 arx, 0-25, 0.8                4.6    4.60 % (digressive
+vrig/LightTruckFront-v2     6 x 10 arx, 0-25, 0.8                4.6    4.60 % (digressive
                                                                         damper; 4.04 % on mild)
-vrig/MotorcycleRear-v1      1 x 2  frf, 0-30, 0.5                10     9.97 % (thesis: digressive
+vrig/MotorcycleRear-v2      1 x 2  frf, 0-30, 0.5                10     9.97 % (thesis: digressive
                                                                         damper + noise; 6.36 % on
                                                                         mild);
                                                                         arx diverges, narx stalls
-vrig/PneumaticTrailer-v1    1 x 3  frf, 0-25, 0.8                38     37.8 %, slow (digressive
+vrig/PneumaticTrailer-v2    1 x 3  frf, 0-25, 0.8                38     37.8 %, slow (digressive
                                                                         shock; 6.73 % on mild);
                                                                         arx warns (Table 6.7),
                                                                         narx diverges
-vrig/FuelTank2ch-v1         2 x 2  split 12 Hz, 0-40, 0.3        8.5    8.5 % (no trip); 0.8
+vrig/FuelTank2ch-v2         2 x 2  split 12 Hz, 0-40, 0.3        8.5    8.5 % (no trip); 0.8
                                                                         no longer trips
-vrig/FuelTank7ch-v1         7 x 7  frf, 1-40, 0.5                14     stall level: every
+vrig/FuelTank7ch-v2         7 x 7  frf, 1-40, 0.5                14     stall level: every
                                                                         target trips at IT03
 =========================== ====== ============================= ====== =========================
 
@@ -137,7 +137,7 @@ __all__ = [
 _ENTRY_POINT = "vrig.envs.checker:make_checked"
 _VECTOR_ENTRY_POINT = "vrig.envs.vector:DriveIterationVectorEnv"
 MAX_EPISODE_STEPS = 10
-_GENERIC_ID = "vrig/DriveIteration-v1"
+_GENERIC_ID = "vrig/DriveIteration-v2"
 
 
 def _shipped_env_ids() -> dict:

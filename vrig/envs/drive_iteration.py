@@ -405,7 +405,8 @@ class DriveIterationEnv(gym.Env):
       ``2 * n_outputs * n_bands``), the reward the ``success_bonus`` term (default 1, paid on
       the step that meets the tolerance). Drives, responses, errors and terminations are v1's:
       fixed-gain episodes are identical in their records; only the rewards of a successful step
-      and the observation differ. The registered ids keep their ``-v1`` suffix.
+      and the observation differ. The registered ids are ``-v2``; ``gymnasium.make`` of a ``-v1``
+      (or ``-v0``) id raises gymnasium's ``DeprecatedEnv`` naming the ``-v2`` one.
     * v1 (issue 16): ``TimeLimit`` alone owns truncation (the env never truncates;
       ``max_iterations`` removed: a ``TypeError`` says to use ``max_episode_steps``; the
       ``iteration`` observation is bounded by 99 instead of the budget; ``info["reason"]`` is

@@ -16,7 +16,7 @@ runs batched (:meth:`~vrig.envs.IterationPhysics.target_records`), and a step's 
 iteration drives are played in one batch.
 
 Every registered ``vrig/`` id names it as its ``vector_entry_point``, so
-``gymnasium.make_vec("vrig/ShockAbsorber-v1", num_envs=8)`` builds it (pass
+``gymnasium.make_vec("vrig/ShockAbsorber-v2", num_envs=8)`` builds it (pass
 ``vectorization_mode="sync"`` or ``"async"`` for gymnasium's own).
 """
 

@@ -311,7 +311,7 @@ class RigDefaults:
     gain : float or None
         Iteration gain in (0, 2] of ``vrig reconstruct`` (global default 0.8).
     gym_id : str or None
-        The gymnasium id of the rig (``"vrig/Shaker-v1"``); a shipped rig's id is registered on
+        The gymnasium id of the rig (``"vrig/Shaker-v2"``); a shipped rig's id is registered on
         ``import vrig`` (:data:`vrig.envs.ENV_IDS`).
     gym_method : str or None
         The env's default inverse-model method on this rig (side-car ``gym.method``; the id's
