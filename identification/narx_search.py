@@ -36,7 +36,10 @@ Search order and time budget
     structure whose least-squares fit diverges the best one; its one-step error says how much
     it can explain) — and stage 2 spends the rest of the budget on the expensive options
     (``focus="simulation"``, ``selection="simulation"``), best-ranked structure first (each
-    option class first on the smallest structure, which calibrates its fit-time rate cheaply).
+    option class first on the smallest structure, which calibrates its fit-time rate cheaply),
+    in rounds: every ranked entry gets its cheapest remaining option (as predicted then) before
+    any gets its next, so a promising structure is not starved by a higher-ranked one's
+    expensive options.
     Stage 1 may spend half the budget; the stage-1 candidates it leaves are tried after stage 2,
     while time is left.
     Before each candidate its fit time is predicted (``rate x work``, work = rows x (k (k + 30) +
@@ -629,9 +632,9 @@ class NarxSearch:
                 self._try(c)
 
     def _stage2(self) -> None:
-        """The expensive options on the ranked structures, best first, each structure's
-        options cheapest first; each option class is first tried on the smallest structure,
-        which calibrates its rate cheaply."""
+        """The expensive options on the ranked structures, in rounds (each entry, best first,
+        its cheapest remaining option); each option class is first tried on the smallest
+        structure, which calibrates its rate cheaply."""
         ranked = self._ranked_structures()
         if not self._stage2_options() or not ranked:
             return
@@ -641,12 +644,14 @@ class NarxSearch:
         first = self._entry_candidates(smallest)
         for c in first:
             self._try(c)
-        for e in ranked:  # each entry's options cheapest first (as predicted now)
-            cands = [c for c in self._entry_candidates(e) if c not in first]
-            if self.budget is not None:  # without a budget the order is fixed (deterministic)
-                cands.sort(key=lambda c: self._predicted(c, size[c.entry]))
-            for c in cands:
-                self._try(c)
+        queues = [[c for c in self._entry_candidates(e) if c not in first] for e in ranked]
+        while any(queues):  # rounds: each entry in rank order gets its next option
+            for q in queues:
+                if not q:
+                    continue
+                if self.budget is not None:  # cheapest as predicted now (else: fixed order)
+                    q.sort(key=lambda c: self._predicted(c, size[c.entry]))
+                self._try(q.pop(0))
 
     def _entry_candidates(self, entry: tuple) -> list[SearchCandidate]:
         """Stage 2's candidates of a ranked entry: every expensive option of a structure (its
