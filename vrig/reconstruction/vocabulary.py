@@ -41,6 +41,7 @@ from dataclasses import dataclass, field
 from types import MappingProxyType
 from typing import Any
 
+from ..errors import VrigError
 from ..field import default_split_hz
 from .methods import InverseArx, InverseNarx, make_method
 
@@ -73,7 +74,7 @@ _TAKES = {  # the vocabulary options each built-in method takes
 }
 
 
-class MethodOptionError(ValueError):
+class MethodOptionError(VrigError, ValueError):
     """A method option that does not apply to the method or lies outside its range.
 
     ``str(exc)`` says it in Python's words (``order must be 1..20, got 0``); ``exc.cli`` in the
