@@ -82,7 +82,7 @@ assert any(p.name == "LICENSE" for p in metadata.files("vrig")), "LICENSE not in
 rig = vrig.load_rig("shock-absorber", seed=0, fidelity="fast")
 drive = 0.002 * identification.band_limited_noise(int(2 * rig.fs), 1, cutoff=0.02, seed=1)
 assert rig.run(drive).data.shape[0] == drive.shape[0]
-env = gym.make("vrig/ShockAbsorber-v1", fast=True)
+env = gym.make("vrig/ShockAbsorber-v2", fast=True)
 env.reset(seed=0)
 env.close()
 print(f"wheel check: python API ok (vrig {vrig.__version__} from {Path(vrig.__file__).parent})")
