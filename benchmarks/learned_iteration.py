@@ -47,7 +47,7 @@ Times on the shared 2-core box (issue 5/16 runs, pseudo-field only): the two SIS
 ~18 min in full; ``--quick`` then (4 training targets, 2 generations of 6, 20 held-out) took
 1.5 min (shock absorber) and 2.5 min (damper). Issue 26 (four rigs x two target kinds, with the
 four update-method rows; the box shared with other jobs, load average 2-4 on its 2 cores):
-``--quick`` took 391 s (not timed on a quiet box); ``--held-out 20 --train 4 --generations 2
+``--quick`` took 391 s (325 s on the quiet box, its last line); ``--held-out 20 --train 4 --generations 2
 --population 6 --no-phase`` took 1092 s (1.5-4.5 min per rig and target kind, the seven-channel
 tank the slowest). The full default run
 (CEM on 10 targets, 6 generations of 10, and its phase variant) was not timed: its CEM plays
