@@ -407,8 +407,12 @@ class NarxSearch:
         Largest candidate term set of a FROLS or SEMP fit (per output channel); larger
         structures are skipped. A selection needs as many training samples as candidates.
     options : dict, optional
-        Further ``Narx`` arguments given to every candidate (e.g. ``constant=True``,
-        ``max_radius=0.995``, ``stability_margin=3.0``, ``max_iter=30``).
+        Further ``Narx`` arguments given to every candidate (e.g. ``max_radius=0.995``,
+        ``stability_margin=3.0``, ``max_iter=30``). The constant term is a candidate term by
+        default (``constant=True``, unlike a bare ``Narx``): measured records carry offsets
+        (transducer zeros, mean loads; a time-domain model's advantage over frequency-domain
+        ones is that it can reproduce them), FROLS and SEMP drop it where it does not help, and
+        an all-terms fit pays one parameter. ``options={"constant": False}`` leaves it out.
     seed : int
         Seed of the white stress input.
     callback : callable, optional
@@ -487,7 +491,7 @@ class NarxSearch:
             )
         self.max_terms = _int_grid(max_terms, "max_terms", 1)[0]
         self.max_candidates = _int_grid(max_candidates, "max_candidates", 1)[0]
-        self.options = dict(options or {})
+        self.options = {"constant": True, **(options or {})}
         reserved_options = ("order", "na", "nb", "nk", "degree", "kind", "functions", "focus")
         for reserved in (*reserved_options, "n_terms", "selection"):
             if reserved in self.options:
@@ -548,6 +552,8 @@ class NarxSearch:
                     f"order {o!r} gives {len(nb)} per-input lags, but u has {u.shape[1]} inputs"
                 )
         self._names = (input_names, output_names)
+        for stale in ("best_", "best_result_", "refit_"):  # a refit that fails keeps no old model
+            self.__dict__.pop(stale, None)
         self._t0 = t0
         self._deadline = None if self.budget is None else t0 + self.budget
         self._prepare(u, y)
@@ -559,12 +565,14 @@ class NarxSearch:
         with warnings.catch_warnings():
             for w in (StabilityWarning, RankDeficiencyWarning, RuntimeWarning):
                 warnings.simplefilter("ignore", w)
-            self._stage1()
-            self._stage2()
-            for c in self._deferred:
-                self._try(c)
-            self._choose(u, y)
-        self.search_time_ = time.perf_counter() - t0
+            try:
+                self._stage1()
+                self._stage2()
+                for c in self._deferred:
+                    self._try(c)
+                self._choose(u, y)
+            finally:  # report() works after a failed search too (it says why each failed)
+                self.search_time_ = time.perf_counter() - t0
         return self
 
     def _prepare(self, u, y) -> None:
@@ -909,29 +917,35 @@ class NarxSearch:
 
     def report(self, *, limit: int | None = None) -> str:
         """The candidates as a text table, best validation score first, then the rejected,
-        failed and skipped ones with their reasons.
+        failed and skipped ones with their reasons (also after a search that found no model).
 
         Parameters
         ----------
         limit : int, optional
             Show at most this many rows (default all).
         """
-        self._check_fitted()
+        if not hasattr(self, "results_"):
+            self._check_fitted()
+        best = getattr(self, "best_result_", None)
+        chosen = (
+            f"chosen: {best.candidate.label()} (refit: {self.refit_})"
+            if hasattr(self, "best_")
+            else "no model chosen (none validated)"
+        )
         rank = {"ok": 0, "rejected": 1, "failed": 2, "skipped": 3}
         rows = sorted(self.results_, key=lambda r: (rank[r.status], r.score, r.n_terms))
         shown = rows if limit is None else rows[:limit]
         head = (
             f"NarxSearch: {len(self.results_)} candidates in {self.search_time_:.1f} s "
             f"(budget {'none' if self.budget is None else f'{self.budget:g} s'}); "
-            f"{sum(r.status == 'ok' for r in rows)} validated, chosen: "
-            f"{self.best_result_.candidate.label()} (refit: {self.refit_})"
+            f"{sum(r.status == 'ok' for r in rows)} validated, {chosen}"
         )
         lines = [
             head,
             f"{'':2}{'candidate':<58} {'terms':>6} {'val RRSE':>9} {'1-step':>8} {'s':>6}  status",
         ]
         for r in shown:
-            mark = "*" if r is self.best_result_ else " "
+            mark = "*" if r is best and hasattr(self, "best_") else " "
             score = f"{r.score:.4g}" if math.isfinite(r.score) else "-"
             one = f"{r.one_step:.3g}" if math.isfinite(r.one_step) else "-"
             status = r.status + (f": {r.reason}" if r.reason else "")

@@ -208,6 +208,22 @@ def test_report_lists_every_candidate_with_its_fate(known_narx_search):
         NarxSearch().report()
 
 
+def test_report_after_a_search_that_found_no_model_says_why():
+    """The error points to report(): it must work then, and it says why each candidate failed."""
+    x, _, yn = _problem_a(600, seed=6)
+    search = NarxSearch(budget=None, orders=(2,), degrees=(1,), focus=("prediction",),
+                        selection=("all",)).fit(x, yn)  # fmt: skip
+    assert hasattr(search, "best_")
+    search.max_terms = 2  # refitted with too small a limit: the old model must not survive
+    with pytest.raises(IdentificationError, match="see results_ / report"):
+        search.fit(x, yn)
+    text = search.report()
+    assert "no model chosen" in text
+    # order 2, degree 1, one input: 4 lagged terms + constant > max_terms = 2
+    assert "over max_terms (2)" in text
+    assert not hasattr(search, "best_")
+
+
 def test_a_fit_past_its_deadline_stops_iterating_and_says_so():
     """Narx.fit(deadline=...): a deadline already past stops the simulation-error refinement
     before its first iteration (the least-squares start is kept, the contract still holds)."""
