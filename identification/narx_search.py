@@ -382,7 +382,9 @@ class NarxSearch:
         Coefficient fits to try (least squares; simulation error).
     selection : sequence of {"all", "frols", "simulation"}
         Term choices to try (all terms; FROLS; SEMP free-run selection), sized by ``criterion``.
-        Least squares on all terms is always tried (stage 1: it ranks the structures).
+        Least squares on all terms is always tried (stage 1: it ranks the structures); where a
+        structure has too many terms for that (``max_terms``), least squares on FROLS terms ranks
+        it instead.
     criterion : {"aic", "aicc", "bic", "fpe", "press"}
         Size criterion of the FROLS and SEMP paths.
     n_terms : sequence of int or None, optional
@@ -624,9 +626,14 @@ class NarxSearch:
     # ------------------------------------------------------------------ stages
     def _stage1(self) -> None:
         cands = []
+        selects = self.selection != ("all",)
         for s in self.structures():
-            cands.append(SearchCandidate(*s, "prediction", "all", self.lags))
-            if "frols" in self.selection and "prediction" in self.focus:
+            base = SearchCandidate(*s, "prediction", "all", self.lags)
+            cands.append(base)
+            # FROLS least squares: asked for, or the only fit that can rank a structure too big
+            # for all terms (else stage 2 never sees it)
+            frols = "frols" in self.selection and "prediction" in self.focus
+            if frols or (selects and self._too_big(base, self._terms(base))):
                 cands += [
                     SearchCandidate(*s, "prediction", "frols", self.lags, k) for k in self.n_terms
                 ]

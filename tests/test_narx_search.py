@@ -224,6 +224,19 @@ def test_report_after_a_search_that_found_no_model_says_why():
     assert not hasattr(search, "best_")
 
 
+def test_a_structure_too_big_for_all_terms_is_ranked_by_frols_and_refined():
+    """focus=("simulation",) with a structure over max_terms: stage 1 cannot fit it with all
+    terms, so FROLS least squares ranks it and stage 2 refines it (before: no candidate)."""
+    x, _, yn = _problem_a(1500, seed=9)
+    search = NarxSearch(budget=None, orders=(2,), degrees=(2,), kinds=("full",),
+                        focus=("simulation",), selection=("frols",), max_terms=4).fit(x, yn)  # fmt: skip
+    fates = {r.candidate.options: r.status for r in search.results_}
+    assert fates[("prediction", "all")] == "skipped"  # 1 + 4 + 10 = 15 terms > 4
+    assert fates[("simulation", "frols")] == "ok"
+    terms = set(search.best_.term_names()[0])
+    assert GENERATING_TERMS <= terms, terms  # the generating terms are found
+
+
 def test_a_fit_past_its_deadline_stops_iterating_and_says_so():
     """Narx.fit(deadline=...): a deadline already past stops the simulation-error refinement
     before its first iteration (the least-squares start is kept, the contract still holds)."""
