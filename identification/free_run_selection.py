@@ -68,6 +68,8 @@ SELECTION_BUDGET_S = 60.0
 """Estimated single-core seconds a free-run selection may take for a whole model (its output
 channels share it) before its forward steps are screened to a shortlist; assign a new value to
 change it (as :data:`identification.budget.MEMORY_BUDGET_BYTES`)."""
+#: longest path when ``n_terms`` is not given (the criterion sizes it along the path)
+DEFAULT_PATH = 40
 
 MIN_SHORTLIST = 10
 """Fewest candidates a screened forward step scores by free run; a problem that does not fit
@@ -366,7 +368,7 @@ def simulation_selection(
     ):
         raise IdentificationError(f"workers must be None or a number >= 1, got {workers!r}")
     M = X.shape[1]
-    n_max = min(M, 40 if n_terms is None else int(n_terms))
+    n_max = min(M, DEFAULT_PATH if n_terms is None else int(n_terms))
     target = y[start:, k]
     siso, inputs = _siso_view(ch, k, y.shape[1], u, y)
     screen = _SCREEN.get() if isinstance(screen, str) and screen == "default" else screen

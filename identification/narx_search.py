@@ -43,11 +43,13 @@ Search order and time budget
     Stage 1 may spend half the budget; the stage-1 candidates it leaves are tried after stage 2,
     while time is left.
     Before each candidate its fit time is predicted (``rate x work``, work = rows x (k (k + 30) +
-    30 M) for M candidate terms of which k are fitted; the median rate of its option class measured on the candidates already
+    30 M) for M candidate terms of which k are fitted, plus a SEMP path's free runs, rows x
+    ``path_work``; the median rate of its option class measured on the candidates already
     fitted, extrapolated conservatively to larger candidates) and it is skipped when the
     prediction exceeds the time left less a reserve for the final refit; a candidate that runs
     longer than predicted is held to the budget by its fit's deadline (``Narx.fit(deadline=...)``:
-    the refinement stops iterating, free-run selection plans for the time left). The budget
+    the refinement stops iterating, free-run selection plans for the time left), set 5 % of the
+    budget before that reserve (a fit cut short still finishes its step and is validated). The budget
     bounds the wall time of :meth:`NarxSearch.fit`; ``budget=None`` tries every candidate to
     the end. With ``budget=None`` everything is deterministic under ``seed``; with a budget, the
     candidates tried (and a fit cut short) depend on the machine's speed.
@@ -73,6 +75,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy import signal
 
+from ._semp import path_work
 from ._validation import as_signal, check_same_length
 from .errors import (
     IdentificationError,
@@ -82,6 +85,7 @@ from .errors import (
     StabilityWarning,
     UnstableModelError,
 )
+from .free_run_selection import DEFAULT_PATH
 from .models import Narx
 from .structure import TERM_KINDS
 
@@ -94,10 +98,10 @@ FOCUSES = ("prediction", "simulation")
 _PRIOR_RATE = {
     ("prediction", "all"): 1.0,
     ("prediction", "frols"): 3.0,
-    ("prediction", "simulation"): 20.0,
+    ("prediction", "simulation"): 2.0,  # per unit of its larger work (its path's free runs)
     ("simulation", "all"): 40.0,
     ("simulation", "frols"): 40.0,
-    ("simulation", "simulation"): 40.0,
+    ("simulation", "simulation"): 4.0,
 }
 #: fraction of the budget stage 1 may spend before stage 2 starts: the least-squares fits rank
 #: the structures, but the gains are often in stage 2 (on the Silverbox record a simulation-focus
@@ -108,6 +112,11 @@ _STAGE1_SHARE = 0.5
 #: few thousand samples; ties go to fewer terms, then least squares before simulation focus and
 #: FROLS before SEMP (the simpler fit), then the lower score
 _TIE = 1e-2
+#: fraction of the budget a candidate's fit deadline keeps beyond the refit reserve: a fit cut
+#: short by its deadline still finishes the step it is in (a SEMP forward step, an LM iteration),
+#: its stability contract and its validation runs; without it the refit of the best candidate no
+#: longer fits in the budget (measured on F-16: a cut-short SEMP ended 2 s past its deadline)
+_FIT_SLACK = 0.05
 _COST_RANK = {"prediction": 0, "simulation": 1, "all": 0, "frols": 1}
 
 
@@ -712,12 +721,20 @@ class NarxSearch:
         (a QR's rows x k^2; the refinement's Jacobian; the free runs' rows x k) plus rows x 30 x
         terms for building and screening its ``terms`` candidates. k is ``terms`` with all
         terms; with FROLS or SEMP the candidate's ``n_terms``, else the number FROLS kept for
-        the structure in stage 1 (the selections size by the same criterion), else ``terms``."""
+        the structure in stage 1 (the selections size by the same criterion), else ``terms``.
+        Free-run selection (SEMP) adds its path's free runs: ``path_work`` subset-terms per
+        sample (:mod:`identification._semp`: every candidate scored at each of its steps, up to
+        ``n_terms`` or 40 — it runs the whole path and sizes after), which grows with the
+        candidates times the square of the path length, not with k alone."""
         if c.selection == "all":
             k = terms
         else:
             k = c.n_terms if c.n_terms is not None else self._kept.get(c.structure, terms)
-        return self._rows * (float(k) * (k + 30.0) + 30.0 * terms) * self.folds
+        work = float(k) * (k + 30.0) + 30.0 * terms
+        if c.selection == "simulation":
+            steps = min(terms, DEFAULT_PATH if c.n_terms is None else c.n_terms)
+            work += path_work(terms, steps)
+        return self._rows * work * self.folds
 
     def _predicted(self, c: SearchCandidate, terms: int) -> float:
         """Predicted seconds: the median rate (seconds per work unit) of the candidates of the
@@ -801,7 +818,11 @@ class NarxSearch:
         sq_err, sq_dev, one_step = 0.0, 0.0, []
         for ufit, yfit, blocks, stress in self._folds:
             model = c.narx(self.criterion, self.options)
-            deadline = None if self._deadline is None else self._deadline - self._reserve()
+            deadline = (
+                None
+                if self._deadline is None
+                else self._deadline - self._reserve() - _FIT_SLACK * self.budget
+            )
             try:
                 model.fit(ufit, yfit, deadline=deadline)
             except (IdentificationError, np.linalg.LinAlgError, FloatingPointError) as exc:
