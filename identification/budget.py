@@ -3,7 +3,8 @@
 Every identification function that allocates an array whose size follows from the caller's
 arguments (the term index table, the regression matrix, forward regression's working copy, the
 output-error Jacobian, a generated signal) computes its size first, in Python integers (no
-overflow), and refuses it with an :class:`~identification.errors.IdentificationError` that names
+overflow), and refuses it with a :class:`~identification.errors.MemoryBudgetError` (an
+:class:`~identification.errors.IdentificationError`) that names
 the size and what to change when it exceeds :data:`MEMORY_BUDGET_BYTES`.
 
 The budget bounds each *single* array. A least-squares fit holds the regression matrix and one
@@ -20,7 +21,7 @@ from __future__ import annotations
 
 import math
 
-from .errors import IdentificationError
+from .errors import MemoryBudgetError
 
 __all__ = ["MEMORY_BUDGET_BYTES", "check_allocation", "format_bytes", "product"]
 
@@ -48,7 +49,8 @@ def format_bytes(n: int) -> str:
 
 
 def check_allocation(n_bytes: int, what: str, remedy: str) -> None:
-    """Raise :class:`IdentificationError` when ``n_bytes`` exceeds :data:`MEMORY_BUDGET_BYTES`.
+    """Raise :class:`~identification.errors.MemoryBudgetError` (an ``IdentificationError``)
+    when ``n_bytes`` exceeds :data:`MEMORY_BUDGET_BYTES`.
 
     Parameters
     ----------
@@ -62,7 +64,7 @@ def check_allocation(n_bytes: int, what: str, remedy: str) -> None:
     """
     budget = MEMORY_BUDGET_BYTES
     if n_bytes > budget:
-        raise IdentificationError(
+        raise MemoryBudgetError(
             f"{what} would take {format_bytes(n_bytes)}, beyond the memory budget of "
             f"{format_bytes(budget)} per array (identification.budget.MEMORY_BUDGET_BYTES): "
             f"{remedy}"

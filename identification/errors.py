@@ -14,6 +14,7 @@ __all__ = [
     "IdentificationError",
     "IllConditionedWarning",
     "InsufficientDataError",
+    "MemoryBudgetError",
     "ModelFileError",
     "RankDeficiencyWarning",
     "SimulationDivergedError",
@@ -29,6 +30,12 @@ class IdentificationError(ValueError):
 
 class InsufficientDataError(IdentificationError):
     """Fewer usable samples than model terms."""
+
+
+class MemoryBudgetError(IdentificationError):
+    """An array a function was about to allocate exceeds the memory budget
+    (:data:`identification.budget.MEMORY_BUDGET_BYTES`); the message names its size and what to
+    change. Nothing was allocated: a caller may retry with less data."""
 
 
 class ModelFileError(IdentificationError):

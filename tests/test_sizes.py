@@ -18,6 +18,7 @@ import vrig
 from identification import (
     IdentificationError,
     InsufficientDataError,
+    MemoryBudgetError,
     Narx,
     band_limited_noise,
     forward_regression,
@@ -94,7 +95,8 @@ def test_fit_checks_rows_x_terms_x_8_bytes_against_the_one_budget(monkeypatch):
     monkeypatch.setattr(identification.budget, "MEMORY_BUDGET_BYTES", 64 * 2**20)
     rng = np.random.default_rng(2)
     u, y = rng.standard_normal((20_000, 2)), rng.standard_normal((20_000, 3))
-    msg = _refused(lambda: Narx(order=2, degree=3).fit(u, y))
+    # MemoryBudgetError: an IdentificationError a caller can tell apart (and retry with less data)
+    msg = _refused(lambda: Narx(order=2, degree=3).fit(u, y), error=MemoryBudgetError)
     assert "19,998 rows x 454 terms x 8 bytes" in msg
     assert f"{19_998 * 454 * 8 / 2**20:.3g} MiB" in msg and "64 MiB" in msg
     assert "shorter" in msg  # what to change

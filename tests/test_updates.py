@@ -180,6 +180,41 @@ def test_reidentify_keeps_the_previous_model_when_a_fit_fails(desired):
         np.testing.assert_array_equal(a.data, b.data)
 
 
+class _BudgetedArx(vrig.reconstruction.InverseArx):
+    """An inverse ARX whose fit refuses a record longer than ``limit`` samples as the library's
+    memory check does (MemoryBudgetError before allocating), and logs each record length."""
+
+    def __init__(self, order, limit):
+        super().__init__(order)
+        self.limit, self.seen = limit, []
+
+    def identify(self, iddrv, idres):
+        from identification import MemoryBudgetError
+
+        self.seen.append(iddrv.n_samples)
+        if iddrv.n_samples > self.limit:
+            raise MemoryBudgetError("the regression matrix would take too much")
+        super().identify(iddrv, idres)
+
+
+def test_reidentify_drops_the_oldest_records_when_the_memory_budget_refuses(desired):
+    n = desired.n_samples
+    method = _BudgetedArx(4, limit=10**9)  # sizes the identification record first
+    engine = DriveIteration(_DriftRig(), desired, method=method, seed=0)
+    engine.identify()
+    n_id = method.seen[0]
+    # room for the identification record and two iteration records (each as long as DESRES)
+    res = reconstruct(_DriftRig(), desired, method=_BudgetedArx(4, limit=n_id + 2 * n),
+                      gain=1.0, iterations=4, seed=0, update="reidentify")  # fmt: skip
+    refits = [e for e in res.updates if e["event"] == "refit"]
+    dropped = [e for e in res.updates if e["event"] == "dropped oldest record"]
+    assert [e["records"] for e in refits] == [2, 3, 3, 3]  # identification + at most 2
+    assert len(dropped) == 2 and all(e["reason"] == "memory budget" for e in dropped)
+    assert not [e for e in res.updates if e["event"] == "kept previous model"]
+    eta = res.errors[:, 0]
+    assert eta[-1] < 0.5 * eta[0]  # still converging on the most recent records
+
+
 def test_ilc_error_decreases_monotonically_under_its_condition(desired):
     engine = DriveIteration(_DriftRig(), desired, method="arx", seed=0, update="ilc",
                             update_options={"r": 1.0})  # fmt: skip

@@ -45,7 +45,10 @@ bracket, the *correction*, by one that learns from the drives played and the res
     most recent iteration records. The fit is made on a copy of the method: a fit that raises, or
     an inverse that diverges (or is not finite) on DESRES or on the response, keeps the previous
     model, and the log says so (the identification's stability contract: a model is only
-    replaced by one that runs).
+    replaced by one that runs). A fit the identification library refuses for its memory budget
+    (``identification.MemoryBudgetError``, raised before anything is allocated) is retried
+    without the oldest iteration records, each drop logged: memory stays bounded however many
+    iterations run.
 ``"ilc"`` (:class:`IlcUpdate`)
     Norm-optimal iterative learning control in the frequency domain (lifted form per line): with
     ``G`` the H1 estimate of the identification records, the correction is ``L(f) E(f)``,
@@ -80,6 +83,8 @@ import math
 from collections.abc import Mapping
 
 import numpy as np
+
+from identification import MemoryBudgetError
 
 from ..processing import gprepro
 from ..timehistory import TimeHistory
@@ -528,18 +533,32 @@ class ReidentifyUpdate:
         return d.with_data(np.concatenate(parts[0])), r.with_data(np.concatenate(parts[1]))
 
     def _refit(self, engine) -> None:
-        """Fit a copy of the method; keep it only when it runs on DESRES."""
+        """Fit a copy of the method; keep it only when it runs on DESRES. A fit refused by the
+        identification library's memory budget (``MemoryBudgetError``: nothing allocated) is
+        retried without the oldest iteration records, each drop logged: memory stays bounded
+        however many iterations run."""
         previous = engine.method, engine.target
-        samples = sum(p[0].n_samples for p in [self.id_record, *self.recent])
-        try:
-            new = copy.deepcopy(engine.method)
-            new.identify(*self._concatenated(engine))
-            engine.method = new
-            engine.target = engine._inverse(engine.desres, "DESRES")
-        except Exception as exc:  # the stability contract: a model that fails is not used
-            engine.method, engine.target = previous
-            self._kept(exc)
-            return
+        while True:
+            samples = sum(p[0].n_samples for p in [self.id_record, *self.recent])
+            try:
+                new = copy.deepcopy(engine.method)
+                new.identify(*self._concatenated(engine))
+                engine.method = new
+                engine.target = engine._inverse(engine.desres, "DESRES")
+            except MemoryBudgetError as exc:
+                engine.method, engine.target = previous
+                if not self.recent:
+                    self._kept(exc)
+                    return
+                del self.recent[0]
+                self.log.append({"rule": "reidentify", "event": "dropped oldest record",
+                                 "reason": "memory budget", "records": 1 + len(self.recent)})  # fmt: skip
+                continue
+            except Exception as exc:  # the stability contract: a model that fails is not used
+                engine.method, engine.target = previous
+                self._kept(exc)
+                return
+            break
         self.log.append({"rule": "reidentify", "event": "refit",
                          "records": 1 + len(self.recent), "samples": int(samples),
                          "model": _describe(engine.method)})  # fmt: skip
