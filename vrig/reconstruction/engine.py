@@ -24,7 +24,7 @@ from ..timehistory import TimeHistory
 from .matching import identify_matched, level_ratios
 from .methods import make_method
 from .protocol import ObservingMethod
-from .scores import scores
+from .scores import pseudo_damages, scores
 from .settings import IterationSettings
 from .updates import make_update
 from .vocabulary import method_spec
@@ -454,7 +454,15 @@ class DriveIteration:
         res = gprepro(raw, self.band)
         if isinstance(self.method, ObservingMethod):  # e.g. a Rattlesnake law's last signals
             self.method.observe(self.down(drv), self.down(res))
-        return drv, raw, res, scores(self.desres, res)
+        return drv, raw, res, scores(self.desres, res, desired_damage=self._desired_damage())
+
+    def _desired_damage(self) -> np.ndarray:
+        """``pseudo_damages(self.desres)``, computed once per desired response (every iteration
+        is scored against it)."""
+        kept = getattr(self, "_damage_of", None)
+        if kept is None or kept[0] is not self.desres:  # TimeHistory data are read-only
+            kept = self._damage_of = (self.desres, pseudo_damages(self.desres))
+        return kept[1]
 
     def _send(self, drive, tag: str, what: str, seed: int):
         """Check ``drive`` (TimeHistory or array) against the limits and play it; returns

@@ -48,7 +48,7 @@ from .spec import (
     read_description,
 )
 
-__all__ = ["FAST_MARGIN", "MAX_BATCH_THREADS", "MujocoRig"]
+__all__ = ["FAST_MARGIN", "MAX_BATCH_THREADS", "MujocoRig", "collidable"]
 
 _STATE = mujoco.mjtState.mjSTATE_FULLPHYSICS
 _MAX_DECIMATION = 10_000  # physics steps per DAQ sample
@@ -212,6 +212,8 @@ class MujocoRig:
                 raise RigModelError(
                     f"{desc.mjcf}: MuJoCo could not compile the model: {exc}"
                 ) from exc
+            if not collidable(self.model):  # exact: no contact can form, skip the search
+                self.model.opt.disableflags |= int(mujoco.mjtDisableBit.mjDSBL_CONTACT)
             self.data = mujoco.MjData(self.model)
             documented = float(self.model.opt.timestep)
             ratio = 1.0 / (desc.fs * documented)
@@ -1059,6 +1061,37 @@ class MujocoRig:
 
 class _Cancelled(Exception):
     """A batch run stopped between chunks because the batch was interrupted."""
+
+
+def collidable(model: mujoco.MjModel) -> bool:
+    """Whether any contact can ever form in ``model``: an explicit ``<contact><pair>``, a flex
+    that may collide, or two geoms (the world's included) that pass MuJoCo's bitmask rule
+    (``contype`` of one AND ``conaffinity`` of the other non-zero, either way round).
+
+    A rig whose model has none (every vrig rig: ``contype="0" conaffinity="0"`` throughout)
+    runs with ``mjDSBL_CONTACT`` set at load (:class:`MujocoRig`): collision detection then
+    is skipped each physics step, and since it would find nothing, every run is bit for bit
+    the one with it (``tests/test_rig_exact_speedups.py``). The rule is conservative: geom
+    pairs that MuJoCo filters out anyway (parent and child bodies, ``<exclude>``) still count.
+
+    Parameters
+    ----------
+    model : mujoco.MjModel
+        A compiled model.
+
+    Returns
+    -------
+    bool
+        True if some contact can form (contact detection must stay on).
+    """
+    if model.npair > 0:
+        return True
+    if model.nflex > 0 and (np.any(model.flex_contype) or np.any(model.flex_conaffinity)):
+        return True
+    contype = np.asarray(model.geom_contype, dtype=np.int64)
+    affinity = np.asarray(model.geom_conaffinity, dtype=np.int64)
+    hits = (contype[:, None] & affinity[None, :]) != 0  # geom i's type meets geom j's affinity
+    return bool(np.any(np.triu(hits | hits.T, k=1)))  # pairs of distinct geoms
 
 
 def _uninstall_elements(d: mujoco.MjData) -> None:
