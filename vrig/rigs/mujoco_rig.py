@@ -721,6 +721,7 @@ class MujocoRig:
         threads: int | None = None,
         chunk_seconds: float | None = None,
         return_exceptions: bool = False,
+        then=None,
     ) -> list:
         """Play many drives at once across threads; result ``i`` is bit for bit
         ``run(drives[i], seed=seeds[i], chunk_seconds=chunk_seconds)``, errors included.
@@ -754,10 +755,17 @@ class MujocoRig:
             False (default): after every drive has finished, raise the exception of the first
             failing drive (lowest index). True: return each failure in its slot instead (like
             ``asyncio.gather``).
+        then : callable, optional
+            ``then(i, response)``, called in the worker thread as soon as drive ``i`` has
+            played (not for a failed drive): its return value takes slot ``i`` (an exception
+            it raises does, as a failing drive's). The work that follows each run (processing,
+            scoring) then overlaps the other threads' runs instead of waiting for the whole
+            batch; ``then`` must be safe to call from several threads at once.
 
         Returns
         -------
         list of TimeHistory (or Exception, with ``return_exceptions=True``)
+            One per drive, in drive order (``then``'s values with ``then``).
             One per drive, in drive order.
 
         Raises
@@ -767,6 +775,8 @@ class MujocoRig:
             :meth:`run` (``ValueError``, ``RigLimitError``, ``SimulationInstabilityError``).
         """
         drives = list(drives)
+        if then is not None and not callable(then):
+            raise TypeError(f"then must be callable or None, got {type(then).__name__}")
         seeds = _batch_seeds(seeds, len(drives))
         workers = _batch_threads(threads, len(drives))
         chunk = self._chunk_samples(chunk_seconds)
@@ -779,16 +789,17 @@ class MujocoRig:
                 results[i] = exc
                 continue
             jobs.append((i, x, *self._streams(seed)))
-        self._play_jobs(jobs, chunk, min(workers, max(len(jobs), 1)), results)
+        self._play_jobs(jobs, chunk, min(workers, max(len(jobs), 1)), results, then)
         if not return_exceptions:
             failed = next((r for r in results if isinstance(r, BaseException)), None)
             if failed is not None:
                 raise failed
         return results
 
-    def _play_jobs(self, jobs, chunk: int, workers: int, results: list) -> None:
+    def _play_jobs(self, jobs, chunk: int, workers: int, results: list, then=None) -> None:
         """Play ``jobs`` ((index, drive, valve rng, DAQ rng)) on ``workers`` threads, each on a
-        free ``MjData`` of the pool; store each response (or exception) at its index. An
+        free ``MjData`` of the pool; store each response (or ``then(index, response)``, or the
+        exception) at its index. An
         interrupt (Ctrl-C) or error in the calling thread stops the workers after their current
         chunk and waits for them (their contexts removed) before it goes on."""
         shown = bar(len(jobs), desc=f"{self.name}: batch of {len(jobs)} runs", unit="run",
@@ -797,16 +808,17 @@ class MujocoRig:
             if workers <= 1:  # in the calling thread, on the rig's own data
                 for i, x, valve_rng, daq_rng in jobs:
                     try:
-                        results[i] = self._responses(self._play(x, chunk, valve_rng, daq_rng))
+                        out = self._responses(self._play(x, chunk, valve_rng, daq_rng))
+                        results[i] = out if then is None else then(i, out)
                     except Exception as exc:
                         results[i] = exc
                     shown.update(1)
                 return
-            self._play_threaded(jobs, chunk, workers, results, shown)
+            self._play_threaded(jobs, chunk, workers, results, shown, then)
         finally:
             shown.close()
 
-    def _play_threaded(self, jobs, chunk: int, workers: int, results: list, shown) -> None:
+    def _play_threaded(self, jobs, chunk: int, workers: int, results: list, shown, then) -> None:
         """:meth:`_play_jobs` on ``workers`` threads. Whatever happens in the calling thread
         (Ctrl-C lands there), it returns only once no run is active any more: the executor's
         own shutdown cannot be trusted for that (an interrupt inside ``submit`` can start a
@@ -816,7 +828,7 @@ class MujocoRig:
             free.put(d)
         cancel, state, active = threading.Event(), threading.Condition(), [0]
 
-        def play(x, valve_rng, daq_rng):
+        def play(i, x, valve_rng, daq_rng):
             with state:
                 if cancel.is_set():
                     raise _Cancelled
@@ -824,11 +836,12 @@ class MujocoRig:
             try:
                 d = free.get()  # as many data as threads: one is always free
                 try:
-                    return self._responses(
+                    out = self._responses(
                         self._play(x, chunk, valve_rng, daq_rng, d, cancel=cancel)
                     )
                 finally:
                     free.put(d)
+                return out if then is None else then(i, out)
             finally:
                 with state:
                     active[0] -= 1
@@ -836,7 +849,7 @@ class MujocoRig:
 
         pool = ThreadPoolExecutor(workers, thread_name_prefix=f"vrig-{self.name}")
         try:
-            futures = {pool.submit(play, *job[1:]): job[0] for job in jobs}
+            futures = {pool.submit(play, *job): job[0] for job in jobs}
             for f in as_completed(futures):
                 exc = f.exception()
                 results[futures[f]] = f.result() if exc is None else exc
