@@ -324,3 +324,20 @@ def test_play_batch_with_one_engine_twice_processes_in_order_after_the_batch():
     ref = [single.play(x, it) for x, it in zip(xs, [1, 2], strict=True)]
     got = play_batch([engine, engine], xs, [1, 2], threads=2)
     assert all(_same_play(g, r) for g, r in zip(got, ref, strict=True))
+
+
+def test_calls_overlapping_from_two_threads_each_play_on_their_own_data():
+    import threading
+
+    rig, twin = load("shock-absorber"), load("shock-absorber")
+    xs = [drive(rig, s, seconds=3.0) for s in range(5)]
+    ref = [outcome(twin, x, seed=s) for s, x in enumerate(xs)]
+    got = {}
+    batch = threading.Thread(
+        target=lambda: got.update(batch=rig.run_batch(xs[:3], seeds=[0, 1, 2], threads=2))
+    )
+    batch.start()
+    got["run"] = [rig.run(xs[3], seed=3), rig.run_batch(xs[4:], seeds=[4], threads=1)[0]]
+    batch.join()
+    assert all(same(g, r) for g, r in zip(got["batch"] + got["run"], ref, strict=True))
+    assert no_live_context() and not rig._busy  # every data handed back

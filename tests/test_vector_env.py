@@ -89,8 +89,13 @@ def test_batched_equals_sync_and_async_through_autoresets_and_truncations():
     _assert_same(batched, asyn)
 
 
-def test_partial_reset_mask_equals_sync():
+def test_partial_reset_mask_equals_sync(monkeypatch):
+    import vrig.envs.vector as vector
+
+    ahead, real = [], vector._Ahead  # the episodes now end apart: a step resets one sub-env
+    monkeypatch.setattr(vector, "_Ahead", lambda *a: ahead.append(1) or real(*a))
     _, batched = _play(None, n=2, steps=4, mask_at=2)
+    assert ahead  # ... and plays the other's drive beside the new target's runs
     _, sync = _play("sync", n=2, steps=4, mask_at=2)
     _assert_same(batched, sync)
 

@@ -58,6 +58,8 @@ MAX_BATCH_THREADS = 8
 """Most worker threads of :meth:`MujocoRig.run_batch` (each holds one live callback context and
 one ``MjData`` clone of the rig)."""
 
+_DATA_LOCK = threading.Lock()  # guards every rig's record of the MjData in use (brief holds)
+
 FAST_MARGIN = 0.8
 """``fidelity="fast"`` runs at most at this fraction of the model's explicit-integration
 stability limit (:mod:`vrig.rigs.stability`): the stiffest mode then decays by a clear factor per
@@ -196,6 +198,7 @@ class MujocoRig:
         self._rng = np.random.default_rng(seed)
         self.seed = seed
         self._clones: list = []  # MjData clones for run_batch's threads (made on first use)
+        self._busy: set = set()  # ids of the MjData a run is using (calls may overlap)
 
     # ------------------------------------------------------------------ set-up
     def _compile(self, spec) -> tuple[float, float]:
@@ -693,7 +696,12 @@ class MujocoRig:
         """
         x = self._check_drive(drive)
         chunk = self._chunk_samples(chunk_seconds)
-        return self._responses(self._play(x, chunk, *self._streams(seed)))
+        streams = self._streams(seed)
+        (d,) = self._take_data(1)  # the rig's own, unless another call is using it
+        try:
+            return self._responses(self._play(x, chunk, *streams, d))
+        finally:
+            self._give_data([d])
 
     def _streams(self, seed):
         """The run's (valve noise, DAQ) generators: from ``seed``, else from the next stream of
@@ -805,14 +813,18 @@ class MujocoRig:
         shown = bar(len(jobs), desc=f"{self.name}: batch of {len(jobs)} runs", unit="run",
                     delay=RUN_BAR_DELAY_S)  # fmt: skip
         try:
-            if workers <= 1:  # in the calling thread, on the rig's own data
-                for i, x, valve_rng, daq_rng in jobs:
-                    try:
-                        out = self._responses(self._play(x, chunk, valve_rng, daq_rng))
-                        results[i] = out if then is None else then(i, out)
-                    except Exception as exc:
-                        results[i] = exc
-                    shown.update(1)
+            if workers <= 1:  # in the calling thread, on the rig's own data (if free)
+                (d,) = self._take_data(1)
+                try:
+                    for i, x, valve_rng, daq_rng in jobs:
+                        try:
+                            out = self._responses(self._play(x, chunk, valve_rng, daq_rng, d))
+                            results[i] = out if then is None else then(i, out)
+                        except Exception as exc:
+                            results[i] = exc
+                        shown.update(1)
+                finally:
+                    self._give_data([d])
                 return
             self._play_threaded(jobs, chunk, workers, results, shown, then)
         finally:
@@ -823,8 +835,8 @@ class MujocoRig:
         (Ctrl-C lands there), it returns only once no run is active any more: the executor's
         own shutdown cannot be trusted for that (an interrupt inside ``submit`` can start a
         worker thread that it never records, and never joins)."""
-        free = queue.SimpleQueue()
-        for d in self._batch_data(workers):
+        free, taken = queue.SimpleQueue(), self._take_data(workers)
+        for d in taken:
             free.put(d)
         cancel, state, active = threading.Event(), threading.Condition(), [0]
 
@@ -859,16 +871,27 @@ class MujocoRig:
                 cancel.set()
                 state.wait_for(lambda: active[0] == 0)
             pool.shutdown(wait=True, cancel_futures=True)
+            self._give_data(taken)
 
-    def _batch_data(self, n: int) -> list:
-        """``n`` MjData for a batch: the rig's own and ``n - 1`` clones (made on first use and
-        kept, each in the presettled state)."""
-        clones = self._clones
-        while len(clones) < n - 1:
-            d = mujoco.MjData(self.model)
-            mujoco.mj_setState(self.model, d, self._state0, _STATE)
-            clones.append(d)
-        return [self.data, *clones[: n - 1]]
+    def _take_data(self, n: int) -> list:
+        """``n`` MjData no other run is using, marked as in use: the rig's own first, then
+        clones (made on first use and kept, each in the presettled state). Every run starts
+        from the presettled state whatever data it is on, so overlapping :meth:`run` /
+        :meth:`run_batch` calls (from different threads) each play on their own data."""
+        with _DATA_LOCK:
+            taken = [d for d in (self.data, *self._clones) if id(d) not in self._busy][:n]
+            while len(taken) < n:
+                d = mujoco.MjData(self.model)
+                mujoco.mj_setState(self.model, d, self._state0, _STATE)
+                self._clones.append(d)
+                taken.append(d)
+            self._busy.update(id(d) for d in taken)
+        return taken
+
+    def _give_data(self, taken: list) -> None:
+        """Mark the data of :meth:`_take_data` free again."""
+        with _DATA_LOCK:
+            self._busy.difference_update(id(d) for d in taken)
 
     def _chunk_samples(self, chunk_seconds) -> int:
         value = self.chunk_seconds if chunk_seconds is None else chunk_seconds
