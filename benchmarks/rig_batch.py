@@ -21,7 +21,9 @@ with each resetting sub-env making its target in turn (``batch_targets=False``, 
 process, so their ratios (``x one env``, ``x serial targets``) are the figures to compare on a
 shared box; beside the wall-clock rate each row has the CPU time per iteration of the process and
 of the calling thread (the serial part: with ``T`` threads on free cores an iteration takes about
-``main + (cpu - main) / T``).
+``main + (cpu - main) / T``), and of MuJoCo's rollouts alone in every thread (``physics``: the
+floor no change outside MuJoCo can lower; ``2 cores at best`` is ``60 s / (physics / 2)``, the
+rate if two cores did nothing but step the physics).
 
     python -m benchmarks.rig_batch [--quick] [--rigs shock-absorber fuel-tank-7ch] [--no-env]
 """
@@ -30,6 +32,7 @@ from __future__ import annotations
 
 import argparse
 import os
+import threading
 import time
 
 import numpy as np
@@ -100,26 +103,58 @@ def _plays(rig, xs, threads_list, fraction) -> list[tuple[str, float, bool]]:
     return rows
 
 
-def _env_rate(env, n: int, steps: int) -> tuple[float, float, float]:
+class _PhysicsClock:
+    """Counts the CPU time [s] spent inside ``mujoco.rollout`` by every thread of the rigs
+    (:mod:`vrig.rigs.mujoco_rig` calls it through its module attribute ``rollout``, replaced
+    here by a timing proxy while the clock is installed)."""
+
+    def __init__(self):
+        import vrig.rigs.mujoco_rig as mujoco_rig
+
+        self._module, self._real = mujoco_rig, mujoco_rig.rollout
+        self._lock, self.seconds = threading.Lock(), 0.0
+
+    def rollout(self, *args, **kwargs):
+        """``mujoco.rollout.rollout``, timed (CPU time of the calling thread)."""
+        t0 = time.thread_time()
+        try:
+            return self._real.rollout(*args, **kwargs)
+        finally:
+            with self._lock:
+                self.seconds += time.thread_time() - t0
+
+    def __enter__(self):
+        self._module.rollout = self
+        return self
+
+    def __exit__(self, *exc):
+        self._module.rollout = self._real
+
+
+def _env_rate(env, n: int, steps: int) -> tuple[float, float, float, float]:
     """Drive iterations per minute of ``steps`` vector steps of ``env`` (n sub-envs) after a reset
     (the first reset, identification included, is not timed; the autoresets of the timed steps
     are: a new target and its IT00 play, one iteration), and the CPU time per iteration [ms] of
-    the process (every thread) and of the calling thread alone (the part no worker thread
-    shares: on a loaded box these two say more than the wall clock)."""
+    the process (every thread), of the calling thread alone (the part no worker thread shares:
+    on a loaded box these say more than the wall clock) and of the MuJoCo rollouts (every
+    thread)."""
     env.reset(seed=0)
     action = np.full(env.action_space.shape, 0.8)
-    t0, cpu0, main0 = time.perf_counter(), time.process_time(), time.thread_time()
-    for _ in range(steps):
-        env.step(action)
-    wall, cpu, main = (time.perf_counter() - t0, time.process_time() - cpu0,
-                       time.thread_time() - main0)  # fmt: skip
-    return _per_minute(n * steps, wall), 1e3 * cpu / (n * steps), 1e3 * main / (n * steps)
+    with _PhysicsClock() as physics:
+        t0, cpu0, main0 = time.perf_counter(), time.process_time(), time.thread_time()
+        for _ in range(steps):
+            env.step(action)
+        wall, cpu, main = (time.perf_counter() - t0, time.process_time() - cpu0,
+                           time.thread_time() - main0)  # fmt: skip
+    k = 1e3 / (n * steps)
+    return _per_minute(n * steps, wall), k * cpu, k * main, k * physics.seconds
 
 
-def env_throughput(rig: str, n: int, steps: int) -> list[tuple[str, float, float, float]]:
+def env_throughput(rig: str, n: int, steps: int) -> list[tuple[str, float, float, float, float]]:
     """(mode, drive iterations per minute, CPU ms per iteration, calling-thread CPU ms per
-    iteration) of one env and of ``n`` envs: sync, batched with the targets made in turn,
-    batched with the targets batched (episodes of 10 iterations)."""
+    iteration, MuJoCo rollout CPU ms per iteration) of one env and of ``n`` envs: sync, batched
+    with the targets made in turn, batched with the targets batched (episodes of 10
+    iterations)."""
     import gymnasium as gym
 
     from vrig.envs import ENV_IDS
@@ -177,13 +212,14 @@ def main(argv=None) -> int:
               f"{os.getloadavg()[0]:.1f}):")  # fmt: skip
         for name in args.rigs:
             base = serial = None
-            for label, rate, cpu, main in env_throughput(name, n, steps):
+            for label, rate, cpu, main, physics in env_throughput(name, n, steps):
                 base = base or rate
                 serial = rate if "serial targets" in label else serial
                 ratio = f"x{rate / serial:.2f} serial targets" if serial and rate != serial else ""
                 print(f"{name:<16} {label:<28} {rate:>7.0f} iterations/min  cpu {cpu:5.1f} "
-                      f"ms/it, main thread {main:5.1f} ms/it  x{rate / base:.2f} one env  {ratio}",
-                      flush=True)  # fmt: skip
+                      f"ms/it, main thread {main:5.1f} ms/it, physics {physics:5.1f} ms/it "
+                      f"(2 cores at best {60e3 / (physics / 2):5.0f}/min)  x{rate / base:.2f} "
+                      f"one env  {ratio}", flush=True)  # fmt: skip
     return 0
 
 

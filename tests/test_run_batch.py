@@ -282,3 +282,62 @@ def test_play_batch_refuses_engines_on_different_rigs_and_mismatched_lengths():
         play_batch([ea, eb], [drive(a, 1), drive(a, 2)], 0)
     with pytest.raises(ValueError, match="one drive and one iteration"):
         play_batch([ea], [drive(a, 1), drive(a, 2)], 0)
+
+
+@pytest.mark.parametrize("threads", [1, 2])
+def test_then_runs_on_each_played_response_in_a_worker_and_its_value_takes_the_slot(threads):
+    import threading
+
+    rig, twin = load("shock-absorber"), load("shock-absorber")
+    xs = [drive(rig, 1), tripping(rig), drive(rig, 2), drive(rig, 3)]
+    seeds = [4, 5, 6, 7]
+    ref = [outcome(twin, x, seed=s) for x, s in zip(xs, seeds, strict=True)]
+    seen = []
+
+    def then(i, response):
+        seen.append((i, threading.current_thread() is threading.main_thread()))
+        if i == 3:
+            raise ZeroDivisionError("then of drive 3")
+        return i, response
+
+    got = rig.run_batch(xs, seeds=seeds, threads=threads, return_exceptions=True, then=then)
+    assert sorted(i for i, _ in seen) == [0, 2, 3]  # not for the drive that tripped
+    assert all(main == (threads == 1) for _, main in seen)  # the workers call it
+    assert same(got[1], ref[1]) and isinstance(got[3], ZeroDivisionError)
+    for k in (0, 2):
+        assert got[k][0] == k and same(got[k][1], ref[k])
+    subset = OutputSubset(rig, [rig.outputs[0].name])
+    via = run_batch(subset, xs[:1], seeds=seeds[:1], then=lambda i, r: r.names)
+    assert via == [(rig.outputs[0].name,)]
+    plain = run_batch(_OneAtATime(rig), xs, seeds=seeds, return_exceptions=True, then=then)
+    assert same(plain[1], ref[1]) and isinstance(plain[3], ZeroDivisionError)
+    assert plain[2][0] == 2 and same(plain[2][1], ref[2])
+    with pytest.raises(TypeError, match="callable"):
+        rig.run_batch(xs, then=3)
+    assert no_live_context()
+
+
+def test_play_batch_with_one_engine_twice_processes_in_order_after_the_batch():
+    rig, twin = load("shock-absorber"), load("shock-absorber")
+    (engine,), (single,) = _engines(rig, 1), _engines(twin, 1)
+    xs = [drive(rig, 1), drive(rig, 2)]
+    ref = [single.play(x, it) for x, it in zip(xs, [1, 2], strict=True)]
+    got = play_batch([engine, engine], xs, [1, 2], threads=2)
+    assert all(_same_play(g, r) for g, r in zip(got, ref, strict=True))
+
+
+def test_calls_overlapping_from_two_threads_each_play_on_their_own_data():
+    import threading
+
+    rig, twin = load("shock-absorber"), load("shock-absorber")
+    xs = [drive(rig, s, seconds=3.0) for s in range(5)]
+    ref = [outcome(twin, x, seed=s) for s, x in enumerate(xs)]
+    got = {}
+    batch = threading.Thread(
+        target=lambda: got.update(batch=rig.run_batch(xs[:3], seeds=[0, 1, 2], threads=2))
+    )
+    batch.start()
+    got["run"] = [rig.run(xs[3], seed=3), rig.run_batch(xs[4:], seeds=[4], threads=1)[0]]
+    batch.join()
+    assert all(same(g, r) for g, r in zip(got["batch"] + got["run"], ref, strict=True))
+    assert no_live_context() and not rig._busy  # every data handed back

@@ -89,8 +89,13 @@ def test_batched_equals_sync_and_async_through_autoresets_and_truncations():
     _assert_same(batched, asyn)
 
 
-def test_partial_reset_mask_equals_sync():
+def test_partial_reset_mask_equals_sync(monkeypatch):
+    import vrig.envs.vector as vector
+
+    ahead, real = [], vector._Ahead  # the episodes now end apart: a step resets one sub-env
+    monkeypatch.setattr(vector, "_Ahead", lambda *a: ahead.append(1) or real(*a))
     _, batched = _play(None, n=2, steps=4, mask_at=2)
+    assert ahead  # ... and plays the other's drive beside the new target's runs
     _, sync = _play("sync", n=2, steps=4, mask_at=2)
     _assert_same(batched, sync)
 
@@ -167,6 +172,32 @@ def test_pseudo_fields_equal_pseudo_field_seed_by_seed_through_tripped_levels(mo
             _same_outcome(g, t)
     with pytest.raises(ValueError, match="seed"):
         field.pseudo_fields(rig, band, 2.0, [1, -1])
+
+
+def test_a_lone_record_plays_its_check_ahead_and_equals_pseudo_field(monkeypatch):
+    """One seed on two threads: each level's 1.5x check is played beside its run (the thread
+    would idle); whatever the level's outcome, the record (or error) is pseudo_field's."""
+    import vrig.field as field
+
+    monkeypatch.setattr(field, "_FIELD_FRACTION", 0.4)  # as above: some seeds trip at 40 %
+    monkeypatch.setattr(field, "_FIELD_ATTEMPTS", 2)
+    rig = vrig.load_rig("shock-absorber", fidelity="fast")
+    twin = vrig.load_rig("shock-absorber", fidelity="fast")
+    band = field.default_band(rig)
+    batches = []
+    real = field._runs
+    monkeypatch.setattr(field, "_runs", lambda r, d, *a: batches.append(len(d)) or real(r, d, *a))
+    kinds = set()
+    for seed in range(4):
+        truth = _outcome(lambda s=seed: vrig.pseudo_field(twin, band, 2.0, seed=s))
+        kinds.add(isinstance(truth, Exception))
+        batches.clear()
+        (got,) = field.pseudo_fields(rig, band, 2.0, [seed], threads=2)
+        _same_outcome(got, truth)
+        assert batches[0] == 2 and all(b == 0 for b in batches[1::2])  # never a late check
+    assert kinds == {True, False}  # seeds that trip at both levels, and one made at 20 %
+    assert field._spare_threads(rig, 1, 1) == 0 and field._spare_threads(rig, 3, 2) == 1
+    assert field._spare_threads(rig, 8, 2) == 0 and field._spare_threads(rig, 1, 4) == 1
 
 
 def test_field_records_equal_field_record_with_one_twin():

@@ -12,6 +12,7 @@ gymnasium environments and the benchmarks choose their targets through it.
 
 from __future__ import annotations
 
+import os
 from functools import partial
 
 import numpy as np
@@ -189,8 +190,12 @@ def pseudo_fields(rig, band: tuple[float, float], seconds: float, seeds, *,
     Result ``i`` is bit for bit ``pseudo_field(rig, band, seconds, seed=seeds[i])``: the same
     levels tried in the same order, the same drives, runs and run seeds, the same record or the
     same exception. Each level is two batches over the seeds still without a record: their
-    drives, then 1.5 times the drives that ran within the headroom (the interlock check), so
-    no run is played that :func:`pseudo_field` would not play.
+    drives, then 1.5 times the drives that ran within the headroom (the interlock check). When
+    fewer seeds are left than the batch has threads (a single record: always), the threads
+    that would idle play some of those checks ahead, beside their level's runs (in seed order,
+    up to the next multiple of the threads): a check whose run fails is then wasted, a check
+    whose run passes is ready one batch earlier. Each run is seeded, so played ahead or not it
+    is the same run.
 
     Parameters
     ----------
@@ -227,7 +232,12 @@ def pseudo_fields(rig, band: tuple[float, float], seconds: float, seeds, *,
         status(f"desired responses: {len(pending)} x {seconds:g} s pseudo-field drives at "
                f"{100 * fraction:.3g} % of full scale rms -> {rig.name} (batched)")  # fmt: skip
         drives = {i: _field_drive(rig, band, seconds, fraction, seeds[i]) for i in pending}
-        runs = _runs(rig, drives, seeds, threads)
+        ahead = pending[: _spare_threads(rig, len(pending), threads)]  # checks played early
+        checks = {i: drives[i].with_data(drives[i].data / _FIELD_HEADROOM) for i in ahead}
+        jobs = {**drives, **{("check", i): c for i, c in checks.items()}}
+        played = _runs(rig, jobs, {k: seeds[k[1] if isinstance(k, tuple) else k] for k in jobs},
+                       threads)  # fmt: skip
+        runs = {i: played[i] for i in drives}
         within = {}  # the seeds whose run swung within the headroom: their 1.5x check
         for i, response in runs.items():
             verdict, error = _field_verdict(response, out_full)
@@ -237,7 +247,8 @@ def pseudo_fields(rig, band: tuple[float, float], seconds: float, seeds, *,
                 last[i] = (error, drives[i], response)
             else:
                 within[i] = drives[i].with_data(drives[i].data / _FIELD_HEADROOM)
-        for i, check in _runs(rig, within, seeds, threads).items():
+        late = _runs(rig, {i: c for i, c in within.items() if i not in checks}, seeds, threads)
+        for i, check in ((i, played[("check", i)] if i in checks else late[i]) for i in within):
             verdict, error = _field_verdict(check, None)
             if verdict == "fail":
                 results[i] = error
@@ -253,9 +264,26 @@ def pseudo_fields(rig, band: tuple[float, float], seconds: float, seeds, *,
     return results
 
 
-def _runs(rig, drives: dict, seeds: list, threads) -> dict:
+def _spare_threads(rig, pending: int, threads) -> int:
+    """How many 1.5x checks a level of ``pending`` runs can play ahead on threads that would
+    idle: none on a rig that plays one run at a time, else up to the next multiple of the
+    batch's threads (:meth:`vrig.rigs.MujocoRig.run_batch`'s default: the cores), at most one
+    per seed."""
+    from .rigs import MujocoRig, OutputSubset
+
+    inner = rig.rig if isinstance(rig, OutputSubset) else rig
+    if not isinstance(inner, MujocoRig):
+        return 0
+    from .rigs.mujoco_rig import MAX_BATCH_THREADS
+
+    t = threads if threads is not None else min(os.cpu_count() or 1, MAX_BATCH_THREADS)
+    return min(-pending % max(int(t), 1), pending)
+
+
+def _runs(rig, drives: dict, seeds, threads) -> dict:
     """``{i: rig.run(drives[i], seed=seeds[i] + 10_000)}`` (the response or the exception) in
-    one batch (:func:`vrig.rigs.run_batch`)."""
+    one batch (:func:`vrig.rigs.run_batch`); ``seeds`` a list or a dict over the keys of
+    ``drives``."""
     from .rigs import run_batch
 
     if not drives:

@@ -8,6 +8,7 @@ requested RMS or peak. All functions take ``fs`` in Hz and a seed (int or Genera
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Callable, Sequence
 
 import numpy as np
@@ -153,15 +154,23 @@ def flicker_sos(corner_hz: float, fs: float, *, low_hz: float = 0.1) -> tuple[np
     Returns
     -------
     (sos, rms) : ndarray, float
-        Second-order sections, and the RMS of the output per unit-variance white input.
+        Second-order sections, and the RMS of the output per unit-variance white input. The
+        design is made once per ``(corner_hz, fs, low_hz)`` and kept (a rig designs the same
+        filter for every run); each call returns its own copy of the sections.
     """
     if not (np.isfinite(fs) and fs > 0 and 0 < low_hz < corner_hz < fs / 2):
         raise ValueError(
             f"need 0 < low_hz < corner_hz < fs/2, got low_hz={low_hz!r}, "
             f"corner_hz={corner_hz!r}, fs={fs!r}"
         )
-    from scipy import signal
+    sos, rms = _flicker_design(float(corner_hz), float(fs), float(low_hz))
+    return sos.copy(), rms  # the cache's stays as designed
 
+
+@functools.lru_cache(maxsize=64)
+def _flicker_design(corner_hz: float, fs: float, low_hz: float) -> tuple[np.ndarray, float]:
+    """The design of :func:`flicker_sos` (checked arguments), made once per corner, rate and
+    low edge; its sections are read-only (callers get copies)."""
     top = min(10.0 * corner_hz, fs / 4)  # the 1/f chain runs on under the roll-off
     edges = low_hz * 10.0 ** np.arange(0.0, np.log10(top / low_hz) + 0.25, 0.25)
     poles, zeros = edges[0::2], edges[1::2][: edges[0::2].size]
@@ -176,6 +185,7 @@ def flicker_sos(corner_hz: float, fs: float, *, low_hz: float = 0.1) -> tuple[np
     f = np.concatenate([[0.0], np.geomspace(low_hz * 1e-3, fs / 2, 20000)])
     _, h = signal.sosfreqz(sos, worN=f, fs=fs)
     rms = np.sqrt(2.0 / fs * np.trapezoid(np.abs(h) ** 2, f))
+    sos.setflags(write=False)
     return sos, float(rms)
 
 

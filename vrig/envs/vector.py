@@ -12,8 +12,9 @@ gymnasium's own, and the results are those of ``gymnasium.make_vec(id, n,
 vectorization_mode="sync")`` (and ``"async"``) bit for bit (``tests/test_vector_env.py``). The
 sub-envs share one rig and one identified inverse model. The new target records of the resetting
 sub-envs (pseudo-field or service records: rig runs too) are made before, together, their rig
-runs batched (:meth:`~vrig.envs.IterationPhysics.target_records`), and a step's IT00 and
-iteration drives are played in one batch.
+runs batched (:meth:`~vrig.envs.IterationPhysics.target_records`), while the step's iteration
+drives already play beside them (a second thread, on the rig's other ``MjData``: every run is
+seeded, so nothing depends on which runs overlap); then the IT00 drives play in one batch.
 
 Every registered ``vrig/`` id names it as its ``vector_entry_point``, so
 ``gymnasium.make_vec("vrig/ShockAbsorber-v2", num_envs=8)`` builds it (pass
@@ -23,6 +24,7 @@ Every registered ``vrig/`` id names it as its ``vector_entry_point``, so
 from __future__ import annotations
 
 import os
+import threading
 
 import gymnasium as gym
 import numpy as np
@@ -170,15 +172,18 @@ class DriveIterationVectorEnv(SyncVectorEnv):
         for i, outcome in zip(live, outcomes, strict=True):
             self._staged[i].outcome = (kinds[i], outcome)
 
-    def _prepare(self, steps: dict, resets: dict) -> dict:
+    def _play_prepared(self, steps: dict, resets: dict, kinds: dict) -> None:
         """Prepare the sub-envs: ``steps`` ``{i: action}`` (:meth:`~DriveIterationEnv.
         prepare_step`) and ``resets`` ``{i: (seed, options)}`` (:meth:`~DriveIterationEnv.
         draw_reset`, then the drawn target records of all of them in one batch,
         :meth:`~vrig.envs.IterationPhysics.target_records`, then :meth:`~DriveIterationEnv.
-        start_reset`); ``{i: (drive, n)}``. An error (a bad action, say) ends every sub-env's
-        episode - some were prepared already, so no consistent batch is left to finish - and
-        goes on: ``reset()`` the vector env then."""
-        prepared = {}
+        start_reset`), and play and stage every prepared drive (:meth:`_play_staged`). While
+        the target records are made, the steps' drives already play (in a second thread, on
+        the rig's other data: every run is seeded, so the outcomes are the same), then the
+        resets' IT00 drives. An error (a bad action, say) ends every sub-env's episode - some
+        were prepared already, so no consistent batch is left to finish - and goes on:
+        ``reset()`` the vector env then."""
+        prepared, ahead = {}, None
         try:
             for i, action in steps.items():
                 prepared[i] = self._staged[i].unwrapped.prepare_step(action)
@@ -186,15 +191,24 @@ class DriveIterationVectorEnv(SyncVectorEnv):
             drawn = [e.draw_reset(seed=resets[i][0], options=resets[i][1]) for i, e in envs.items()]
             wanted = [s for s in drawn if s is not None]
             if wanted and self.batch_targets:  # each start_reset then finds its record made
+                if prepared:  # the steps' runs beside the targets' own
+                    ahead = _Ahead(self._play_staged, dict(prepared), kinds)
+                    prepared = {}
                 self._staged[0].unwrapped.physics.target_records(wanted, threads=self.threads)
             for i, env in envs.items():
                 prepared[i] = env.start_reset()
         except BaseException:
+            if ahead is not None:
+                ahead.wait()  # no run of it is left live
             for staged in self._staged:
                 staged.outcome = None
                 staged.unwrapped.close()
             raise
-        return dict(sorted(prepared.items()))
+        try:
+            self._play_staged(dict(sorted(prepared.items())), kinds)
+        finally:
+            if ahead is not None:
+                ahead.finish()
 
     def step(self, actions):
         """Step every sub-env (resetting those that ended, in ``NEXT_STEP`` mode), their rig
@@ -214,7 +228,7 @@ class DriveIterationVectorEnv(SyncVectorEnv):
         }
         steps = {i: acts[i] for i, k in kinds.items() if k == "step"}
         resets = {i: (None, None) for i, k in kinds.items() if k == "reset"}
-        self._play_staged(self._prepare(steps, resets), kinds)
+        self._play_prepared(steps, resets, kinds)
         return super().step(actions)
 
     def reset(self, *, seed=None, options=None):
@@ -244,5 +258,32 @@ class DriveIterationVectorEnv(SyncVectorEnv):
         resets = {
             i: (seeds[i], env_options) for i in range(self.num_envs) if not masked or mask[i]
         }
-        self._play_staged(self._prepare({}, resets), dict.fromkeys(resets, "reset"))
+        self._play_prepared({}, resets, dict.fromkeys(resets, "reset"))
         return super().reset(seed=seed, options=options)
+
+
+class _Ahead:
+    """``fn(*args)`` in a thread of its own, started at once; :meth:`finish` waits for it and
+    raises what it raised."""
+
+    def __init__(self, fn, *args):
+        self.error = None
+
+        def run():
+            try:
+                fn(*args)
+            except BaseException as exc:  # handed to the calling thread by finish()
+                self.error = exc
+
+        self.thread = threading.Thread(target=run, name="vrig-steps-ahead", daemon=True)
+        self.thread.start()
+
+    def wait(self) -> None:
+        """Wait until the thread has ended (whatever it raised stays unraised)."""
+        self.thread.join()
+
+    def finish(self) -> None:
+        """Wait until the thread has ended and raise its error, if any."""
+        self.wait()
+        if self.error is not None:
+            raise self.error

@@ -24,7 +24,7 @@ from ..timehistory import TimeHistory
 from .matching import identify_matched, level_ratios
 from .methods import make_method
 from .protocol import ObservingMethod
-from .scores import scores
+from .scores import pseudo_damages, scores
 from .settings import IterationSettings
 from .updates import make_update
 from .vocabulary import method_spec
@@ -454,7 +454,15 @@ class DriveIteration:
         res = gprepro(raw, self.band)
         if isinstance(self.method, ObservingMethod):  # e.g. a Rattlesnake law's last signals
             self.method.observe(self.down(drv), self.down(res))
-        return drv, raw, res, scores(self.desres, res)
+        return drv, raw, res, scores(self.desres, res, desired_damage=self._desired_damage())
+
+    def _desired_damage(self) -> np.ndarray:
+        """``pseudo_damages(self.desres)``, computed once per desired response (every iteration
+        is scored against it)."""
+        kept = getattr(self, "_damage_of", None)
+        if kept is None or kept[0] is not self.desres:  # TimeHistory data are read-only
+            kept = self._damage_of = (self.desres, pseudo_damages(self.desres))
+        return kept[1]
 
     def _send(self, drive, tag: str, what: str, seed: int):
         """Check ``drive`` (TimeHistory or array) against the limits and play it; returns
@@ -588,6 +596,10 @@ def play_batch(engines, drives, iterations, *, threads: int | None = None) -> li
     :class:`~identification.SimulationDivergedError`), with the same ``rejected`` bookkeeping
     (``REFUSEDxx`` / ``TRIPPEDxx``) on each engine. Any other error (e.g. a drive of the wrong
     shape) is raised, the first one's (lowest index), once every drive has been played.
+    When no two engines share an engine, method or update rule object, each play's
+    processing and scores run in the rig's worker thread as soon as its run ends (beside the
+    other runs: :meth:`vrig.rigs.MujocoRig.run_batch`'s ``then``); else in drive order after
+    the batch. The results are the same either way.
 
     Parameters
     ----------
@@ -629,8 +641,12 @@ def play_batch(engines, drives, iterations, *, threads: int | None = None) -> li
         except Exception as exc:  # raised below, in drive order
             out[i] = _Raise(exc)
     if sent:
-        raws = run_batch(engines[0].rig, [d for _, d, _ in sent],
-                         seeds=[s for *_, s in sent], threads=threads, return_exceptions=True)  # fmt: skip
+        # each engine on its own: its processing and scores run in the rig's worker thread
+        # right after its run, beside the other runs (shared state: in order, after all)
+        alone = _unshared(engines)
+        then = (lambda k, raw: _Processed(engines[sent[k][0]], sent[k][1], raw)) if alone else None
+        raws = run_batch(engines[0].rig, [d for _, d, _ in sent], seeds=[s for *_, s in sent],
+                         threads=threads, return_exceptions=True, then=then)  # fmt: skip
         for (i, drv, _), tag, raw in zip(sent, names, raws, strict=True):
             if isinstance(raw, (RigLimitError, SimulationInstabilityError)):
                 engines[i].rejected = (f"TRIPPED{tag}", drv)
@@ -638,14 +654,19 @@ def play_batch(engines, drives, iterations, *, threads: int | None = None) -> li
             elif isinstance(raw, BaseException):
                 out[i] = _Raise(raw)
             else:
-                try:
-                    out[i] = engines[i]._processed(drv, raw)
-                except _PLAY_ERRORS as exc:
-                    out[i] = exc
+                done = raw if alone else _Processed(engines[i], drv, raw)
+                out[i] = done.outcome
     first = next((r for r in out if isinstance(r, _Raise)), None)
     if first is not None:
         raise first.error
     return out
+
+
+def _unshared(engines) -> bool:
+    """Whether no two engines share what processing a play changes (the engine, its method,
+    its update rule): then each engine's plays can be processed in any thread."""
+    held = [id(x) for e in engines for x in (e, e.method, e.updater) if x is not None]
+    return len(set(held)) == len(held)
 
 
 class _Raise:
@@ -653,3 +674,18 @@ class _Raise:
 
     def __init__(self, error: BaseException):
         self.error = error
+
+
+class _Processed:
+    """:meth:`DriveIteration._processed` of a played drive, its outcome for :func:`play_batch`'s
+    slot: the play tuple, the play error (returned in the slot) or any other error (raised,
+    in drive order, as :class:`_Raise`). Never raises itself: a run's errors and the
+    processing's stay apart."""
+
+    def __init__(self, engine, drv: TimeHistory, raw: TimeHistory):
+        try:
+            self.outcome = engine._processed(drv, raw)
+        except _PLAY_ERRORS as exc:
+            self.outcome = exc
+        except Exception as exc:
+            self.outcome = _Raise(exc)

@@ -129,7 +129,7 @@ def load_rig(
     )
 
 
-def run_batch(rig, drives, *, seeds=None, threads=None, return_exceptions=False) -> list:
+def run_batch(rig, drives, *, seeds=None, threads=None, return_exceptions=False, then=None) -> list:
     """Play ``drives`` on any rig: ``rig.run_batch`` when it has one (a :class:`MujocoRig`:
     across threads), an :class:`OutputSubset`'s wrapped rig's batch (its channels selected),
     else one ``rig.run`` after another. Result ``i`` is ``rig.run(drives[i], seed=seeds[i])``.
@@ -148,24 +148,36 @@ def run_batch(rig, drives, *, seeds=None, threads=None, return_exceptions=False)
     return_exceptions : bool
         False: raise the first failing drive's exception (lowest index) once every drive has
         been played; True: return each failure in its slot.
+    then : callable, optional
+        ``then(i, response)`` of each drive that played: its value (or the exception it
+        raises) takes slot ``i``. A :class:`MujocoRig` calls it in the worker thread right
+        after the run (:meth:`MujocoRig.run_batch`); any other rig after its run.
 
     Returns
     -------
     list of TimeHistory (or Exception, with ``return_exceptions=True``)
     """
     drives = list(drives)
+    if then is not None and not callable(then):
+        raise TypeError(f"then must be callable or None, got {type(then).__name__}")
     if isinstance(rig, OutputSubset):
-        out = run_batch(rig.rig, drives, seeds=seeds, threads=threads, return_exceptions=True)
-        results = [r if isinstance(r, BaseException) else r[rig.names] for r in out]
+        names = rig.names
+        inner = (lambda i, r: r[names]) if then is None else (lambda i, r: then(i, r[names]))
+        results = run_batch(rig.rig, drives, seeds=seeds, threads=threads,
+                            return_exceptions=True, then=inner)  # fmt: skip
     elif callable(getattr(rig, "run_batch", None)):
-        return rig.run_batch(
-            drives, seeds=seeds, threads=threads, return_exceptions=return_exceptions
-        )
+        if then is None or isinstance(rig, MujocoRig):  # a MujocoRig calls then in its workers
+            extra = {} if then is None else {"then": then}
+            return rig.run_batch(drives, seeds=seeds, threads=threads,
+                                 return_exceptions=return_exceptions, **extra)  # fmt: skip
+        results = rig.run_batch(drives, seeds=seeds, threads=threads, return_exceptions=True)
+        results = [_then(then, i, r) for i, r in enumerate(results)]
     else:
         results = []
-        for drive, seed in zip(drives, _batch_seeds(seeds, len(drives)), strict=True):
+        played = zip(drives, _batch_seeds(seeds, len(drives)), strict=True)
+        for i, (drive, seed) in enumerate(played):
             try:
-                results.append(rig.run(drive, seed=seed))
+                results.append(_then(then, i, rig.run(drive, seed=seed)))
             except Exception as exc:  # in its slot, like a batched rig's
                 results.append(exc)
     if not return_exceptions:
@@ -173,3 +185,13 @@ def run_batch(rig, drives, *, seeds=None, threads=None, return_exceptions=False)
         if failed is not None:
             raise failed
     return results
+
+
+def _then(then, i: int, result):
+    """``then(i, result)`` for a drive that played (its exception in the slot), else ``result``."""
+    if then is None or isinstance(result, BaseException):
+        return result
+    try:
+        return then(i, result)
+    except Exception as exc:
+        return exc

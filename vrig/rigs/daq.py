@@ -19,6 +19,7 @@ the filter states, the noise stream and the sampling phase across chunks; no loo
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 
 import numpy as np
@@ -118,7 +119,7 @@ class AntiAliasFilter:
             raise ValueError(
                 f"anti-alias cutoff {self.cutoff * fs} Hz is outside (0, {physics_rate / 2}) Hz"
             )
-        return signal.butter(self.order, wn, output="sos")
+        return _butter_sos(self.order, wn, "lowpass", None).copy()  # the cache's stays
 
     def response(self, f, fs: float, physics_rate: float) -> np.ndarray:
         """Complex frequency response at frequencies ``f`` [Hz] (for analytic models).
@@ -149,7 +150,17 @@ def _highpass_active(t: Transducer, physics_rate: float) -> bool:
 
 
 def _highpass_sos(corner_hz: float, physics_rate: float) -> np.ndarray:
-    return signal.butter(1, corner_hz, btype="highpass", fs=physics_rate, output="sos")
+    return _butter_sos(1, corner_hz, "highpass", physics_rate).copy()  # the cache's stays
+
+
+@functools.lru_cache(maxsize=64)
+def _butter_sos(order: int, wn: float, btype: str, fs: float | None) -> np.ndarray:
+    """``scipy.signal.butter(order, wn, btype, fs=fs, output="sos")``, designed once per
+    argument set (every run of a rig conditions its channels with the same filters); read-only
+    (callers take copies)."""
+    sos = signal.butter(order, wn, btype=btype, fs=fs, output="sos")
+    sos.setflags(write=False)
+    return sos
 
 
 def transducer_response(t: Transducer, f, physics_rate: float) -> np.ndarray:

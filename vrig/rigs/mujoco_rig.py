@@ -48,7 +48,7 @@ from .spec import (
     read_description,
 )
 
-__all__ = ["FAST_MARGIN", "MAX_BATCH_THREADS", "MujocoRig"]
+__all__ = ["FAST_MARGIN", "MAX_BATCH_THREADS", "MujocoRig", "collidable"]
 
 _STATE = mujoco.mjtState.mjSTATE_FULLPHYSICS
 _MAX_DECIMATION = 10_000  # physics steps per DAQ sample
@@ -57,6 +57,8 @@ _ELEMENTS = ("joint", "body", "geom", "site", "actuator", "tendon", "equality", 
 MAX_BATCH_THREADS = 8
 """Most worker threads of :meth:`MujocoRig.run_batch` (each holds one live callback context and
 one ``MjData`` clone of the rig)."""
+
+_DATA_LOCK = threading.Lock()  # guards every rig's record of the MjData in use (brief holds)
 
 FAST_MARGIN = 0.8
 """``fidelity="fast"`` runs at most at this fraction of the model's explicit-integration
@@ -196,6 +198,7 @@ class MujocoRig:
         self._rng = np.random.default_rng(seed)
         self.seed = seed
         self._clones: list = []  # MjData clones for run_batch's threads (made on first use)
+        self._busy: set = set()  # ids of the MjData a run is using (calls may overlap)
 
     # ------------------------------------------------------------------ set-up
     def _compile(self, spec) -> tuple[float, float]:
@@ -212,6 +215,8 @@ class MujocoRig:
                 raise RigModelError(
                     f"{desc.mjcf}: MuJoCo could not compile the model: {exc}"
                 ) from exc
+            if not collidable(self.model):  # exact: no contact can form, skip the search
+                self.model.opt.disableflags |= int(mujoco.mjtDisableBit.mjDSBL_CONTACT)
             self.data = mujoco.MjData(self.model)
             documented = float(self.model.opt.timestep)
             ratio = 1.0 / (desc.fs * documented)
@@ -691,7 +696,12 @@ class MujocoRig:
         """
         x = self._check_drive(drive)
         chunk = self._chunk_samples(chunk_seconds)
-        return self._responses(self._play(x, chunk, *self._streams(seed)))
+        streams = self._streams(seed)
+        (d,) = self._take_data(1)  # the rig's own, unless another call is using it
+        try:
+            return self._responses(self._play(x, chunk, *streams, d))
+        finally:
+            self._give_data([d])
 
     def _streams(self, seed):
         """The run's (valve noise, DAQ) generators: from ``seed``, else from the next stream of
@@ -719,6 +729,7 @@ class MujocoRig:
         threads: int | None = None,
         chunk_seconds: float | None = None,
         return_exceptions: bool = False,
+        then=None,
     ) -> list:
         """Play many drives at once across threads; result ``i`` is bit for bit
         ``run(drives[i], seed=seeds[i], chunk_seconds=chunk_seconds)``, errors included.
@@ -752,10 +763,17 @@ class MujocoRig:
             False (default): after every drive has finished, raise the exception of the first
             failing drive (lowest index). True: return each failure in its slot instead (like
             ``asyncio.gather``).
+        then : callable, optional
+            ``then(i, response)``, called in the worker thread as soon as drive ``i`` has
+            played (not for a failed drive): its return value takes slot ``i`` (an exception
+            it raises does, as a failing drive's). The work that follows each run (processing,
+            scoring) then overlaps the other threads' runs instead of waiting for the whole
+            batch; ``then`` must be safe to call from several threads at once.
 
         Returns
         -------
         list of TimeHistory (or Exception, with ``return_exceptions=True``)
+            One per drive, in drive order (``then``'s values with ``then``).
             One per drive, in drive order.
 
         Raises
@@ -765,6 +783,8 @@ class MujocoRig:
             :meth:`run` (``ValueError``, ``RigLimitError``, ``SimulationInstabilityError``).
         """
         drives = list(drives)
+        if then is not None and not callable(then):
+            raise TypeError(f"then must be callable or None, got {type(then).__name__}")
         seeds = _batch_seeds(seeds, len(drives))
         workers = _batch_threads(threads, len(drives))
         chunk = self._chunk_samples(chunk_seconds)
@@ -777,44 +797,50 @@ class MujocoRig:
                 results[i] = exc
                 continue
             jobs.append((i, x, *self._streams(seed)))
-        self._play_jobs(jobs, chunk, min(workers, max(len(jobs), 1)), results)
+        self._play_jobs(jobs, chunk, min(workers, max(len(jobs), 1)), results, then)
         if not return_exceptions:
             failed = next((r for r in results if isinstance(r, BaseException)), None)
             if failed is not None:
                 raise failed
         return results
 
-    def _play_jobs(self, jobs, chunk: int, workers: int, results: list) -> None:
+    def _play_jobs(self, jobs, chunk: int, workers: int, results: list, then=None) -> None:
         """Play ``jobs`` ((index, drive, valve rng, DAQ rng)) on ``workers`` threads, each on a
-        free ``MjData`` of the pool; store each response (or exception) at its index. An
+        free ``MjData`` of the pool; store each response (or ``then(index, response)``, or the
+        exception) at its index. An
         interrupt (Ctrl-C) or error in the calling thread stops the workers after their current
         chunk and waits for them (their contexts removed) before it goes on."""
         shown = bar(len(jobs), desc=f"{self.name}: batch of {len(jobs)} runs", unit="run",
                     delay=RUN_BAR_DELAY_S)  # fmt: skip
         try:
-            if workers <= 1:  # in the calling thread, on the rig's own data
-                for i, x, valve_rng, daq_rng in jobs:
-                    try:
-                        results[i] = self._responses(self._play(x, chunk, valve_rng, daq_rng))
-                    except Exception as exc:
-                        results[i] = exc
-                    shown.update(1)
+            if workers <= 1:  # in the calling thread, on the rig's own data (if free)
+                (d,) = self._take_data(1)
+                try:
+                    for i, x, valve_rng, daq_rng in jobs:
+                        try:
+                            out = self._responses(self._play(x, chunk, valve_rng, daq_rng, d))
+                            results[i] = out if then is None else then(i, out)
+                        except Exception as exc:
+                            results[i] = exc
+                        shown.update(1)
+                finally:
+                    self._give_data([d])
                 return
-            self._play_threaded(jobs, chunk, workers, results, shown)
+            self._play_threaded(jobs, chunk, workers, results, shown, then)
         finally:
             shown.close()
 
-    def _play_threaded(self, jobs, chunk: int, workers: int, results: list, shown) -> None:
+    def _play_threaded(self, jobs, chunk: int, workers: int, results: list, shown, then) -> None:
         """:meth:`_play_jobs` on ``workers`` threads. Whatever happens in the calling thread
         (Ctrl-C lands there), it returns only once no run is active any more: the executor's
         own shutdown cannot be trusted for that (an interrupt inside ``submit`` can start a
         worker thread that it never records, and never joins)."""
-        free = queue.SimpleQueue()
-        for d in self._batch_data(workers):
+        free, taken = queue.SimpleQueue(), self._take_data(workers)
+        for d in taken:
             free.put(d)
         cancel, state, active = threading.Event(), threading.Condition(), [0]
 
-        def play(x, valve_rng, daq_rng):
+        def play(i, x, valve_rng, daq_rng):
             with state:
                 if cancel.is_set():
                     raise _Cancelled
@@ -822,11 +848,12 @@ class MujocoRig:
             try:
                 d = free.get()  # as many data as threads: one is always free
                 try:
-                    return self._responses(
+                    out = self._responses(
                         self._play(x, chunk, valve_rng, daq_rng, d, cancel=cancel)
                     )
                 finally:
                     free.put(d)
+                return out if then is None else then(i, out)
             finally:
                 with state:
                     active[0] -= 1
@@ -834,7 +861,7 @@ class MujocoRig:
 
         pool = ThreadPoolExecutor(workers, thread_name_prefix=f"vrig-{self.name}")
         try:
-            futures = {pool.submit(play, *job[1:]): job[0] for job in jobs}
+            futures = {pool.submit(play, *job): job[0] for job in jobs}
             for f in as_completed(futures):
                 exc = f.exception()
                 results[futures[f]] = f.result() if exc is None else exc
@@ -844,16 +871,27 @@ class MujocoRig:
                 cancel.set()
                 state.wait_for(lambda: active[0] == 0)
             pool.shutdown(wait=True, cancel_futures=True)
+            self._give_data(taken)
 
-    def _batch_data(self, n: int) -> list:
-        """``n`` MjData for a batch: the rig's own and ``n - 1`` clones (made on first use and
-        kept, each in the presettled state)."""
-        clones = self._clones
-        while len(clones) < n - 1:
-            d = mujoco.MjData(self.model)
-            mujoco.mj_setState(self.model, d, self._state0, _STATE)
-            clones.append(d)
-        return [self.data, *clones[: n - 1]]
+    def _take_data(self, n: int) -> list:
+        """``n`` MjData no other run is using, marked as in use: the rig's own first, then
+        clones (made on first use and kept, each in the presettled state). Every run starts
+        from the presettled state whatever data it is on, so overlapping :meth:`run` /
+        :meth:`run_batch` calls (from different threads) each play on their own data."""
+        with _DATA_LOCK:
+            taken = [d for d in (self.data, *self._clones) if id(d) not in self._busy][:n]
+            while len(taken) < n:
+                d = mujoco.MjData(self.model)
+                mujoco.mj_setState(self.model, d, self._state0, _STATE)
+                self._clones.append(d)
+                taken.append(d)
+            self._busy.update(id(d) for d in taken)
+        return taken
+
+    def _give_data(self, taken: list) -> None:
+        """Mark the data of :meth:`_take_data` free again."""
+        with _DATA_LOCK:
+            self._busy.difference_update(id(d) for d in taken)
 
     def _chunk_samples(self, chunk_seconds) -> int:
         value = self.chunk_seconds if chunk_seconds is None else chunk_seconds
@@ -1059,6 +1097,37 @@ class MujocoRig:
 
 class _Cancelled(Exception):
     """A batch run stopped between chunks because the batch was interrupted."""
+
+
+def collidable(model: mujoco.MjModel) -> bool:
+    """Whether any contact can ever form in ``model``: an explicit ``<contact><pair>``, a flex
+    that may collide, or two geoms (the world's included) that pass MuJoCo's bitmask rule
+    (``contype`` of one AND ``conaffinity`` of the other non-zero, either way round).
+
+    A rig whose model has none (every vrig rig: ``contype="0" conaffinity="0"`` throughout)
+    runs with ``mjDSBL_CONTACT`` set at load (:class:`MujocoRig`): collision detection then
+    is skipped each physics step, and since it would find nothing, every run is bit for bit
+    the one with it (``tests/test_rig_exact_speedups.py``). The rule is conservative: geom
+    pairs that MuJoCo filters out anyway (parent and child bodies, ``<exclude>``) still count.
+
+    Parameters
+    ----------
+    model : mujoco.MjModel
+        A compiled model.
+
+    Returns
+    -------
+    bool
+        True if some contact can form (contact detection must stay on).
+    """
+    if model.npair > 0:
+        return True
+    if model.nflex > 0 and (np.any(model.flex_contype) or np.any(model.flex_conaffinity)):
+        return True
+    contype = np.asarray(model.geom_contype, dtype=np.int64)
+    affinity = np.asarray(model.geom_conaffinity, dtype=np.int64)
+    hits = (contype[:, None] & affinity[None, :]) != 0  # geom i's type meets geom j's affinity
+    return bool(np.any(np.triu(hits | hits.T, k=1)))  # pairs of distinct geoms
 
 
 def _uninstall_elements(d: mujoco.MjData) -> None:
