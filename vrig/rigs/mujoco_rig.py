@@ -774,7 +774,6 @@ class MujocoRig:
         -------
         list of TimeHistory (or Exception, with ``return_exceptions=True``)
             One per drive, in drive order (``then``'s values with ``then``).
-            One per drive, in drive order.
 
         Raises
         ------
