@@ -237,6 +237,29 @@ def test_a_structure_too_big_for_all_terms_is_ranked_by_frols_and_refined():
     assert GENERATING_TERMS <= terms, terms  # the generating terms are found
 
 
+def test_the_constant_term_is_a_candidate_by_default():
+    """A known NARX with an offset term (a transducer zero): the default search keeps the
+    constant and recovers it; ``options={"constant": False}`` leaves it out."""
+    x, y, _ = _problem_a(2000, seed=11, noise=0.0)
+    offset = 0.3 / (1 - 0.2)  # y(t) = ... + 0.3: the constant 0.3 in the generating equation
+    yo = np.zeros_like(y)
+    for t in range(2, y.size):
+        yo[t] = 0.2 * yo[t - 1] + 0.1 * yo[t - 1] * x[t - 1] + 0.9 * x[t - 2] + 0.3
+    assert abs(yo.mean() - offset) < 0.1  # the premise: a record with a clear mean
+    grid = dict(budget=None, orders=(2,), degrees=(2,), kinds=("full",),
+                focus=("prediction",), selection=("frols",))  # fmt: skip
+    model = NarxSearch(**grid).fit(x, yo).best_
+    names = list(model.term_names()[0])
+    assert "1" in names
+    np.testing.assert_allclose(model.coef_[0][names.index("1")], 0.3, atol=1e-6)
+    # without it, the offset must come from the lagged terms: none of this structure's fits
+    # then runs bounded on every stress input (the search says so rather than guess)
+    without = NarxSearch(**grid, options={"constant": False})
+    with pytest.raises(IdentificationError, match="no candidate"):
+        without.fit(x, yo)
+    assert all(r.status == "rejected" for r in without.results_)
+
+
 def test_a_fit_past_its_deadline_stops_iterating_and_says_so():
     """Narx.fit(deadline=...): a deadline already past stops the simulation-error refinement
     before its first iteration (the least-squares start is kept, the contract still holds)."""

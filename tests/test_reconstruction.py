@@ -566,6 +566,11 @@ def test_a_searched_narx_method_reports_its_search():
     drive = method.drive(th(plant(d_new), "load"))[:, 0]
     err = np.sqrt(np.mean((drive[200:-5] - d_new[200:-5]) ** 2)) / d_new.std()
     assert err < 1e-3, (err, method.describe())
+    # the searched inverse has the fitted inverse's model class: no constant term, even on a
+    # response with a mean (NarxSearch's own default has one)
+    offset = InverseNarx(2, 2, search=True, budget=20.0)
+    offset.identify(th(d_id, "drive"), th(plant(d_id) + 0.2, "load"))
+    assert "1" not in offset.inverse.model.term_names()[0]
     with pytest.raises(ValueError, match="search must be True or False"):
         InverseNarx(2, 2, search="yes")
 

@@ -275,7 +275,7 @@ class InverseNarx(_InverseTimeDomain):
         :data:`SEARCH_ORDERS` up to twice ``order``, degrees 1 .. ``degree``, both term kinds
         above, least squares and simulation focus, all/FROLS/SEMP terms, within ``budget``.
         ``kind``, ``focus``, ``selection``, ``n_terms`` and ``criterion`` are then searched,
-        not used.
+        not used. Like the fitted inverse, the searched one has no constant term.
     budget : float, optional
         Seconds the search may take (``search=True``; default 60).
     **kw
@@ -325,7 +325,9 @@ class InverseNarx(_InverseTimeDomain):
                 degrees=range(1, self.degree + 1),
                 kinds=("input-polynomial", "full"),
                 functions=[None, self.functions] if self.functions else None,
-                options={"stability_margin": self.stability_margin},
+                # the fitted inverse's model class: no constant term (NarxSearch's default has
+                # one); the searched and the fitted inverse differ in structure and fit only
+                options={"stability_margin": self.stability_margin, "constant": False},
             )
         return Narx(
             order=self.order,
