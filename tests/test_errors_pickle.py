@@ -26,6 +26,7 @@ CASES = [
     ve.ReconstructionInterrupted("interrupted at IT02", result={"it": 2}),
     ie.IdentificationError("plain"),
     ie.InsufficientDataError("too short"),
+    ie.MemoryBudgetError("the regression matrix would take 3 GiB"),
     ie.ModelFileError("m.npz", "no coefficients"),
     ie.UnstableModelError("unstable", cause=ValueError("pole")),
     ie.SimulationDivergedError(1, "y1", 42, math.inf, 1e6),
