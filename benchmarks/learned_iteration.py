@@ -47,7 +47,7 @@ Times on the shared 2-core box (issue 5/16 runs, pseudo-field only): the two SIS
 ~18 min in full; ``--quick`` then (4 training targets, 2 generations of 6, 20 held-out) took
 1.5 min (shock absorber) and 2.5 min (damper). Issue 26 (four rigs x two target kinds, with the
 four update-method rows; the box shared with other jobs, load average 2-4 on its 2 cores):
-``--quick`` took 391 s (325 s on the quiet box, its last line); ``--held-out 20 --train 4 --generations 2
+``--quick`` took 391 s (272 s on the quiet box after the throughput work, its last line); ``--held-out 20 --train 4 --generations 2
 --population 6 --no-phase`` took 1092 s (1.5-4.5 min per rig and target kind, the seven-channel
 tank the slowest). The full default run
 (CEM on 10 targets, 6 generations of 10, and its phase variant) was not timed: its CEM plays
@@ -746,25 +746,34 @@ def _print(res):
 
 
 def episode_times(rigs=("shock-absorber", "elastomeric-damper", "shaker"), repeats=3):
-    """Wall time of a 10-iteration episode (reset with IT00 + 10 steps at gain 0.8, tolerance
-    out of reach, inverse model already identified), fast and default, per SISO rig."""
+    """Wall time of a 10-iteration episode (reset with IT00 + up to 10 steps at gain 0.8,
+    tolerance out of reach, inverse model already identified), fast and default, per SISO rig.
+    An episode that ends early (an interlock trip or a diverging drive ends it) is timed as far
+    as it went and the iterations it played are printed beside the time."""
     out = {}
     for rig in rigs:
         for label, kw in (("fast", {"fast": True}), ("default", {})):
-            env = gym.make("vrig/DriveIteration-v2", rig=rig, tolerance=1e-9, **kw)
+            env = gym.make("vrig/DriveIteration-v2", rig=rig, tolerance=1e-9,
+                           max_episode_steps=10, **kw)  # fmt: skip
             env.reset(seed=0)  # identifies the model (cached) and warms up
-            times = []
+            times, played = [], []
             for r in range(repeats):
                 t = time.perf_counter()
                 env.reset(seed=r + 1)
-                for _ in range(10):
-                    env.step(np.full(env.action_space.shape, 0.8))
+                steps = 0
+                for steps in range(1, 11):
+                    *_, terminated, truncated, _ = env.step(np.full(env.action_space.shape, 0.8))
+                    if terminated or truncated:
+                        break
                 times.append(time.perf_counter() - t)
+                played.append(steps)
             env.close()
-            out[f"{rig} {label}"] = {"min_s": min(times), "median_s": float(np.median(times))}
+            out[f"{rig} {label}"] = {"min_s": min(times), "median_s": float(np.median(times)),
+                                     "iterations": played}  # fmt: skip
             print(
                 f"  {rig:<20} {label:<8} 10-iteration episode: min {min(times):.2f} s, "
-                f"median {np.median(times):.2f} s",
+                f"median {np.median(times):.2f} s (iterations played: "
+                f"{', '.join(map(str, played))})",
                 flush=True,
             )
     return out

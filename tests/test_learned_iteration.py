@@ -129,3 +129,31 @@ def test_the_rule_gain_follows_the_side_car():
     assert li.rule_gain(vrig.load_rig("fuel-tank-7ch", fidelity="fast")) == 0.5  # frf's gain
     assert li.rule_gain(vrig.load_rig("elastomeric-damper", fidelity="fast")) == 0.5  # rig's
     assert li.rule_gain(SimpleNamespace()) == 0.8
+
+
+def test_episode_times_stop_at_an_episode_that_ends_early(monkeypatch, capsys):
+    """``--timing``: an episode that ends before 10 iterations (a trip, a diverging drive) is
+    timed as far as it went, its iterations counted; stepping on would raise (the env's own
+    contract: no step after the end)."""
+
+    class _EndsAtTwo:
+        action_space = gym.spaces.Box(0.0, 2.0, shape=(1,))
+
+        def reset(self, seed=None):
+            self.n = 0
+            return {}, {}
+
+        def step(self, action):
+            if self.n >= 2:
+                raise RuntimeError("no episode in progress")
+            self.n += 1
+            return {}, 0.0, self.n == 2, False, {}
+
+        def close(self):
+            pass
+
+    monkeypatch.setattr(li.gym, "make", lambda *a, **k: _EndsAtTwo())
+    out = li.episode_times(rigs=("any",), repeats=2)
+    assert out["any fast"]["iterations"] == [2, 2]
+    assert out["any default"]["iterations"] == [2, 2]
+    assert "iterations played: 2, 2" in capsys.readouterr().out
