@@ -760,11 +760,10 @@ def episode_times(rigs=("shock-absorber", "elastomeric-damper", "shaker"), repea
             for r in range(repeats):
                 t = time.perf_counter()
                 env.reset(seed=r + 1)
-                steps = 0
-                for steps in range(1, 11):
+                steps, ended = 0, False
+                while steps < 10 and not ended:
                     *_, terminated, truncated, _ = env.step(np.full(env.action_space.shape, 0.8))
-                    if terminated or truncated:
-                        break
+                    steps, ended = steps + 1, terminated or truncated
                 times.append(time.perf_counter() - t)
                 played.append(steps)
             env.close()
