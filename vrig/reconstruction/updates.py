@@ -539,26 +539,21 @@ class ReidentifyUpdate:
         however many iterations run."""
         previous = engine.method, engine.target
         while True:
-            samples = sum(p[0].n_samples for p in [self.id_record, *self.recent])
             try:
                 new = copy.deepcopy(engine.method)
                 new.identify(*self._concatenated(engine))
                 engine.method = new
                 engine.target = engine._inverse(engine.desres, "DESRES")
-            except MemoryBudgetError as exc:
+                break
+            except Exception as exc:  # the stability contract: a model that fails is not used
                 engine.method, engine.target = previous
-                if not self.recent:
+                if not (isinstance(exc, MemoryBudgetError) and self.recent):
                     self._kept(exc)
                     return
                 del self.recent[0]
                 self.log.append({"rule": "reidentify", "event": "dropped oldest record",
                                  "reason": "memory budget", "records": 1 + len(self.recent)})  # fmt: skip
-                continue
-            except Exception as exc:  # the stability contract: a model that fails is not used
-                engine.method, engine.target = previous
-                self._kept(exc)
-                return
-            break
+        samples = sum(p[0].n_samples for p in [self.id_record, *self.recent])
         self.log.append({"rule": "reidentify", "event": "refit",
                          "records": 1 + len(self.recent), "samples": int(samples),
                          "model": _describe(engine.method)})  # fmt: skip
