@@ -634,19 +634,19 @@ class NarxSearch:
 
     # ------------------------------------------------------------------ stages
     def _stage1(self) -> None:
-        cands = []
+        size = {}
+        asked = "frols" in self.selection and "prediction" in self.focus
         selects = self.selection != ("all",)
         for s in self.structures():
             base = SearchCandidate(*s, "prediction", "all", self.lags)
-            cands.append(base)
+            size[base] = self._terms(base)
             # FROLS least squares: asked for, or the only fit that can rank a structure too big
             # for all terms (else stage 2 never sees it)
-            frols = "frols" in self.selection and "prediction" in self.focus
-            if frols or (selects and self._too_big(base, self._terms(base))):
-                cands += [
-                    SearchCandidate(*s, "prediction", "frols", self.lags, k) for k in self.n_terms
-                ]
-        size = {c: self._terms(c) for c in cands}
+            if asked or (selects and self._too_big(base, size[base])):
+                for k in self.n_terms:
+                    c = SearchCandidate(*s, "prediction", "frols", self.lags, k)
+                    size[c] = self._terms(c)
+        cands = list(size)
         stop = None if self._deadline is None else self._t0 + _STAGE1_SHARE * self.budget
         self._deferred = []
         for c in sorted(cands, key=lambda c: (size[c], c.selection != "all", c.n_terms or 0)):
