@@ -5,10 +5,14 @@
 
 One line per case: every rig (``fast`` fidelity, rig seed 3) with ARX, the shock absorber with NARX,
 FRF and split spectra, the elastomeric damper with the adaptive strategy (6 s pseudo-field target,
-10 s identification, 2 iterations, gain 0.5, seed 7), and two episodes of two gymnasium environments
-at a fixed gain. A line holds the η0 and damage-ratio tables at full precision (``repr``) and the
-SHA-256 (first 16 hex digits) of the identification records and of every drive and raw response.
-Issue 14 used it to show the architecture changes left every number unchanged.
+10 s identification, 2 iterations, gain 0.5, seed 7), two episodes of two gymnasium environments
+at a fixed gain, and every rig x method through the command line (``vrig reconstruct --rig R
+--method M --seconds 6 --iterations 1 --format npz``, the rig at ``fast`` fidelity, every other
+value the command's default: the side-car's). A line holds the η0 and damage-ratio tables at full
+precision (``repr``) and the SHA-256 (first 16 hex digits) of the identification records and of
+every drive and raw response (the command line's: of the records its test folder holds). Issue 14
+used it to show the architecture changes left every number unchanged; issue 33 that the command
+line's figures stayed while the Python API's moved onto the side-car's defaults.
 """
 
 from __future__ import annotations
@@ -29,6 +33,7 @@ CASES = (
 )
 OPTIONS = {"split": {"split_hz": 3.0}}
 ENVS = ("vrig/ShockAbsorber-v2", "vrig/ElastomericDamper-v2")
+CLI_METHODS = ("arx", "narx", "split", "frf", "error-signal")
 
 
 def _hash(a) -> str:
@@ -79,6 +84,48 @@ def env_lines(env_id: str) -> list[str]:
     return lines
 
 
+def cli_line(rig_name: str, method: str) -> str:
+    """The fingerprint of one ``vrig reconstruct`` run (see the module docstring), from the
+    test folder it writes: exit code, η0 per iteration (``summary.json``) and the records'
+    hashes."""
+    import contextlib
+    import io
+    import json
+    import tempfile
+
+    import vrig
+    from vrig import cli
+
+    real_load = vrig.load_rig
+
+    def load_rig(*a, **k):
+        k.setdefault("fidelity", "fast")
+        return real_load(*a, **k)
+
+    with tempfile.TemporaryDirectory(prefix="vrig-fingerprint-") as tmp:
+        out = Path(tmp) / "out"
+        argv = ["reconstruct", "--rig", rig_name, "--method", method, "--seconds", "6",
+                "--iterations", "1", "--format", "npz", "--out", str(out)]  # fmt: skip
+        vrig.load_rig = load_rig
+        try:
+            with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(io.StringIO()):
+                code = cli.main(argv)
+        finally:
+            vrig.load_rig = real_load
+        if not (out / "summary.json").is_file():
+            return f"cli {rig_name} {method} exit {code} no summary"
+        summary = json.loads((out / "summary.json").read_text(encoding="utf-8"))
+        errors = summary.get("errors", {})
+        errors = [errors.get(k) for k in ("eta0_percent", "damage_ratio")]
+        hashes = []
+        for name in ("IDDRV", "IDRES", "IT00DRV", "RIT00RES", "IT01DRV", "RIT01RES"):
+            path = out / f"{name}.npz"
+            if path.is_file():
+                with np.load(path) as z:
+                    hashes.append(f"{name} {_hash(z['data'])}")
+    return f"cli {rig_name} {method} exit {code} eta0 {errors!r} " + " ".join(hashes)
+
+
 def fingerprints(progress=print):
     """Every fingerprint line, in order; ``progress(line)`` is called as each is made."""
     import vrig
@@ -92,6 +139,10 @@ def fingerprints(progress=print):
         for line in env_lines(env_id):
             lines.append(line)
             progress(line)
+    for name in vrig.list_rigs():
+        for method in CLI_METHODS:
+            lines.append(cli_line(name, method))
+            progress(lines[-1])
     return lines
 
 
