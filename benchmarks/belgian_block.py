@@ -27,8 +27,8 @@ from pathlib import Path
 import numpy as np
 
 import vrig
-from vrig.field import default_band
 from vrig.files import atomic_write
+from vrig.reconstruction.defaults import default_band
 from vrig.records import belgian_block_desired, belgian_block_path, belgian_block_rig
 from vrig.targets import check_target, identification_records, scale_to_limits
 

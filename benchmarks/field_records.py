@@ -49,7 +49,8 @@ def _lines(label: str, stats: list[dict]) -> list[str]:
 
 def main(argv=None) -> int:
     import vrig
-    from vrig.field import default_band, desired_response
+    from vrig.field import desired_response
+    from vrig.reconstruction.defaults import default_band
 
     ap = argparse.ArgumentParser(prog="python -m benchmarks.field_records",
                                  description=__doc__.split("\n")[0])  # fmt: skip

@@ -138,8 +138,8 @@ def target_statistics(rig, desired, band=None) -> dict:
     -------
     dict of ndarray
     """
-    from vrig.field import default_band
     from vrig.processing import gprepro
+    from vrig.reconstruction.defaults import default_band
     from vrig.reconstruction.matching import half_energy_amplitude
 
     y = gprepro(desired, band or default_band(rig)).data
@@ -316,7 +316,8 @@ def report(title: str, stats: dict, rows: list[dict]) -> str:
 def _targets(args, log):
     """(title, rig, desired) of every target of the run."""
     import vrig
-    from vrig.field import default_band, pseudo_field
+    from vrig.field import pseudo_field
+    from vrig.reconstruction.defaults import default_band
 
     if args.desired is not None:
         rig = vrig.load_rig(args.rig, fidelity=args.fidelity)

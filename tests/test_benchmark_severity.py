@@ -118,7 +118,8 @@ def test_desired_response_is_the_rig_at_the_records_severity():
     import numpy as np
 
     from benchmarks.runner.record import _desired
-    from vrig.field import default_band, pseudo_field
+    from vrig.field import pseudo_field
+    from vrig.reconstruction.defaults import default_band
 
     rig = vrig.load_rig(RIG, seed=0, fidelity="fast", severity=2.0)
     _drive, want = pseudo_field(rig, default_band(rig), 4.0, seed=0)

@@ -119,7 +119,7 @@ def test_reconstruct_uses_the_side_car_band_like_the_cli():
     rig = _LinearRig(RigDefaults(band=(2.0, 12.0)))
     result = vrig.reconstruct(rig, _desired(rig), method="arx", iterations=0)
     assert result.bandwidth == (2.0, 12.0)
-    assert tuple(result.bandwidth) == vrig.field.default_band(rig)
+    assert tuple(result.bandwidth) == vrig.reconstruction.defaults.default_band(rig)
     plain = _LinearRig()  # no side-car defaults: the test band
     assert vrig.reconstruct(plain, _desired(plain), iterations=0).bandwidth == (0.0, 20.0)
 

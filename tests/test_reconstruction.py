@@ -584,11 +584,11 @@ USER_RIG = __import__("pathlib").Path(__file__).parent / "data" / "servo_mass.ri
 def test_split_on_a_users_rig_splits_at_the_bands_rule_not_a_type_error():
     """``vrig.reconstruct(rig, desired, method="split")`` on a rig loaded from its path whose
     side-car has no "reconstruction" block raised ``TypeError: SplitSpectra.__init__() missing
-    ... 'split_hz'``. The rule (vrig.field.default_split_hz, the one the CLI and the envs use):
+    ... 'split_hz'``. The rule (vrig.reconstruction.defaults.default_split_hz, the one the CLI and the envs use):
     the side-car's split, else the band's geometric mean, or a quarter of its upper edge for a
     band from 0 Hz."""
-    from vrig.field import default_split_hz
     from vrig.reconstruction import DriveIteration
+    from vrig.reconstruction.defaults import default_split_hz
 
     rig = vrig.load_rig(USER_RIG)
     assert rig.defaults.method("split").split_hz is None and rig.bandwidth == (0.0, 250.0)

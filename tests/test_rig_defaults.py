@@ -1,6 +1,6 @@
 """A rig's own defaults live in its side-car (``"reconstruction"``: band, gain, gym id and
 tolerance): parsed and checked there, exposed as ``rig.defaults``, read by
-:func:`vrig.field.default_band`, the gymnasium registration and the env's tolerance.
+:func:`vrig.reconstruction.defaults.default_band`, the gymnasium registration and the env's tolerance.
 
 Every expected value here is read from the side-car JSON files themselves (independently of
 :mod:`vrig.rigs.spec`), never copied from the code."""
@@ -15,7 +15,7 @@ import pytest
 
 import vrig
 from vrig.envs import ENV_IDS, FALLBACK_TOLERANCE, DriveIterationEnv
-from vrig.field import default_band
+from vrig.reconstruction.defaults import default_band
 from vrig.rigs import ChannelSpec, FileRig, OutputSubset, RigDefaults
 from vrig.rigs.spec import MethodDefaults, read_defaults
 

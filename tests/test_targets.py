@@ -21,8 +21,9 @@ from scipy import signal
 
 import vrig
 from vrig.cli import main
-from vrig.field import default_band, pseudo_field
+from vrig.field import pseudo_field
 from vrig.processing import gprepro
+from vrig.reconstruction.defaults import default_band
 from vrig.signals import flat_psd, random_drive
 from vrig.targets import (
     check_target,

@@ -14,6 +14,7 @@ import pytest
 
 import vrig
 from vrig.envs import ENV_IDS, DriveIterationEnv, DriveIterationVectorEnv, IterationPhysics
+from vrig.reconstruction.defaults import default_band
 
 ID = next(i for i, kw in ENV_IDS.items() if kw.get("rig") == "shock-absorber")
 # short fast episodes; a tolerance out of reach so that TimeLimit truncates (budget 3)
@@ -158,7 +159,7 @@ def test_pseudo_fields_equal_pseudo_field_seed_by_seed_through_tripped_levels(mo
     monkeypatch.setattr(field, "_FIELD_ATTEMPTS", 2)  # ... and then 20 %, the last level
     rig = vrig.load_rig("shock-absorber", fidelity="fast")
     twin = vrig.load_rig("shock-absorber", fidelity="fast")  # the serial truth's own rig
-    band, seeds = field.default_band(rig), list(range(6))
+    band, seeds = default_band(rig), list(range(6))
     tried = []
     real = field._field_drive
     monkeypatch.setattr(field, "_field_drive", lambda *a: tried.append(a[3]) or real(*a))
@@ -183,7 +184,7 @@ def test_a_lone_record_plays_its_check_ahead_and_equals_pseudo_field(monkeypatch
     monkeypatch.setattr(field, "_FIELD_ATTEMPTS", 2)
     rig = vrig.load_rig("shock-absorber", fidelity="fast")
     twin = vrig.load_rig("shock-absorber", fidelity="fast")
-    band = field.default_band(rig)
+    band = default_band(rig)
     batches = []
     real = field._runs
     monkeypatch.setattr(field, "_runs", lambda r, d, *a: batches.append(len(d)) or real(r, d, *a))

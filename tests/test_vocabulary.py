@@ -3,7 +3,7 @@ defaults and the band become a method in one place, :func:`vrig.reconstruction.m
 which the CLI, :func:`vrig.reconstruct`, the envs and the benchmark runner all use.
 
 The truths: the documented built-in defaults (arx order 4, narx order 4 degree 2, error-signal
-linear order 3, split at :func:`vrig.field.default_split_hz`), the side-car's values as written
+linear order 3, split at :func:`vrig.reconstruction.defaults.default_split_hz`), the side-car's values as written
 in it, and the CLI's usage messages as ``vrig reconstruct --help`` states the ranges.
 """
 
@@ -14,7 +14,6 @@ from types import SimpleNamespace
 import pytest
 
 import vrig
-from vrig.field import default_split_hz
 from vrig.reconstruction import (
     InverseArx,
     InverseErrorSignal,
@@ -24,6 +23,7 @@ from vrig.reconstruction import (
     SplitSpectra,
     method_spec,
 )
+from vrig.reconstruction.defaults import default_split_hz
 from vrig.reconstruction.vocabulary import side_car_options
 from vrig.rigs.spec import MethodDefaults, RigDefaults
 

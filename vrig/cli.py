@@ -92,12 +92,12 @@ import numpy as np
 
 from .field import (
     TARGET_KINDS,
-    default_band,
     desired_response,
     parse_target,
     pseudo_field,
 )
 from .files import file_kind, mount_points
+from .reconstruction.defaults import default_band
 
 __all__ = ["EXIT_CODE_MEANINGS", "STOP_EXIT", "ExitCode", "main"]
 

@@ -19,8 +19,6 @@ import numpy as np
 
 __all__ = [
     "TARGET_KINDS",
-    "default_band",
-    "default_split_hz",
     "desired_response",
     "desired_responses",
     "parse_target",
@@ -36,54 +34,6 @@ _FIELD_FRACTION = 0.10  # pseudo-field drive RMS as a fraction of full scale (5 
 _FIELD_HEADROOM = 2 / 3  # pseudo-field responses peak below this fraction of the transducer range
 _FADE_S = 1.0
 _FIELD_ATTEMPTS = 11  # the level halved up to ten times: down to 1/1024 of it (60 dB)
-
-
-def default_band(rig) -> tuple[float, float]:
-    """The simulation band reconstructions use on ``rig`` unless told otherwise [Hz].
-
-    The rig's side-car band (``rig.defaults.band``, side-car ``"reconstruction": {"band": ...}``)
-    where it differs from the test band (e.g. the shaker's 10-60 Hz: its README), else the test
-    band ``rig.bandwidth`` (also for a rig without a side-car, e.g. a user's own :class:`vrig.rigs.Rig`).
-
-    Parameters
-    ----------
-    rig : Rig
-        Any rig with a ``bandwidth`` (low, high) [Hz]; a ``defaults.band`` [Hz] wins when given.
-    """
-    band = getattr(getattr(rig, "defaults", None), "band", None)
-    return tuple(rig.bandwidth if band is None else band)
-
-
-def default_split_hz(band: tuple[float, float], rig=None) -> float:
-    """The split frequency [Hz] of method ``"split"`` when the caller gives none.
-
-    The one rule of ``vrig reconstruct``, :func:`vrig.reconstruct` and the gym envs: the rig
-    side-car's ``reconstruction.methods.split.split_hz`` when it names one (a frequency chosen
-    below the rig's first resonance in the band, as the reference text's §3.2.1 splits the fuel
-    tank's 0-40 Hz at 12 Hz from its identification FRF); else, from the band alone (a user's own
-    rig, whose side-car has no ``"reconstruction"`` block), the band's geometric mean
-    ``sqrt(low * high)``, or a quarter of its upper edge ``high / 4`` for a band from 0 Hz (no
-    geometric mean: the two octaves below the upper edge go to the high band). Either way the
-    split lies inside the band (``low < split < high``) for any band ``0 <= low < high``.
-
-    Parameters
-    ----------
-    band : (float, float)
-        The simulation band ``(low, high)`` [Hz] of the reconstruction.
-    rig : Rig, optional
-        The rig; its ``defaults.method("split").split_hz`` wins when set. None: the band rule.
-
-    Returns
-    -------
-    float
-        The split frequency [Hz].
-    """
-    defaults = getattr(rig, "defaults", None)
-    split = None if defaults is None else defaults.method("split").split_hz
-    if split is not None:
-        return float(split)
-    lo, hi = (float(b) for b in band)
-    return float(np.sqrt(lo * hi)) if lo > 0 else hi / 4
 
 
 def pseudo_field(rig, band: tuple[float, float], seconds: float, *, seed: int = 0):
@@ -371,7 +321,7 @@ def desired_response(rig, target: str = "pseudo-field", seconds: float = 30.0, *
     seed : int
         Seed of the random drive (pseudo-field) or of the road (field).
     band : (float, float), optional
-        Drive band of a pseudo-field record [Hz] (default :func:`default_band`).
+        Drive band of a pseudo-field record [Hz] (default :func:`vrig.reconstruction.defaults.default_band`).
 
     Returns
     -------
@@ -383,6 +333,8 @@ def desired_response(rig, target: str = "pseudo-field", seconds: float = 30.0, *
     """
     kind, scenario = parse_target(rig, target)
     if kind == "pseudo-field":
+        from .reconstruction.defaults import default_band
+
         band = default_band(rig) if band is None else tuple(band)
         desdrv, field = pseudo_field(rig, band, seconds, seed=seed)
         return _pseudo_field_made(rig, band, seconds, seed, desdrv, field)
@@ -413,7 +365,7 @@ def desired_responses(rig, target: str, seconds: float, seeds, *, band=None,
     seeds : sequence of int
         Seeds of the random drives (pseudo-field) or of the roads (field), each >= 0.
     band : (float, float), optional
-        Drive band of a pseudo-field record [Hz] (default :func:`default_band`).
+        Drive band of a pseudo-field record [Hz] (default :func:`vrig.reconstruction.defaults.default_band`).
     threads : int, optional
         Worker threads of the batched rig runs (:meth:`vrig.rigs.MujocoRig.run_batch`).
     twin : MujocoRig, optional
@@ -429,6 +381,8 @@ def desired_responses(rig, target: str, seconds: float, seeds, *, band=None,
     kind, scenario = parse_target(rig, target)
     seeds = [_seed(s) for s in seeds]
     if kind == "pseudo-field":
+        from .reconstruction.defaults import default_band
+
         band = default_band(rig) if band is None else tuple(band)
         made = pseudo_fields(rig, band, seconds, seeds, threads=threads)
         finish = partial(_pseudo_field_made, rig, band, seconds)

@@ -898,7 +898,7 @@ def check_rig_linearity(
     """Play the records of :func:`linearity_drives` on ``rig`` and :func:`check_linearity` them.
 
     The drive is flat band-limited random noise over ``band`` (default: the rig's simulation
-    band, :func:`vrig.field.default_band`) with ``level`` x each drive channel's full scale
+    band, :func:`vrig.reconstruction.defaults.default_band`) with ``level`` x each drive channel's full scale
     rms (default 10 %; ``2u`` then peaks near 70 % of full scale), the offset b = that rms,
     ``seconds`` of analysis after a 1 s fade-in and 1 s of settling. One drive seed (``seed``) for every record;
     every run its own rig noise seed (``seed + 10_000 + i``). If a run trips an interlock the
@@ -924,8 +924,8 @@ def check_rig_linearity(
         outer :func:`vrig.progress.enabled` in force, as ``vrig check-linearity`` sets it).
     """
     from .errors import RigLimitError
-    from .field import default_band
     from .progress import bar, enabled_if
+    from .reconstruction.defaults import default_band
 
     if not (isinstance(level, (int, float)) and 0 < level <= 0.5):
         raise ValueError(f"level must be a fraction of full scale in (0, 0.5], got {level!r}")

@@ -76,8 +76,8 @@ from fractions import Fraction
 import numpy as np
 from scipy import signal
 
-from .field import default_band
 from .processing import gprepro, identification_band
+from .reconstruction.defaults import default_band
 from .timehistory import TimeHistory
 
 __all__ = [
@@ -228,7 +228,7 @@ def f2d(field: TimeHistory, rig, band=None, *, channels=None, scale=None) -> Tim
     rig : Rig
         The rig the desired response is for (its ``outputs``, ``fs`` and band).
     band : (float, float), optional
-        Simulation band (low, high) [Hz]; default :func:`vrig.field.default_band` of the rig.
+        Simulation band (low, high) [Hz]; default :func:`vrig.reconstruction.defaults.default_band` of the rig.
     channels : mapping of str to str, optional
         Rig response name -> field channel name, where the names differ (default: the same
         names).
@@ -422,7 +422,7 @@ def identification_records(
     rig : Rig
         The rig.
     band : (float, float), optional
-        Simulation band [Hz] (default :func:`vrig.field.default_band`).
+        Simulation band [Hz] (default :func:`vrig.reconstruction.defaults.default_band`).
     seconds : float
         Record length [s].
     id_rms : float or sequence of float, optional
@@ -964,7 +964,7 @@ def check_target(
         The desired response: the rig's response channels (by name, else by position) at
         ``rig.fs``.
     band : (float, float), optional
-        Simulation band [Hz] (default :func:`vrig.field.default_band`).
+        Simulation band [Hz] (default :func:`vrig.reconstruction.defaults.default_band`).
     seconds : float, optional
         Length of the identification run [s] (default: the target's length, as a
         reconstruction identifies). Not used with ``id_drive`` / ``id_response``.

@@ -404,7 +404,8 @@ def _target(rig_name: str, fidelity: str, seconds: float, desired: int, severity
     road of seed ``desired``; it need not be reachable. Both are made by
     :func:`vrig.field.desired_response` (the one place a target is made); ``band`` is the
     rig's default simulation band for either."""
-    from vrig.field import default_band, desired_response
+    from vrig.field import desired_response
+    from vrig.reconstruction.defaults import default_band
 
     rig = _load_rig(rig_name, 0, fidelity, severity)
     band = default_band(rig)

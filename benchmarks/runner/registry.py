@@ -174,7 +174,7 @@ def _built(name: str, **options):
 
 
 def _split(rig, band):
-    """Split spectra at the band's rule (:func:`vrig.field.default_split_hz` without the rig's
+    """Split spectra at the band's rule (:func:`vrig.reconstruction.defaults.default_split_hz` without the rig's
     side-car split), inverse ARX(4) per band, by the method vocabulary."""
     from vrig.reconstruction.vocabulary import method_spec
 

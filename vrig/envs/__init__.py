@@ -19,7 +19,7 @@ failed first reset), and the spec has ``disable_env_checker=True`` so the stock 
 
 **Rig defaults.** The env takes the rig's own defaults from its side-car, as ``vrig reconstruct``
 does, unless the caller passes them (:func:`vrig.envs.physics.rig_settings`): the band
-(:func:`vrig.field.default_band`), the method's options (``reconstruction.methods.METHOD``:
+(:func:`vrig.reconstruction.defaults.default_band`), the method's options (``reconstruction.methods.METHOD``:
 ``order``, ``degree``, ``focus``, ``split_hz``; a key of ``method_options`` wins) and its
 identification level (``id_rms``). A method the side-car marks ``unsupported`` (the reference text
 reports it failing on the rig) runs all the same, after a one-line ``UserWarning`` quoting why (a

@@ -22,8 +22,9 @@ import numpy as np
 from identification.errors import SimulationDivergedError
 
 from ..errors import RigLimitError, SimulationInstabilityError
-from ..field import default_band, desired_responses, parse_target
+from ..field import desired_responses, parse_target
 from ..reconstruction import DriveIteration, IterationSettings
+from ..reconstruction.defaults import default_band
 from ..reconstruction.settings import cache_key
 from ..reconstruction.vocabulary import side_car_options
 from ..rigs import load_rig
@@ -47,7 +48,7 @@ def rig_settings(rig, settings: IterationSettings, band) -> IterationSettings:
     ``split_hz``; a key of ``settings.method_options`` wins) and identification level
     (``id_rms``, a fraction of each drive's full scale, else the rig's ``id_rms``; used unless
     ``settings.id_rms`` is set), as ``vrig reconstruct`` takes them. The iteration gain is not
-    taken (the env's actions are the gains); the band is :func:`vrig.field.default_band`'s.
+    taken (the env's actions are the gains); the band is :func:`vrig.reconstruction.defaults.default_band`'s.
 
     Parameters
     ----------
@@ -99,7 +100,7 @@ class IterationPhysics:
         **rig_options)``) or a rig object.
     settings : IterationSettings, optional
         The identification settings (method and its options, band, identification drive,
-        decimation, taper, ``id_seed``); the band defaults to :func:`vrig.field.default_band` and
+        decimation, taper, ``id_seed``); the band defaults to :func:`vrig.reconstruction.defaults.default_band` and
         ``id_duration`` to ``seconds``. ``id_seed`` is fixed for the life of the physics, so every
         episode reuses the same identified model; the run seed is per episode (:meth:`start`).
         The rig's side-car defaults for the method (options, identification level) fill what

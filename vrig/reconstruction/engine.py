@@ -15,12 +15,12 @@ from scipy.signal import windows
 from identification.errors import SimulationDivergedError
 
 from ..errors import RigLimitError, SimulationInstabilityError
-from ..field import default_band
 from ..processing import band_gains, decimate, gprepro, identification_band
 from ..progress import status
 from ..rigs.limits import check_drive_limits
 from ..signals import random_drive, triangular_psd
 from ..timehistory import TimeHistory
+from .defaults import default_band
 from .matching import identify_matched, level_ratios
 from .methods import make_method
 from .protocol import ObservingMethod
@@ -146,7 +146,7 @@ class DriveIteration:
         The iteration's settings (default: the defaults); the engine uses the identification
         ones and ``id_seed`` / ``run_seed``, the loop's (gain, iterations, ...) are the caller's.
         Method ``"split"`` without a ``split_hz`` option splits at
-        :func:`vrig.field.default_split_hz` (the rig side-car's split, else the band's rule).
+        :func:`vrig.reconstruction.defaults.default_split_hz` (the rig side-car's split, else the band's rule).
     **options
         Settings by name applied on top of ``settings`` (see :meth:`IterationSettings.build`).
     """

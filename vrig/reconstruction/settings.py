@@ -77,7 +77,7 @@ class IterationSettings:
     strategy : {"fixed", "adaptive"}
         See :data:`STRATEGIES`.
     bandwidth : (low, high) Hz, optional
-        Simulation band applied to every record (default: :func:`vrig.field.default_band`, the
+        Simulation band applied to every record (default: :func:`vrig.reconstruction.defaults.default_band`, the
         rig side-car's ``reconstruction.band`` where it names one, else the rig's test band
         ``rig.bandwidth`` -- the band the CLI, the pseudo-field responses and the envs use).
     id_duration : float, optional

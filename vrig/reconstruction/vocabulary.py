@@ -16,7 +16,7 @@ option         methods                                      default
                (``linear_order``)                           ``linear_order``); range 1..20
 ``degree``     narx, split (a NARX low band), error-signal  2 (split: none, an ARX low band); 1..5
 ``focus``      narx, error-signal                           ``"prediction"``
-``split_hz``   split                                        :func:`vrig.field.default_split_hz`
+``split_hz``   split                                        :func:`vrig.reconstruction.defaults.default_split_hz`
                                                             (the side-car's split, else the band's
                                                             rule); inside the band
 ``search``     narx                                         False
@@ -42,7 +42,7 @@ from types import MappingProxyType
 from typing import Any
 
 from ..errors import VrigError
-from ..field import default_split_hz
+from .defaults import default_split_hz
 from .methods import InverseArx, InverseNarx, make_method
 
 __all__ = [
@@ -135,7 +135,7 @@ def side_car_options(name: str, rig, band) -> dict:
     """The rig side-car's defaults for method ``name`` as keyword arguments of its class (what
     :func:`vrig.envs.physics.rig_settings` puts into ``method_options``): ``order`` (error-signal:
     ``linear_order``), ``degree``, ``focus``, and for ``split`` its ``split_hz`` (the side-car's,
-    else :func:`vrig.field.default_split_hz`'s band rule, always given) and, when the side-car
+    else :func:`vrig.reconstruction.defaults.default_split_hz`'s band rule, always given) and, when the side-car
     sets an order or degree, the band methods ``low`` / ``high``. Only options the method takes;
     the built-in defaults are left to the class.
 
@@ -169,7 +169,7 @@ def method_spec(name, *, rig=None, band=None, side_car: bool = True, **given) ->
         ``identify`` and ``drive`` (returned as it is; no options then).
     rig : Rig, optional
         The rig: its side-car's defaults for the method (``side_car=True``) and its split
-        frequency (:func:`vrig.field.default_split_hz`).
+        frequency (:func:`vrig.reconstruction.defaults.default_split_hz`).
     band : (float, float), optional
         The simulation band [Hz]; ``split`` needs it (or ``split_hz``), and checks its split lies
         inside it.

@@ -307,7 +307,7 @@ class RigDefaults:
     band : (float, float) or None
         Simulation band (low, high) [Hz] of reconstructions, pseudo-field desired responses and
         the gymnasium envs where it differs from the test band ``bandwidth``
-        (:func:`vrig.field.default_band`).
+        (:func:`vrig.reconstruction.defaults.default_band`).
     gain : float or None
         Iteration gain in (0, 2] of ``vrig reconstruct`` (global default 0.8).
     gym_id : str or None

@@ -44,7 +44,7 @@ class OutputSubset:
 
     defaults = None
     """None: the wrapped rig's side-car defaults (band, tolerance) were set on all its responses,
-    so a subset gets the global ones (:func:`vrig.field.default_band`: the test band)."""
+    so a subset gets the global ones (:func:`vrig.reconstruction.defaults.default_band`: the test band)."""
 
     def __getattr__(self, attr):  # inputs, fs, bandwidth, description, ... of the wrapped rig
         if attr == "rig":
