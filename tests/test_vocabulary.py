@@ -1,10 +1,10 @@
-"""One method vocabulary (issue 26, deliverable 5): a method name and options, the rig side-car's
-defaults and the band become a method in one place, :func:`vrig.reconstruction.method_spec`,
-which the CLI, :func:`vrig.reconstruct`, the envs and the benchmark runner all use.
+"""One method vocabulary: a method name and options become a method in one place,
+:func:`vrig.reconstruction.method_spec` (the defaults resolver, :mod:`vrig.reconstruction.defaults`,
+gives it the rig side-car's options first: tests/test_defaults_resolver.py).
 
-The truths: the documented built-in defaults (arx order 4, narx order 4 degree 2, error-signal
-linear order 3, split at :func:`vrig.reconstruction.defaults.default_split_hz`), the side-car's values as written
-in it, and the CLI's usage messages as ``vrig reconstruct --help`` states the ranges.
+The truths: the documented built-in defaults (the method classes' signatures: arx order 4, narx
+order 4 degree 2, error-signal linear order 3), and the CLI's usage messages as ``vrig reconstruct
+--help`` states the ranges.
 """
 
 from __future__ import annotations
@@ -23,8 +23,7 @@ from vrig.reconstruction import (
     SplitSpectra,
     method_spec,
 )
-from vrig.reconstruction.defaults import default_split_hz
-from vrig.reconstruction.vocabulary import side_car_options
+from vrig.reconstruction.vocabulary import side_car_vocabulary
 from vrig.rigs.spec import MethodDefaults, RigDefaults
 
 
@@ -46,9 +45,8 @@ def test_the_built_in_defaults():
     assert isinstance(es, InverseErrorSignal)
     assert (es.linear_order, es.nonlinear_order, es.degree) == (3, 2, 2)
     assert isinstance(method_spec("frf").method, InverseFrf)
-    split = method_spec("split", band=(0.0, 40.0)).method
-    assert isinstance(split, SplitSpectra) and split.split_hz == default_split_hz((0.0, 40.0))
-    assert split.split_hz == 10.0  # a quarter of the upper edge of a band from 0 Hz
+    split = method_spec("split", band=(0.0, 40.0), split_hz=10.0).method
+    assert isinstance(split, SplitSpectra) and split.split_hz == 10.0
     assert all(type(b) is InverseArx and b.order == 4 for b in (split.low, split.high))
 
 
@@ -58,7 +56,7 @@ def test_descriptions_say_what_was_built():
     assert method_spec("narx", search=True, budget=5.0).description == (
         "narx searched by free-run validation (orders up to 8, degrees 1..2, budget 5 s)"
     )
-    assert method_spec("split", band=(1.0, 100.0), degree=2).description == (
+    assert method_spec("split", band=(1.0, 100.0), degree=2, split_hz=10.0).description == (
         "split spectra at 10 Hz (low narx degree 2 order 4, high arx order 4)"
     )
     assert method_spec("error-signal", focus="simulation").description == (
@@ -85,53 +83,23 @@ def test_a_method_object_is_taken_as_it_is():
 
 
 # ---------------------------------------------------------------------------------------------
-# layers: given > side-car > built-in
+# the side-car's vocabulary options (applied by the resolver)
 # ---------------------------------------------------------------------------------------------
-def test_given_wins_over_the_side_car_which_wins_over_the_built_in():
-    rig = _rig(narx=MethodDefaults("why", order=3, degree=3, focus="simulation"))
-    m = method_spec("narx", rig=rig).method
-    assert (m.order, m.degree, m.focus) == (3, 3, "simulation")
-    m = method_spec("narx", rig=rig, order=5).method
-    assert (m.order, m.degree, m.focus) == (5, 3, "simulation")
-    m = method_spec("narx", rig=rig, side_car=False).method  # as vrig.reconstruct builds it
-    assert (m.order, m.degree, m.focus) == (4, 2, "prediction")
-
-
 def test_a_side_car_option_the_method_does_not_take_is_left_out():
     rig = _rig(arx=MethodDefaults("why", order=5, focus="simulation"))
-    assert method_spec("arx", rig=rig).method.order == 5  # focus: not an arx option
-    assert side_car_options("arx", rig, (0.0, 10.0)) == {"order": 5}
+    assert side_car_vocabulary("arx", rig) == {"order": 5}  # focus: not an arx option
+    rig = _rig(split=MethodDefaults("why", split_hz=7.0, order=3, degree=2))
+    assert side_car_vocabulary("split", rig) == {"split_hz": 7.0, "order": 3, "degree": 2}
+    assert side_car_vocabulary("frf", rig) == {}
+    assert side_car_vocabulary("arx", SimpleNamespace(name="no side-car")) == {}
 
 
-def test_side_car_options_are_the_classes_keyword_arguments():
-    rig = _rig(
-        **{
-            "error-signal": MethodDefaults("why", order=5, degree=3, focus="simulation"),
-            "split": MethodDefaults("why", split_hz=7.0, order=3, degree=2),
-        }
-    )
-    assert side_car_options("error-signal", rig, (0.0, 40.0)) == {
-        "linear_order": 5,
-        "degree": 3,
-        "focus": "simulation",
-    }
-    split = side_car_options("split", rig, (0.0, 40.0))
-    assert split["split_hz"] == 7.0
-    assert type(split["low"]) is InverseNarx and (split["low"].order, split["low"].degree) == (3, 2)
-    assert type(split["high"]) is InverseArx and split["high"].order == 3
-    # no side-car split: the band's rule, always given (the env stores it in method_options)
-    assert side_car_options("split", _rig(), (4.0, 100.0)) == {"split_hz": 20.0}
-    assert side_car_options("frf", rig, (0.0, 40.0)) == {}
-
-
-def test_the_split_frequency_is_the_side_cars_then_the_bands():
-    rig = _rig(split=MethodDefaults("why", split_hz=12.0))
-    assert method_spec("split", rig=rig, band=(0.0, 40.0)).method.split_hz == 12.0
-    # vrig.reconstruct (side_car=False) keeps the rig's split too: default_split_hz's rule
-    assert method_spec("split", rig=rig, band=(0.0, 40.0), side_car=False).method.split_hz == 12.0
-    assert method_spec("split", band=(0.0, 40.0), split_hz=3.0).method.split_hz == 3.0
+def test_split_needs_its_frequency_and_builds_its_band_methods_from_order_and_degree():
     with pytest.raises(ValueError, match="'split' needs split_hz"):
         method_spec("split")
+    split = method_spec("split", band=(0.0, 40.0), split_hz=7.0, order=3, degree=2).method
+    assert type(split.low) is InverseNarx and (split.low.order, split.low.degree) == (3, 2)
+    assert type(split.high) is InverseArx and split.high.order == 3
 
 
 # ---------------------------------------------------------------------------------------------
@@ -176,44 +144,25 @@ def test_none_means_not_given():
 
 
 # ---------------------------------------------------------------------------------------------
-# every caller builds the same method
+# the runner's built-ins are vrig reconstruct's methods
 # ---------------------------------------------------------------------------------------------
-def test_the_engine_builds_by_the_vocabulary():
-    rig = vrig.load_rig("motorcycle-rear", fidelity="fast")
-    desired = vrig.TimeHistory(
-        __import__("numpy").zeros((2000, len(rig.outputs))), rig.fs, [c.name for c in rig.outputs]
-    )
-    engine = vrig.reconstruction.DriveIteration(rig, desired, method="narx", order=3)
-    # vrig.reconstruct takes no side-car order/focus (only its split rule): given + built-in
-    assert (engine.method.order, engine.method.degree, engine.method.focus) == (3, 2, "prediction")
-
-
-def test_the_env_and_the_cli_build_the_same_method_from_the_side_car():
-    from vrig.envs.physics import rig_settings
-
-    rig = vrig.load_rig("motorcycle-rear", fidelity="fast")
-    side = rig.defaults.method("narx")
-    settings = rig_settings(rig, vrig.IterationSettings(method="narx"), (0.0, 40.0))
-    env = vrig.reconstruction.make_method("narx", **settings.method_options)
-    cli = method_spec("narx", rig=rig, band=(0.0, 40.0)).method
-    for m in (env, cli):
-        assert (m.order, m.focus) == (side.order, side.focus)
-        assert m.degree == (side.degree or 2)
-
-
-def test_the_runners_built_ins_are_the_vocabularys():
+def test_the_runners_built_ins_are_the_resolvers():
     from benchmarks.runner.registry import get_method
+    from vrig.reconstruction.defaults import resolve
 
-    arx = get_method("arx").factory()
-    assert type(arx) is InverseArx and arx.order == 4
-    narx = get_method("narx").factory()
-    assert (narx.order, narx.degree, narx.kind) == (4, 2, "full")
-    sim = get_method("narx-sim").factory()
+    rig = vrig.load_rig("motorcycle-rear", fidelity="fast")  # a side-car with narx options
+    band = rig.bandwidth
+    side = rig.defaults.method("narx")
+    narx = get_method("narx").make(rig, band)
+    assert (narx.order, narx.focus, narx.kind) == (side.order, side.focus, "full")
+    cli = resolve(rig, method="narx", bandwidth=band).method
+    assert (cli.order, cli.degree, cli.focus) == (narx.order, narx.degree, narx.focus)
+    sim = get_method("narx-sim").make(rig, band)
     assert (sim.kind, sim.focus, sim.selection) == ("full", "simulation", "simulation")
-    search = get_method("narx-search").factory()
+    search = get_method("narx-search").make(rig, band)
     assert search.search is True and search.budget == 60.0
-    es = get_method("error-signal").factory()
-    assert (es.linear_order, es.nonlinear_order, es.degree) == (3, 2, 2)
-    split = get_method("split").factory(None, (4.0, 100.0))
-    assert split.split_hz == pytest.approx(20.0)  # the band's geometric mean
-    assert isinstance(get_method("frf").factory(), InverseFrf)
+    es = get_method("error-signal").make(rig, band)
+    assert type(es) is InverseErrorSignal
+    split = get_method("split").make(rig, (4.0, 100.0))
+    assert split.split_hz == resolve(rig, method="split", bandwidth=(4.0, 100.0)).method.split_hz
+    assert isinstance(get_method("frf").make(rig, band), InverseFrf)

@@ -609,44 +609,66 @@ def _check_content(desired, rig) -> None:
             )
 
 
-def _defaults(args, rig) -> dict:
-    """Fill the ``reconstruct`` options the user did not give from the rig's side-car
-    (``rig.defaults``: ``reconstruction.methods.METHOD`` first, then ``reconstruction``), else
-    the global defaults; returns the further :class:`~vrig.IterationSettings` options
-    (``strategy``, ``tolerance``, ``id_rms`` in drive units, ``id_match`` when asked for).
+def _resolve(args, rig):
+    """``reconstruct``'s settings: what the user gave (None where a flag was not given) resolved
+    by the one resolver every door uses (:func:`vrig.reconstruction.defaults.resolve`: the rig
+    side-car's method block, then its rig block, then the built-in defaults). A method the
+    side-car marks ``unsupported`` (the reference text reports it failing on the rig) runs
+    anyway, after one ``warning:`` line on stderr quoting the side-car: a benchmark lets a user
+    see a method do badly. A bad option is a usage error."""
+    from .reconstruction import IterationSettings, MethodOptionError
+    from .reconstruction.defaults import resolve
 
-    A method the side-car marks ``unsupported`` (the reference text reports it failing on the
-    rig) runs anyway with its defaults, after one ``warning:`` line on stderr quoting the
-    side-car (:func:`_unsupported_warning`): a benchmark lets a user see a method do badly."""
-    d = rig.defaults
-    m = d.method(args.method)
-    if m.unsupported:
-        print(_unsupported_warning(args.method, rig.name, m.unsupported), file=sys.stderr)
     if args.tolerance is not None and not (np.isfinite(args.tolerance) and args.tolerance > 0):
         raise _UsageError(f"--tolerance must be an η0 > 0 [%], got {args.tolerance:g}")
-    taken = []  # what the side-car set, for the note below
-    if args.gain is None:
-        args.gain = next(g for g in (m.gain, d.gain, DEFAULT_GAIN) if g is not None)
-        taken += [f"gain {args.gain:g}"] if m.gain is not None or d.gain is not None else []
-    for name in ("order", "degree", "split_hz", "focus"):  # (no flag for focus)
-        if getattr(args, name, None) is None and getattr(m, name) is not None:
-            setattr(args, name, getattr(m, name))
-            taken.append(f"{name} {getattr(m, name)}")
-        elif not hasattr(args, name):
-            setattr(args, name, None)
-    extra = {"strategy": args.strategy, "tolerance": args.tolerance}
-    if getattr(args, "id_match", False):
-        extra["id_match"] = True
-    level = m.id_rms if m.id_rms is not None else d.id_rms
-    if level is not None:  # a fraction of each drive's full scale
-        extra["id_rms"] = tuple(level * c.full_scale for c in rig.inputs)
-        taken.append(f"identification at {100 * level:g} % of full scale")
-    if taken:
-        print(
-            f"note: the rig's own defaults for {args.method}: {', '.join(taken)} (why: its "
-            "side-car's reconstruction block, models/README.md)"
+    options = {k: getattr(args, k, None) for k in ("order", "degree", "split_hz", "budget")}
+    options["search"] = bool(getattr(args, "search", False))
+    try:
+        given = IterationSettings(
+            method=args.method,
+            method_options={k: v for k, v in options.items() if v is not None},
+            iterations=args.iterations,
+            gain=args.gain,
+            strategy=args.strategy,
+            bandwidth=None if args.band is None else _band(rig, args.band),
+            id_seed=args.seed,
+            run_seed=args.seed,
+            tolerance=args.tolerance,
+            id_match=bool(getattr(args, "id_match", False)),
+            update=getattr(args, "update", "none"),
         )
-    return extra
+        resolved = resolve(rig, given)
+    except MethodOptionError as exc:
+        raise _UsageError(exc.cli) from None
+    except (ValueError, TypeError) as exc:  # e.g. a Rattlesnake law's file or signature
+        raise _UsageError(f"--method {args.method}: {exc}") from None
+    if resolved.warning:
+        print(
+            _unsupported_warning(
+                args.method, rig.name, rig.defaults.method(args.method).unsupported
+            ),
+            file=sys.stderr,
+        )
+    return resolved
+
+
+def _defaults_line(resolved, rig) -> str:
+    """The header line of the values the resolver filled in (not given on the command line),
+    each with where it came from; the band and method have lines of their own."""
+    parts = []
+    for name, entry in resolved.record().items():
+        if entry["source"] == "caller" or name in ("method", "bandwidth"):
+            continue
+        value = entry["value"]
+        if name == "id_rms":
+            unit = rig.inputs[0].unit
+            value = ", ".join(f"{v:.4g} {unit}" for v in value)
+        elif isinstance(value, list):
+            value = ", ".join(f"{v:g}" for v in value)
+        elif isinstance(value, float):
+            value = f"{value:g}"
+        parts.append(f"{name} {value} ({entry['source']})")
+    return "defaults  " + ("; ".join(parts) or "none: every value given")
 
 
 def _unsupported_warning(method: str, rig_name: str, text: str) -> str:
@@ -658,24 +680,6 @@ def _unsupported_warning(method: str, rig_name: str, text: str) -> str:
         f'here ("{quoted}"); running it anyway (models/<rig>/<rig>.rig.json '
         "reconstruction.methods)"
     )
-
-
-def _method(args, band, rig):
-    """``--method`` and its options as a method object and its description, by the one method
-    vocabulary (:func:`vrig.reconstruction.vocabulary.method_spec`: the rig side-car's defaults,
-    the built-in ones, the ranges); a bad option is a usage error."""
-    from .reconstruction.vocabulary import MethodOptionError, method_spec
-
-    given = {k: getattr(args, k, None) for k in ("order", "degree", "split_hz", "budget")}
-    try:
-        spec = method_spec(
-            args.method, rig=rig, band=band, search=bool(getattr(args, "search", False)), **given
-        )
-    except MethodOptionError as exc:
-        raise _UsageError(exc.cli) from None
-    except (ValueError, TypeError) as exc:  # e.g. a Rattlesnake law's file or signature
-        raise _UsageError(f"--method {args.method}: {exc}") from None
-    return spec.method, spec.description
 
 
 def _method_stem(method: str) -> str:
@@ -842,9 +846,10 @@ def _reconstruct_holding(args, hold: contextlib.ExitStack) -> int:
     _check_reconstruct_args(args)
     status(f"loading rig {args.rig} (building its simulation) ...")
     rig = _load_rig(args.rig, seed=args.seed)
-    extra = _defaults(args, rig)  # the rig side-car's defaults for what the user did not give
-    band = _band(rig, args.band)
-    method, method_text = _method(args, band, rig)
+    resolved = _resolve(args, rig)  # the rig side-car's defaults for what the user did not give
+    band, gain = resolved.settings.bandwidth, resolved.settings.gain
+    args.gain = gain  # (the advice's "a lower --gain")
+    method_text = resolved.description
     default_out = f"{Path(rig.name).stem}-{_method_stem(args.method)}"
     out = _out_dir(args.out, default_out, args.overwrite)
     if args.desired is not None:  # a file: read and check it first
@@ -856,7 +861,8 @@ def _reconstruct_holding(args, hold: contextlib.ExitStack) -> int:
         field, source, records = _read_field(args, rig, band)
     _check_space(out, field, rig, args)
     print(f"rig       {rig.name} (variant {rig.variant}): {rig.description.title}")
-    print(f"method    {method_text}, gain {args.gain:g}, {args.iterations} iterations")
+    print(f"method    {method_text}, gain {gain:g}, {args.iterations} iterations")
+    print(_defaults_line(resolved, rig))
     print(f"band      {band[0]:g}-{band[1]:g} Hz (simulation bandwidth)")
     print(f"desired   {source}", flush=True)
     settings = {
@@ -868,11 +874,14 @@ def _reconstruct_holding(args, hold: contextlib.ExitStack) -> int:
         "iterations": args.iterations,
         "seed": args.seed,
         "desired": source,
-        **{k: v for k, v in extra.items() if k != "id_rms"},
+        "strategy": args.strategy,
+        "tolerance": args.tolerance,
+        "update": resolved.settings.update,
+        **({"id_match": True} if resolved.settings.id_match else {}),
     }
     save = {"field": field, "records": records, "settings": settings}
     try:
-        result = _reconstruct(rig, field, method, band, args, out, save, extra)
+        result = _reconstruct(rig, field, resolved, args, out, save)
     except ReconstructionInterrupted as exc:  # Ctrl-C: keep what was played
         result = exc.result
     with _SIGINT.deferred():  # from here on a Ctrl-C waits until the results are written
@@ -961,26 +970,15 @@ def _check_space(out: Path, field, rig, args) -> None:
         )
 
 
-def _reconstruct(rig, field, method, band, args, out: Path, save: dict, extra: dict):
-    """Run the reconstruction; a failure before IT00 saves what was made and raises
-    :class:`_Failure` (exit code 7). ``extra``: further settings (strategy, tolerance, the rig's
-    identification level) from :func:`_defaults`."""
+def _reconstruct(rig, field, resolved, args, out: Path, save: dict):
+    """Run the reconstruction with the resolved settings (:func:`_resolve`); a failure before
+    IT00 saves what was made and raises :class:`_Failure` (exit code 7)."""
     from .errors import ReconstructionError
     from .progress import is_enabled
-    from .reconstruction import IterationSettings, reconstruct
+    from .reconstruction import reconstruct
 
     try:
-        iteration = IterationSettings(
-            method=method,
-            iterations=args.iterations,
-            gain=args.gain,
-            bandwidth=band,
-            id_seed=args.seed,
-            run_seed=args.seed,
-            update=getattr(args, "update", "none"),
-            **extra,
-        )
-        return reconstruct(rig, field, iteration, progress=is_enabled())
+        return reconstruct(rig, field, resolved, progress=is_enabled())
     except ValueError as exc:  # e.g. a desired record too short for the model: bad input
         raise _UsageError(str(exc)) from exc
     except ReconstructionError as exc:  # nothing played: keep what was made, say what to change

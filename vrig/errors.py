@@ -24,6 +24,7 @@ __all__ = [
     "RigModelError",
     "RigParameterError",
     "SimulationInstabilityError",
+    "UnsupportedMethodWarning",
     "VrigError",
 ]
 
@@ -237,3 +238,10 @@ def _rebuild_reconstruction_error(cls, message: str, state: dict):
     :class:`FolderLockedError` (``__reduce__``): their constructors take keywords, which
     ``pickle`` cannot pass."""
     return cls(message, **state)
+
+
+class UnsupportedMethodWarning(UserWarning):
+    """A method the rig's side-car marks ``unsupported`` (the reference text reports it failing
+    on the rig) runs all the same: a benchmark lets a user see a method do badly. Issued once per
+    engine (:class:`~vrig.reconstruction.DriveIteration`) with the side-car's sentence quoted;
+    ``vrig reconstruct`` prints it as one ``warning:`` line."""

@@ -361,6 +361,7 @@ def _summary(result, rig, fmt: str, files: dict, models: dict, model_note: str, 
         "models": models,
         "model_note": model_note,
         "settings": _plain(dict(settings or {})),
+        "resolved": _plain(dict(getattr(result, "resolved", None) or {})),
         "identification": _plain(getattr(result, "identification", None)),
         "updates": _plain(list(getattr(result, "updates", None) or [])),
     }

@@ -163,22 +163,20 @@ def method_names(*, quick: bool = False) -> list[str]:
 
 
 # ---------------------------------------------------------------------------------------------
-# built-in methods (the four of vrig.reconstruction, with the CLI's default settings)
+# built-in methods (vrig.reconstruction's, resolved as vrig reconstruct resolves them)
 # ---------------------------------------------------------------------------------------------
 def _built(name: str, **options):
-    """A factory of method ``name`` built by the one method vocabulary
-    (:func:`vrig.reconstruction.vocabulary.method_spec`: its built-in defaults, no rig side-car)."""
-    from vrig.reconstruction.vocabulary import method_spec
+    """A factory ``(rig, band) -> method`` of method ``name`` and ``options`` resolved as every
+    door resolves it (:func:`vrig.reconstruction.defaults.resolve`: the options given here, then
+    the rig side-car's method block, then the method class's defaults): the object
+    ``vrig reconstruct --method NAME`` runs on that rig."""
 
-    return lambda: method_spec(name, side_car=False, **options).method
+    def factory(rig, band):
+        from vrig.reconstruction.defaults import resolve
 
+        return resolve(rig, method=name, bandwidth=band, **options).method
 
-def _split(rig, band):
-    """Split spectra at the band's rule (:func:`vrig.reconstruction.defaults.default_split_hz` without the rig's
-    side-car split), inverse ARX(4) per band, by the method vocabulary."""
-    from vrig.reconstruction.vocabulary import method_spec
-
-    return method_spec("split", band=band, side_car=False).method
+    return factory
 
 
 class ForwardFrf:
@@ -226,24 +224,24 @@ class ForwardFrf:
 
 
 def _register_builtins() -> None:
-    register_method("arx", _built("arx"), description="inverse ARX(4), QanTiM", linear=True)
+    register_method("arx", _built("arx"), description="inverse ARX, QanTiM", linear=True)
     register_method(
         "narx",
         _built("narx", kind="full"),
-        description="inverse NARX(4), quadratic, every monomial (full)",
+        description="inverse NARX, every monomial (full)",
         quick=False,  # its free run diverges on most rigs at --quick settings; narx-ip is quick
         linear=False,
     )
     register_method(
         "narx-ip",
         _built("narx", kind="input-polynomial"),
-        description="inverse NARX(4), quadratic, input-polynomial terms (vrig's default)",
+        description="inverse NARX, input-polynomial terms (vrig's default)",
         linear=False,
     )
     register_method(
         "narx-sim",
         _built("narx", kind="full", focus="simulation", selection="simulation"),
-        description="inverse NARX(4), quadratic, terms chosen and refined by free-run error "
+        description="inverse NARX, terms chosen and refined by free-run error "
         "(SEMP, simulation focus)",
         linear=False,
     )
@@ -259,15 +257,16 @@ def _register_builtins() -> None:
     register_method(
         "error-signal",
         _built("error-signal"),
-        description="inverse ARX(3) plus a quadratic input-polynomial NARX(2) of its drive "
-        "error (§5.5.4, Table 6.5)",
+        description="inverse ARX plus an input-polynomial NARX of its drive error (§5.5.4, "
+        "Table 6.5)",
         quick=False,
         linear=False,
     )
     register_method(
         "split",
-        _split,
-        description="split spectra at the band's geometric mean, inverse ARX(4) per band",
+        _built("split"),
+        description="split spectra at the rig's split (side-car, else the band rule), inverse "
+        "ARX per band",
         linear=True,
     )
     register_method(
@@ -289,12 +288,12 @@ def _register_updates() -> None:
         ("arx-secant", "secant", "per-band Broyden (secant) update of the correction"),
         ("arx-ilc", "ilc", "norm-optimal ILC with the identified H1 FRF"),
     ):
-        register_method(name, _built("arx"), description=f"inverse ARX(4), {text}",
+        register_method(name, _built("arx"), description=f"inverse ARX, {text}",
                         quick=False, linear=True, update=update)  # fmt: skip
     register_method(
         "narx-reidentify",
         _built("narx", kind="input-polynomial"),
-        description="inverse NARX(4), quadratic input-polynomial, refitted on identification + "
+        description="inverse NARX, input-polynomial, refitted on identification + "
         "iteration records before every correction",
         quick=False,
         linear=False,

@@ -265,7 +265,9 @@ def leaderboard(records: list[dict], settings: dict | None = None, *, title: str
         lines += [
             f"{len(records)} records ({sum(r['status'] == 'ok' for r in records)} ok). "
             f"Desired responses: pseudo-field records of {s['seconds']:g} s (vrig.field); "
-            f"{s['iterations']} iterations after IT00 at gain {s['gain']:g}; rig fidelity "
+            f"{s['iterations']} iterations after IT00 at "
+            + (f"gain {s['gain']:g}" if s.get("gain") is not None else "each rig's own gain")
+            + "; rig fidelity "
             f"`{s['fidelity']}`; tolerance {s['tolerance']:g} % mean η0; modelling errors on "
             f"the last {100 * s['holdout']:.0f} % of the identification records. η0 is the "
             "DC-corrected QanTiM fit value (eq. 5-28), mean over response channels, lower is "

@@ -21,16 +21,15 @@ import numpy as np
 
 from identification.errors import SimulationDivergedError
 
-from ..errors import RigLimitError, SimulationInstabilityError
+from ..errors import RigLimitError, SimulationInstabilityError, UnsupportedMethodWarning
 from ..field import desired_responses, parse_target
 from ..reconstruction import DriveIteration, IterationSettings
-from ..reconstruction.defaults import default_band
+from ..reconstruction.defaults import resolve
 from ..reconstruction.settings import cache_key
-from ..reconstruction.vocabulary import side_car_options
 from ..rigs import load_rig
 from ..timehistory import TimeHistory
 
-__all__ = ["IterationPhysics", "clear_model_cache", "rig_settings"]
+__all__ = ["IterationPhysics", "clear_model_cache"]
 
 _CACHE_SIZE = 16
 _FIELD_CACHE_SIZE = 256  # desired records per physics (a 20 s SISO record is 80 kB)
@@ -42,52 +41,16 @@ def clear_model_cache() -> None:
     _MODELS.clear()
 
 
-def rig_settings(rig, settings: IterationSettings, band) -> IterationSettings:
-    """``settings`` with the rig's own defaults for its method where the caller gave none: the
-    side-car's ``reconstruction.methods.METHOD`` options (``order``, ``degree``, ``focus``,
-    ``split_hz``; a key of ``settings.method_options`` wins) and identification level
-    (``id_rms``, a fraction of each drive's full scale, else the rig's ``id_rms``; used unless
-    ``settings.id_rms`` is set), as ``vrig reconstruct`` takes them. The iteration gain is not
-    taken (the env's actions are the gains); the band is :func:`vrig.reconstruction.defaults.default_band`'s.
-
-    Parameters
-    ----------
-    rig : Rig
-        The rig; one without ``defaults`` (not built from a side-car) or a method given as an
-        object leaves ``settings`` unchanged.
-    settings : IterationSettings
-        The caller's settings.
-    band : (float, float)
-        The simulation band [Hz] (the default split frequency of ``split`` derives from it).
-
-    Warns
-    -----
-    UserWarning
-        The side-car marks the method ``unsupported`` on this rig (the reference text reports
-        it failing there): one line quoting the side-car; the method runs all the same, with
-        its defaults.
-    """
-    defaults = getattr(rig, "defaults", None)
-    name = settings.method
-    if defaults is None or not isinstance(name, str):
-        return settings
-    m = defaults.method(name)
-    if m.unsupported:
-        quoted = " ".join(str(m.unsupported).split())
+def _env_warning(resolved, rig) -> None:
+    """The one-line warning of a method the rig's side-car marks ``unsupported`` (the resolver's
+    text, and the env's default method on the rig)."""
+    if resolved.warning:
+        default = getattr(getattr(rig, "defaults", None), "gym_method", None) or "arx"
         warnings.warn(
-            f"method {name!r} on rig {getattr(rig, 'name', rig)!r}: the reference text reports "
-            f'it failing here ("{quoted}"; its side-car\'s reconstruction.methods.{name}); '
-            f"running it anyway (the env's default method on this rig: "
-            f"{defaults.gym_method or 'arx'!r})",
-            UserWarning,
-            stacklevel=2,
+            f"{resolved.warning} (the env's default method on this rig: {default!r})",
+            UnsupportedMethodWarning,
+            stacklevel=3,
         )
-    options = {**side_car_options(name, rig, band), **settings.method_options}
-    changes = {"method_options": options}
-    level = m.id_rms if m.id_rms is not None else defaults.id_rms
-    if settings.id_rms is None and level is not None:
-        changes["id_rms"] = tuple(float(level * c.full_scale) for c in rig.inputs)
-    return settings.replace(**changes)
 
 
 class IterationPhysics:
@@ -103,9 +66,11 @@ class IterationPhysics:
         decimation, taper, ``id_seed``); the band defaults to :func:`vrig.reconstruction.defaults.default_band` and
         ``id_duration`` to ``seconds``. ``id_seed`` is fixed for the life of the physics, so every
         episode reuses the same identified model; the run seed is per episode (:meth:`start`).
-        The rig's side-car defaults for the method (options, identification level) fill what
-        the settings leave unset (:func:`rig_settings`); a method the side-car marks
-        ``unsupported`` runs after a one-line ``UserWarning`` quoting the side-car.
+        Resolved by :func:`vrig.reconstruction.defaults.resolve` as every door resolves them
+        (the caller's values, then the rig side-car's method options, band and identification
+        level, then the built-in defaults; the gain is the env's action, not a setting); a method
+        the side-car marks ``unsupported`` runs after a one-line
+        :class:`~vrig.errors.UnsupportedMethodWarning` quoting the side-car.
     seconds : float
         Length of the desired responses [s].
     fidelity : {"full", "fast"}
@@ -151,11 +116,12 @@ class IterationPhysics:
         if "model_seed" in options:
             options["id_seed"] = options.pop("model_seed")
         settings = IterationSettings.build(settings, **options)
-        band = tuple(float(b) for b in (settings.bandwidth or default_band(self.rig)))
-        settings = rig_settings(self.rig, settings, band)
-        duration = settings.id_duration if settings.id_duration is not None else float(seconds)
-        self.settings = settings.replace(bandwidth=band, id_duration=float(duration))
-        self.band = band
+        if settings.id_duration is None:
+            settings = settings.replace(id_duration=float(seconds))
+        self.resolved = resolve(self.rig, settings)  # the one resolver, as every door
+        _env_warning(self.resolved, self.rig)
+        self.settings = self.resolved.settings
+        self.band = self.settings.bandwidth
         self.seconds = float(seconds)
         kind, scenario = parse_target(self.rig, target)
         self.target = kind if scenario is None else f"{kind}:{scenario}"
@@ -284,7 +250,7 @@ class IterationPhysics:
             stays the physics' own (the inverse model is identified once, then copied from the
             cache).
         """
-        engine = DriveIteration(self.rig, desired, self.settings.replace(run_seed=int(run_seed)))
+        engine = DriveIteration(self.rig, desired, self.resolved.replace(run_seed=int(run_seed)))
         key = self._key
         if self.settings.id_match:  # the model depends on the target too: one per target
             key = (*key, hashlib.sha256(np.ascontiguousarray(desired.data).tobytes()).hexdigest())

@@ -8,31 +8,31 @@ environments drive the same engine a step at a time.
 
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 from scipy import signal
 from scipy.signal import windows
 
 from identification.errors import SimulationDivergedError
 
-from ..errors import RigLimitError, SimulationInstabilityError
+from ..errors import RigLimitError, SimulationInstabilityError, UnsupportedMethodWarning
 from ..processing import band_gains, decimate, gprepro, identification_band
 from ..progress import status
 from ..rigs.limits import check_drive_limits
-from ..signals import random_drive, triangular_psd
 from ..timehistory import TimeHistory
-from .defaults import default_band
+from .defaults import BUILT_IN, CALLER, DEFAULT_ID_RMS_FRACTION, ResolvedSettings, resolve
+from .id_drive import identification_run
 from .matching import identify_matched, level_ratios
 from .methods import make_method
 from .protocol import ObservingMethod
 from .scores import pseudo_damages, scores
 from .settings import IterationSettings
 from .updates import make_update
-from .vocabulary import method_spec
 
 __all__ = ["DriveIteration", "play_batch"]
 
 _PLAY_ERRORS = (RigLimitError, SimulationInstabilityError, SimulationDivergedError)
-_ID_ATTEMPTS = 11  # the default identification level halved up to ten times: 1/1024 (60 dB)
 """What :func:`play_batch` returns in a drive's slot (what :meth:`DriveIteration.play` raises
 for a drive the rig refuses, trips on or cannot simulate)."""
 
@@ -57,7 +57,7 @@ def _check_band(band, fs: float) -> tuple[float, float]:
 
 def _check_id_rms(id_rms, full: np.ndarray) -> np.ndarray:
     """Identification drive RMS per channel: finite, > 0 and at most the full scale."""
-    rms = np.asarray(id_rms if id_rms is not None else 0.05 * full, float)
+    rms = np.asarray(id_rms, float)
     try:
         rms = np.broadcast_to(rms, full.shape)
     except ValueError:
@@ -120,6 +120,15 @@ def _extrapolation_note(method, peak_ratio, names) -> str | None:
     )
 
 
+def _level_reason(source: str) -> str:
+    """Why the identification drive has its level, from where the resolver took ``id_rms``."""
+    if source == CALLER:
+        return "the given id_rms"
+    if source == BUILT_IN:
+        return f"the default level ({100 * DEFAULT_ID_RMS_FRACTION:g} % of full scale rms)"
+    return f"the rig's own level ({source}.id_rms)"
+
+
 class DriveIteration:
     """One reconstruction, step by step: the engine of :func:`reconstruct` and of the gymnasium
     environments (so a policy's fixed gain reproduces ``reconstruct`` exactly).
@@ -142,11 +151,13 @@ class DriveIteration:
         The rig (:class:`~vrig.rigs.Rig` protocol).
     desired : TimeHistory
         The desired response (DESRES before processing), the rig's outputs at ``rig.fs``.
-    settings : IterationSettings, optional
-        The iteration's settings (default: the defaults); the engine uses the identification
-        ones and ``id_seed`` / ``run_seed``, the loop's (gain, iterations, ...) are the caller's.
-        Method ``"split"`` without a ``split_hz`` option splits at
-        :func:`vrig.reconstruction.defaults.default_split_hz` (the rig side-car's split, else the band's rule).
+    settings : IterationSettings or ResolvedSettings, optional
+        The iteration's settings (default: the defaults), resolved here by the one resolver
+        (:func:`vrig.reconstruction.defaults.resolve`: the caller's values, then the rig
+        side-car's, then the built-in defaults; kept in :attr:`resolved`, the filled-in settings
+        in :attr:`settings`); settings resolved already (a ``ResolvedSettings``) are used as they
+        are. The engine uses the identification ones and ``id_seed`` / ``run_seed``, the loop's
+        (gain, iterations, ...) are :func:`reconstruct`'s.
     **options
         Settings by name applied on top of ``settings`` (see :meth:`IterationSettings.build`).
     """
@@ -166,21 +177,25 @@ class DriveIteration:
             raise ValueError(
                 f"desired has {desired.n_channels} channels, the rig {len(rig.outputs)} responses"
             )
-        s = self.settings = IterationSettings.build(settings, **options)
+        if isinstance(settings, ResolvedSettings) and not options:
+            resolved = settings  # resolved by the caller (it said any warning)
+        else:
+            resolved = resolve(rig, settings, **options)  # the one resolver
+            if resolved.warning:
+                warnings.warn(resolved.warning, UnsupportedMethodWarning, stacklevel=2)
+        self.resolved = resolved
+        s = self.settings = resolved.settings
         self.rig = rig
-        band = s.bandwidth if s.bandwidth is not None else default_band(rig)  # side-car's
-        self.band = _check_band(band, rig.fs)
+        self.band = _check_band(s.bandwidth, rig.fs)
         self.id_band = identification_band(self.band, fs=rig.fs)
-        # the one method vocabulary; split without split_hz: the rig's split, else the band's
-        spec = method_spec(s.method, rig=rig, band=self.band, side_car=False, **s.method_options)
-        self.method = spec.method
+        self.method = resolved.method
         self.decimation = (
             max(1, int(rig.fs // (8 * self.id_band[1]))) if s.decimation is None else s.decimation
         )
         self.taper = float(s.taper)
         self.n_inputs = len(rig.inputs)
         full = np.array([c.full_scale for c in rig.inputs])
-        self.id_rms = _check_id_rms(s.id_rms, full)
+        self.id_rms = _check_id_rms(s.id_rms, full)  # resolved: never None here
         self.id_psd = s.id_psd
         self.id_samples = round((s.id_duration or desired.duration) * rig.fs)
         self.desres = gprepro(desired, self.band)
@@ -252,42 +267,21 @@ class DriveIteration:
         self._fit(iddrv, idres)
 
     def _identify_default(self) -> tuple[TimeHistory, TimeHistory]:
-        """The default IDDRV and IDRES (see :meth:`identify`); fills ``id_report``."""
-        rig, rms = self.rig, self.id_rms
-        shape = self.id_psd
-        if shape is None:
-            shape = triangular_psd((max(self.id_band[0], 0.0), self.id_band[1]))
-        for attempt in range(_ID_ATTEMPTS):
-            level = 100 * np.max(rms / [c.full_scale for c in rig.inputs])
-            status(
-                f"identifying: IDDRV {self.id_samples / rig.fs:g} s ({level:.3g} % of full "
-                f"scale rms{f', halved {attempt}x' if attempt else ''}) -> {rig.name}"
-            )
-            iddrv = random_drive(
-                shape,
-                self.id_samples,
-                rig.fs,
-                channels=self.n_inputs,
-                rms=rms,
-                seed=self.settings.id_seed,
-                names=self.names,
-                unit=rig.inputs[0].unit,
-            )
-            try:
-                _, idres = self._send(
-                    iddrv, "ID", "the identification drive", self.settings.id_seed
-                )
-                break
-            except RigLimitError as exc:  # halve the amplitude and try again
-                rms, last_trip = rms / 2, exc
-        else:
-            raise last_trip  # even at 1/1024 of the amplitude the identification drive trips
-        given = self.settings.id_rms is not None
+        """The default IDDRV and IDRES (see :meth:`identify`; the one identification drive,
+        :func:`~vrig.reconstruction.id_drive.identification_run`); fills ``id_report``."""
+        rig, seed = self.rig, self.settings.id_seed
+        run = identification_run(
+            rig, self.band, self.id_samples, self.id_rms, seed=seed, psd=self.id_psd,
+            send=lambda drive: self._send(drive, "ID", "the identification drive", seed),
+        )  # fmt: skip
+        iddrv, idres, rms, attempt, last_trip = (
+            run.drive, run.response, run.rms, run.halvings, run.last_trip,
+        )  # fmt: skip
         self.id_report = {
             "mode": "default",
             "rms_percent": (100 * rms / [c.full_scale for c in rig.inputs]).tolist(),
             **level_ratios(self.desres, gprepro(idres, self.band)),
-            "reason": "the given id_rms" if given else "the default level (5 % of full scale rms)",
+            "reason": _level_reason(self.resolved.sources.get("id_rms", CALLER)),
         }
         if attempt:
             self.id_report["reason"] += f", halved {attempt}x after interlock trips ({last_trip})"
@@ -444,7 +438,11 @@ class DriveIteration:
 
     def _play_names(self, iteration: int) -> tuple[str, str, int]:
         """(tag ``xx``, record name ``ITxxDRV``, rig run seed ``run_seed + 1 + xx``)."""
-        return f"{iteration:02d}", f"IT{iteration:02d}DRV", self.settings.rig_run_seed + 1 + iteration
+        return (
+            f"{iteration:02d}",
+            f"IT{iteration:02d}DRV",
+            self.settings.rig_run_seed + 1 + iteration,
+        )
 
     def _processed(self, drv: TimeHistory, raw: TimeHistory):
         """(ITxxDRV, RITxxRES, ITxxRES, scores) of a played drive (see :meth:`play`); the

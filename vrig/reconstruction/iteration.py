@@ -116,9 +116,9 @@ def reconstruct(
 
 def _reconstruct(rig, desired, settings, progress: bool, options) -> ReconstructionResult:
     """:func:`reconstruct`'s body (progress switched on or off by the caller)."""
-    settings = IterationSettings.build(settings, **options)
+    engine = DriveIteration(rig, desired, settings, **options)  # resolves every default
+    settings = engine.settings
     gain = settings.gains_for(len(rig.inputs))
-    engine = DriveIteration(rig, desired, settings)
     engine.check_desired()  # ValueError before anything is played
     result = ReconstructionResult(
         desired=engine.desres,
@@ -135,6 +135,7 @@ def _reconstruct(rig, desired, settings, progress: bool, options) -> Reconstruct
         strategy=settings.strategy,
         seed=settings.id_seed,
         settings=settings,
+        resolved=engine.resolved.record(),
         updates=engine.update_log,  # the rule's own list: filled as the loop runs
     )
     bar = None

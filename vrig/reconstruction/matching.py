@@ -48,6 +48,7 @@ from ..progress import status
 from ..signals import random_drive, triangular_psd
 from ..spectra import frf_h1, matched_drive_psd, psd_function, spectral_matrix
 from ..timehistory import TimeHistory
+from .id_drive import identification_run
 
 __all__ = [
     "FLOOR",
@@ -243,31 +244,16 @@ def identify_matched(engine) -> tuple[TimeHistory, TimeHistory, MatchedIdentific
 
 
 def _probe(engine, nperseg: int) -> tuple[TimeHistory, TimeHistory]:
-    """The broadband probe (triangular over the identification band, at ``engine.id_rms``,
-    halved while the rig trips on it) and the rig's raw response."""
-    rig, rms = engine.rig, engine.id_rms
-    n = PROBE_SEGMENTS * nperseg
-    shape = triangular_psd((max(engine.id_band[0], 0.0), engine.id_band[1]))
-    for attempt in range(_MAX_HALVINGS + 1):
-        status(
-            f"identifying (matched): probe {n / rig.fs:g} s at {_percent(rms, rig).max():.3g} % "
-            f"of full scale rms{f', halved {attempt}x' if attempt else ''} -> {rig.name}"
-        )
-        drive = random_drive(
-            shape,
-            n,
-            rig.fs,
-            channels=engine.n_inputs,
-            rms=rms,
-            seed=np.random.default_rng([engine.settings.id_seed, _PROBE_SEED]),
-            names=engine.names,
-            unit=rig.inputs[0].unit,
-        )
-        try:
-            return engine._send(drive, "ID", "the identification probe", engine.settings.id_seed)
-        except RigLimitError as exc:
-            rms, last = rms / 2, exc
-    raise last
+    """The broadband probe (the identification drive, :func:`~vrig.reconstruction.id_drive.
+    identification_run`, over the identification band at ``engine.id_rms``, halved while the rig
+    trips on it) and the rig's raw response."""
+    seed = engine.settings.id_seed
+    run = identification_run(
+        engine.rig, engine.band, PROBE_SEGMENTS * nperseg, engine.id_rms,
+        seed=[seed, _PROBE_SEED], attempts=_MAX_HALVINGS + 1, label="matched probe",
+        send=lambda drive: engine._send(drive, "ID", "the identification probe", seed),
+    )  # fmt: skip
+    return run.drive, run.response
 
 
 def _percent(x, rig) -> np.ndarray:

@@ -440,8 +440,8 @@ class SplitSpectra:
         if not (isinstance(split_hz, (int, float, np.number)) and 0 < split_hz < np.inf):
             raise ValueError(f"split_hz must be a finite frequency > 0 Hz, got {split_hz!r}")
         self.split_hz = split_hz
-        self.low = low or InverseArx(4)
-        self.high = high or InverseArx(4)
+        self.low = low or InverseArx()
+        self.high = high or InverseArx()
         self.low_responses = _names(low_responses, "low_responses")
         self.high_responses = _names(high_responses, "high_responses")
 

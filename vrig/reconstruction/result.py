@@ -87,7 +87,13 @@ class ReconstructionResult:
         The model decimation used, the gain per drive channel, the strategy and the
         identification seed (``settings.id_seed``).
     settings : IterationSettings
-        Everything the reconstruction was run with.
+        Everything the reconstruction was run with, every default resolved
+        (:func:`vrig.reconstruction.defaults.resolve`).
+    resolved : dict
+        Each value the defaults resolver filled in and where it came from,
+        ``{name: {"value": ..., "source": ...}}`` (:meth:`vrig.reconstruction.defaults.
+        ResolvedSettings.record`: the source ``"caller"``, the side-car's method or rig block, or
+        ``"built-in"``); ``summary.json`` keeps it as ``resolved``.
     identification : dict or None
         Which identification level was used and why (``DriveIteration.id_report``: the mode,
         default or matched to the target, the drive level in % of full scale, the
@@ -119,6 +125,7 @@ class ReconstructionResult:
     strategy: str = "fixed"
     seed: int = 0
     settings: IterationSettings | None = None
+    resolved: dict = field(default_factory=dict)
     error: BaseException | None = None
     rejected_name: str = ""
     rejected_drive: TimeHistory | None = None

@@ -71,20 +71,24 @@ class IterationSettings:
     method_options : mapping
         Options of a named method (``order``, ``degree``, ``split_hz``, ...); stored read-only.
     iterations : int
-        Correction iterations after IT00 (0 .. :data:`MAX_ITERATIONS`).
-    gain : float or sequence of float
-        Iteration gain in (0, 2], one value or one per drive channel.
+        Correction iterations after IT00 (0 .. :data:`MAX_ITERATIONS`; default 5).
+    gain : float or sequence of float, optional
+        Iteration gain in (0, 2], one value or one per drive channel (default None: the rig
+        side-car's, else :data:`vrig.reconstruction.defaults.DEFAULT_GAIN`, applied by
+        :func:`vrig.reconstruction.defaults.resolve`).
     strategy : {"fixed", "adaptive"}
         See :data:`STRATEGIES`.
     bandwidth : (low, high) Hz, optional
-        Simulation band applied to every record (default: :func:`vrig.reconstruction.defaults.default_band`, the
-        rig side-car's ``reconstruction.band`` where it names one, else the rig's test band
-        ``rig.bandwidth`` -- the band the CLI, the pseudo-field responses and the envs use).
+        Simulation band applied to every record (default: the rig side-car's
+        ``reconstruction.band`` where it names one, else the rig's test band ``rig.bandwidth``:
+        :func:`vrig.reconstruction.defaults.default_band`).
     id_duration : float, optional
         Identification drive length [s] (default: the desired record's).
     id_rms : float or sequence of float, optional
-        Identification drive RMS per drive channel, in the drive's unit (default: 5 % of full
-        scale, halved until the rig accepts it).
+        Identification drive RMS per drive channel, in the drive's unit (default: the rig
+        side-car's fraction of full scale, else
+        :data:`~vrig.reconstruction.defaults.DEFAULT_ID_RMS_FRACTION`; halved until the rig
+        accepts it).
     id_psd : callable or list of callables, optional
         PSD shape of the identification drive (default: triangular over the identification band).
     id_match : bool
@@ -131,8 +135,8 @@ class IterationSettings:
 
     method: Any = "arx"
     method_options: Mapping[str, Any] = field(default_factory=dict)
-    iterations: int = 8
-    gain: float | tuple[float, ...] = 0.8
+    iterations: int = 5
+    gain: float | tuple[float, ...] | None = None
     strategy: str = "fixed"
     bandwidth: tuple[float, float] | None = None
     id_duration: float | None = None
@@ -186,17 +190,8 @@ class IterationSettings:
             raise ValueError(
                 f"tolerance must be a finite η0 > 0 [%] (or None: no tolerance stop), got {tol!r}"
             )
-        try:
-            gain = np.asarray(self.gain)
-            if gain.dtype.kind == "c":  # never drop an imaginary part silently
-                raise TypeError
-            gain = gain.astype(float)
-        except (TypeError, ValueError):
-            raise ValueError(
-                f"gain must be a real number or one per drive channel, got {self.gain!r}"
-            ) from None
-        if gain.ndim > 1 or np.any(~np.isfinite(gain)) or np.any(gain <= 0) or np.any(gain > 2):
-            raise ValueError(f"gain must lie in (0, 2], got {gain}")
+        if self.gain is not None:
+            self._check_gain()
         d = self.decimation
         if d is not None and (not isinstance(d, (int, np.integer)) or isinstance(d, bool) or d < 1):
             raise ValueError(f"decimation must be a positive integer, got {d!r}")
@@ -220,6 +215,19 @@ class IterationSettings:
         if self.run_seed is not None:
             _check_seed(self.run_seed, "run_seed")
         self._check_update()
+
+    def _check_gain(self) -> None:
+        try:
+            gain = np.asarray(self.gain)
+            if gain.dtype.kind == "c":  # never drop an imaginary part silently
+                raise TypeError
+            gain = gain.astype(float)
+        except (TypeError, ValueError):
+            raise ValueError(
+                f"gain must be a real number or one per drive channel, got {self.gain!r}"
+            ) from None
+        if gain.ndim > 1 or np.any(~np.isfinite(gain)) or np.any(gain <= 0) or np.any(gain > 2):
+            raise ValueError(f"gain must lie in (0, 2], got {gain}")
 
     def _check_update(self) -> None:
         """``update`` one of :data:`UPDATES`, its options known and in range."""
@@ -302,7 +310,14 @@ class IterationSettings:
         Returns
         -------
         ndarray (n_inputs,)
+
+        Raises
+        ------
+        ValueError
+            ``gain`` is None: not resolved yet (:func:`vrig.reconstruction.defaults.resolve`).
         """
+        if self.gain is None:
+            raise ValueError("gain is not resolved: vrig.reconstruction.defaults.resolve first")
         return np.broadcast_to(np.asarray(self.gain, dtype=float), (n_inputs,)).copy()
 
     def identification_key(self) -> tuple:

@@ -7,27 +7,26 @@ and the method options of :class:`~vrig.reconstruction.IterationSettings`), the 
 (:func:`vrig.envs.physics.rig_settings`) and the benchmark runner's built-in methods all build
 their methods with :func:`method_spec`.
 
-The vocabulary's own options, shared by the methods that take them (None: not given):
+The vocabulary's own options, shared by the methods that take them (None: not given); their
+defaults are the method classes' own (:mod:`vrig.reconstruction.defaults`: the precedence):
 
 =============  ===========================================  ==========================================
-option         methods                                      default
+option         methods                                      range
 =============  ===========================================  ==========================================
-``order``      arx, narx, split (both bands), error-signal  4; error-signal 3 (its inverse ARX's order,
-               (``linear_order``)                           ``linear_order``); range 1..20
-``degree``     narx, split (a NARX low band), error-signal  2 (split: none, an ARX low band); 1..5
-``focus``      narx, error-signal                           ``"prediction"``
-``split_hz``   split                                        :func:`vrig.reconstruction.defaults.default_split_hz`
-                                                            (the side-car's split, else the band's
-                                                            rule); inside the band
-``search``     narx                                         False
-``budget``     narx with ``search``                         60 s; > 0
+``order``      arx, narx, split (both bands), error-signal  1..20
+               (``linear_order``)
+``degree``     narx, split (a NARX low band), error-signal  1..5
+``focus``      narx, error-signal                           ``"prediction"`` or ``"simulation"``
+``split_hz``   split                                        inside the band
+``search``     narx                                         True or False
+``budget``     narx with ``search``                         > 0 s
 =============  ===========================================  ==========================================
 
-Layers, first wins: what the caller gives, the rig side-car's
-``reconstruction.methods.METHOD`` (:class:`~vrig.rigs.spec.MethodDefaults`: ``order``,
-``degree``, ``focus``, ``split_hz``; only where the method takes the option), the built-in
-defaults above. Any other option is the method class's own keyword argument (``kind``, ``lead``,
-``nperseg``, ``low``/``high`` band methods ...) and goes to it unchanged
+:func:`method_spec` builds a method from what it is given; the rig side-car's method block and the
+built-in defaults are applied before, by :func:`vrig.reconstruction.defaults.resolve` (the one
+resolver every door uses), which reads the side-car's values with :func:`side_car_vocabulary`.
+Any other option is the method class's own keyword argument (``kind``, ``lead``, ``nperseg``,
+``low``/``high`` band methods ...) and goes to it unchanged
 (:func:`~vrig.reconstruction.make_method` refuses one it does not take).
 
 A name ``"rattlesnake:<file.py>:<name>"`` is a control law written to Sandia Rattlesnake's
@@ -42,7 +41,6 @@ from types import MappingProxyType
 from typing import Any
 
 from ..errors import VrigError
-from .defaults import default_split_hz
 from .methods import InverseArx, InverseNarx, make_method
 
 __all__ = [
@@ -52,7 +50,7 @@ __all__ = [
     "MethodSpec",
     "is_method_name",
     "method_spec",
-    "side_car_options",
+    "side_car_vocabulary",
 ]
 
 BUILTIN_METHODS = ("arx", "narx", "split", "frf", "error-signal")
@@ -63,7 +61,6 @@ RATTLESNAKE_PREFIX = "rattlesnake:"
 
 ORDER_RANGE = (1, 20)
 DEGREE_RANGE = (1, 5)
-DEFAULT_BUDGET_S = 60.0
 _VOCABULARY = ("order", "degree", "focus", "split_hz", "search", "budget")
 _TAKES = {  # the vocabulary options each built-in method takes
     "arx": {"order"},
@@ -131,36 +128,38 @@ def is_method_name(name) -> bool:
     )
 
 
-def side_car_options(name: str, rig, band) -> dict:
-    """The rig side-car's defaults for method ``name`` as keyword arguments of its class (what
-    :func:`vrig.envs.physics.rig_settings` puts into ``method_options``): ``order`` (error-signal:
-    ``linear_order``), ``degree``, ``focus``, and for ``split`` its ``split_hz`` (the side-car's,
-    else :func:`vrig.reconstruction.defaults.default_split_hz`'s band rule, always given) and, when the side-car
-    sets an order or degree, the band methods ``low`` / ``high``. Only options the method takes;
-    the built-in defaults are left to the class.
+def side_car_vocabulary(name: str, rig) -> dict:
+    """The rig side-car's vocabulary options for method ``name`` (``reconstruction.methods.NAME``:
+    ``order``, ``degree``, ``focus``, ``split_hz``), only those the method takes and the side-car
+    sets (``{}`` without a side-car or for a name outside :data:`BUILTIN_METHODS`).
 
     Parameters
     ----------
     name : str
         The method name.
     rig : Rig or None
-        The rig; one without ``defaults`` gives the band rule's split only.
-    band : (float, float)
-        The simulation band [Hz].
+        The rig (``rig.defaults``, :class:`~vrig.rigs.spec.RigDefaults`).
 
     Returns
     -------
     dict
     """
-    vocab = _side_car(name, rig)
-    if name == "split":
-        vocab.setdefault("split_hz", float(default_split_hz(band, rig)))
-    return _class_options(name, vocab, {}, defaults=False)
+    defaults = getattr(rig, "defaults", None)
+    if defaults is None or name not in _TAKES:
+        return {}
+    m = defaults.method(name)
+    return {
+        k: getattr(m, k)
+        for k in ("order", "degree", "focus", "split_hz")
+        if k in _TAKES[name] and getattr(m, k) is not None
+    }
 
 
-def method_spec(name, *, rig=None, band=None, side_car: bool = True, **given) -> MethodSpec:
-    """The method object for ``name`` and options, with its description (see the module
-    docstring for the vocabulary and its layers).
+def method_spec(name, *, rig=None, band=None, **given) -> MethodSpec:
+    """The method object for ``name`` and the options given, with its description (see the
+    module docstring for the vocabulary). No default is applied here: an option not given is the
+    method class's own default (:func:`vrig.reconstruction.defaults.resolve` applies the rig
+    side-car's first).
 
     Parameters
     ----------
@@ -168,14 +167,9 @@ def method_spec(name, *, rig=None, band=None, side_car: bool = True, **given) ->
         A name of :data:`BUILTIN_METHODS`, ``"rattlesnake:<file.py>:<name>"``, or an object with
         ``identify`` and ``drive`` (returned as it is; no options then).
     rig : Rig, optional
-        The rig: its side-car's defaults for the method (``side_car=True``) and its split
-        frequency (:func:`vrig.reconstruction.defaults.default_split_hz`).
+        Unused by the options (kept for the description of a split's source); may be None.
     band : (float, float), optional
-        The simulation band [Hz]; ``split`` needs it (or ``split_hz``), and checks its split lies
-        inside it.
-    side_car : bool, optional
-        Apply the side-car's ``order``, ``degree``, ``focus`` and ``split_hz`` (default). False:
-        only the split frequency rule, as :func:`vrig.reconstruct` does.
+        The simulation band [Hz]: a ``split_hz`` must lie inside it.
     **given
         Options: the vocabulary's (None: not given) and the method class's own.
 
@@ -188,7 +182,8 @@ def method_spec(name, *, rig=None, band=None, side_car: bool = True, **given) ->
     MethodOptionError
         A vocabulary option the method does not take, or one outside its range.
     ValueError
-        An unknown method name, or an option the method class does not take.
+        An unknown method name, an option the method class does not take, or ``split``
+        without ``split_hz``.
     """
     if not isinstance(name, str):
         method = make_method(name, **given)
@@ -200,29 +195,15 @@ def method_spec(name, *, rig=None, band=None, side_car: bool = True, **given) ->
     if name not in _TAKES:
         make_method(name)  # the unknown-name error of make_method
     _check_applies(name, vocab)
-    if side_car:
-        vocab = {**_side_car(name, rig), **vocab}
     if name == "split" and "split_hz" not in vocab:
-        if band is None:
-            raise ValueError("method 'split' needs split_hz, or a band to derive it from")
-        vocab["split_hz"] = float(default_split_hz(band, rig))
+        raise ValueError(
+            "method 'split' needs split_hz (vrig.reconstruction.defaults.resolve gives the rig's "
+            "or the band rule's)"
+        )
     _check_ranges(vocab, band if name == "split" else None)
-    options = _class_options(name, vocab, given, defaults=True)
-    return MethodSpec(make_method(name, **options), _describe(name, options), options)
-
-
-def _side_car(name: str, rig) -> dict:
-    """The side-car's vocabulary options for ``name`` that the method takes (``{}`` without a
-    side-car)."""
-    defaults = getattr(rig, "defaults", None)
-    if defaults is None or name not in _TAKES:
-        return {}
-    m = defaults.method(name)
-    return {
-        k: getattr(m, k)
-        for k in ("order", "degree", "focus", "split_hz")
-        if k in _TAKES[name] and getattr(m, k) is not None
-    }
+    options = _class_options(name, vocab, given)
+    method = make_method(name, **options)
+    return MethodSpec(method, _describe(name, method), options)
 
 
 def _say(message: str, *, cli: str) -> MethodOptionError:
@@ -274,12 +255,11 @@ def _check_ranges(vocab: dict, band) -> None:
             raise _say(f"split_hz {text}", cli=f"--split-hz {text}")
 
 
-def _class_options(name: str, vocab: dict, rest: dict, *, defaults: bool) -> dict:
-    """The method class's keyword arguments from the vocabulary options ``vocab`` (with the
-    built-in defaults when ``defaults``) and the class's own options ``rest``."""
+def _class_options(name: str, vocab: dict, rest: dict) -> dict:
+    """The method class's keyword arguments from the vocabulary options ``vocab`` given and the
+    class's own options ``rest`` (nothing given: the class's own defaults)."""
     out = dict(rest)
-    order = vocab.get("order", (3 if name == "error-signal" else 4) if defaults else None)
-    degree = vocab.get("degree", 2 if defaults and name != "split" else None)
+    order, degree = vocab.get("order"), vocab.get("degree")
     if name in ("arx", "narx") and order is not None:
         out["order"] = order
     if name == "error-signal":
@@ -293,45 +273,46 @@ def _class_options(name: str, vocab: dict, rest: dict, *, defaults: bool) -> dic
         if "focus" in vocab and not vocab.get("search"):
             out["focus"] = vocab["focus"]
     if name == "narx" and vocab.get("search"):
-        out.update(search=True, budget=float(vocab.get("budget", DEFAULT_BUDGET_S)))
+        out["search"] = True
+        if "budget" in vocab:
+            out["budget"] = float(vocab["budget"])
     if name == "split":
         out["split_hz"] = float(vocab["split_hz"])
-        if "low" not in rest and "high" not in rest and (defaults or order or degree):
-            order = 4 if order is None else order
-            out["low"] = InverseNarx(order, degree) if degree else InverseArx(order)
-            out["high"] = InverseArx(order)
+        if "low" not in rest and "high" not in rest and (order or degree):
+            band_order = {} if order is None else {"order": order}
+            out["low"] = (
+                InverseNarx(degree=degree, **band_order) if degree else InverseArx(**band_order)
+            )
+            out["high"] = InverseArx(**band_order)
     return out
 
 
-def _describe(name: str, options: dict) -> str:
-    """The one-line description of a built-in method from its class options."""
-    fit = (
-        "" if options.get("focus", "prediction") == "prediction" else f", {options['focus']} focus"
-    )
+def _describe(name: str, method) -> str:
+    """The one-line description of a built-in method, read from the built object."""
+    focus = getattr(method, "focus", "prediction")
+    fit = "" if focus == "prediction" else f", {focus} focus"
     if name == "arx":
-        return f"arx order {options.get('order', 4)}"
+        return f"arx order {method.order}"
     if name == "narx":
-        order, degree = options.get("order", 4), options.get("degree", 2)
-        if options.get("search"):
+        if getattr(method, "search", False):
             return (
-                f"narx searched by free-run validation (orders up to {2 * order}, degrees "
-                f"1..{degree}, budget {options['budget']:g} s)"
+                f"narx searched by free-run validation (orders up to {2 * method.order}, degrees "
+                f"1..{method.degree}, budget {method.budget:g} s)"
             )
-        return f"narx order {order} degree {degree}{fit}"
+        return f"narx order {method.order} degree {method.degree}{fit}"
     if name == "split":
-        return f"split spectra at {options['split_hz']:g} Hz ({_bands(options)})"
+        return f"split spectra at {method.split_hz:g} Hz ({_bands(method)})"
     if name == "error-signal":
         return (
-            f"error-signal (arx order {options.get('linear_order', 3)} + narx order "
-            f"{options.get('nonlinear_order', 2)} degree {options.get('degree', 2)} of its drive "
-            f"error{fit})"
+            f"error-signal (arx order {method.linear_order} + narx order "
+            f"{method.nonlinear_order} degree {method.degree} of its drive error{fit})"
         )
     return "frf (H1, truncated-SVD/Tikhonov inverse)"
 
 
-def _bands(options: dict) -> str:
+def _bands(method) -> str:
     """``low ... order n, high arx order n`` of a split method's band methods."""
-    low, high = options.get("low"), options.get("high")
+    low, high = method.low, method.high
     parts = []
     for part, band in (("low", low), ("high", high)):
         if isinstance(band, InverseNarx):
