@@ -461,13 +461,13 @@ HAVE_ROADS = importlib.util.find_spec("vrig.roads") is not None
 
 @pytest.fixture
 def fake_field(monkeypatch):
-    """``vrig.field.desired_response`` replaced for field targets: half the pseudo-field record
+    """``vrig.desired.kinds.desired_response`` replaced for field targets: half the pseudo-field record
     of the same seed (reachable and quick), with a source line naming it; the runner's
     per-process cache of desired responses is emptied before and after."""
-    import vrig.field
+    import vrig.desired.kinds
     from benchmarks.runner import record
 
-    real = vrig.field.desired_response
+    real = vrig.desired.kinds.desired_response
 
     def fake(rig, target="pseudo-field", seconds=30.0, *, seed=0, band=None):
         field, source, extra = real(rig, "pseudo-field", seconds, seed=seed, band=band)
@@ -477,7 +477,7 @@ def fake_field(monkeypatch):
         return half, f"stand-in service record {target} seed {seed}", {}
 
     record._target.cache_clear()
-    monkeypatch.setattr(vrig.field, "desired_response", fake)
+    monkeypatch.setattr(vrig.desired.kinds, "desired_response", fake)
     yield
     record._target.cache_clear()
 

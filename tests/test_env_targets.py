@@ -1,6 +1,6 @@
 """The target of the drive-iteration envs (issue 22, deliverable 6): ``target="pseudo-field"``
 (default, unchanged), ``"field:<scenario>"`` and ``"field"``, made by
-:func:`vrig.field.desired_response` with each reset's seed.
+:func:`vrig.desired.kinds.desired_response` with each reset's seed.
 
 The field path needs ``vrig.roads``; without it the tests of the real service records skip, and
 the routing is tested with a stand-in for ``desired_response``.
@@ -31,10 +31,10 @@ KW = {"fast": True, "seconds": 2.0}
 def fake_field(monkeypatch):
     """``desired_responses`` of the physics replaced: a field target gives half the
     pseudo-field record of the same seed (reachable, and known); every seed is logged."""
-    from vrig import field
+    from vrig.desired import kinds
     from vrig.envs import physics
 
-    real, calls = field.desired_response, []
+    real, calls = kinds.desired_response, []
 
     def fake(rig, target, seconds, *, seed=0, band=None):
         calls.append((rig, target, seconds, seed))

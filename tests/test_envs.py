@@ -10,8 +10,8 @@ from helpers import records_equal
 
 import vrig
 from identification import metrics
+from vrig.desired.pseudo_field import pseudo_field
 from vrig.envs import ENV_IDS, band_edges, band_error_ratios
-from vrig.field import pseudo_field
 from vrig.io import write
 from vrig.reconstruction import reconstruct
 

@@ -241,7 +241,7 @@ def test_arx_inverse_of_the_linearised_damper_is_as_good_as_the_frf_inverse():
     model the same linear system: their IT00 errors agree (FRF: ~5 %). The automatic lead must
     not settle on a lead shorter than the rig's delay whose inverse only stays bounded with
     contracted poles (before: lead 3 -> 36-70 %, lead 2 with ARX(6) -> 220 %)."""
-    from vrig.field import pseudo_field
+    from vrig.desired.pseudo_field import pseudo_field
     from vrig.reconstruction import InverseArx, InverseFrf
     from vrig.reconstruction.defaults import default_band
 
