@@ -5,7 +5,6 @@ Short records on the fast shock-absorber rig (6 s, one iteration) keep this file
 
 from __future__ import annotations
 
-import importlib.util
 import json
 import os
 import re
@@ -456,7 +455,6 @@ def test_a_long_record_gets_status_lines_on_stderr(tmp_path, monkeypatch, capsys
 # ---------------------------------------------------------------------------------------------
 # the target axis (issue 22): pseudo-field (default) and field:<scenario> records
 # ---------------------------------------------------------------------------------------------
-HAVE_ROADS = importlib.util.find_spec("vrig.roads") is not None
 
 
 @pytest.fixture
@@ -597,7 +595,6 @@ def test_field_alone_is_each_rigs_first_scenario_and_a_target_no_rig_has_is_an_e
     assert not out.exists()  # refused before anything ran
 
 
-@pytest.mark.skipif(not HAVE_ROADS, reason="vrig.roads is not on this branch yet")
 def test_a_field_record_reconstructs_a_real_service_record():
     """The real field path: the radiator in its truck front end on a class road (4 s, fast)."""
     import vrig
