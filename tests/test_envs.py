@@ -60,7 +60,7 @@ def test_environments_are_registered_on_import_vrig():
     assert vrig.envs.DriveIterationEnv is not None
 
 
-# check_env of every registered id: tests/test_gym_ids.py (the seven-channel tank's is slow)
+# check_env of every registered id: tests/test_env_ids.py (the seven-channel tank's is slow)
 
 
 def test_the_same_seed_gives_identical_trajectories():
