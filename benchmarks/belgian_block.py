@@ -1,8 +1,8 @@
 """The Belgian-block road record reconstructed on fuel-tank-7ch (issue 22, deliverable 4a).
 
-A real road-load measurement (``vrig.records``: six wheel accelerations, 256 Hz, 300 s of Belgian
+A real road-load measurement (``vrig.desired.belgian_block``: six wheel accelerations, 256 Hz, 300 s of Belgian
 pavé at 20 km/h) becomes the desired response of fuel-tank-7ch's four vertical accelerations by
-the documented F2D and scaling rule (:func:`vrig.records.belgian_block_desired`), and
+the documented F2D and scaling rule (:func:`vrig.desired.belgian_block.belgian_block_desired`), and
 :func:`vrig.reconstruct` plays it on the rig at its default settings (fidelity full, the default
 variant, method ARX order 4, the side-car's gain, 5 % identification drive halved until the rig
 accepts it). Prints the reachability check at the record's own level and at the scaled level,
@@ -27,10 +27,11 @@ from pathlib import Path
 import numpy as np
 
 import vrig
+from vrig.desired.belgian_block import belgian_block_desired, belgian_block_path, belgian_block_rig
+from vrig.desired.identification import identification_records
+from vrig.desired.reachability import check_target, scale_to_limits
 from vrig.files import atomic_write
 from vrig.reconstruction.defaults import default_band
-from vrig.records import belgian_block_desired, belgian_block_path, belgian_block_rig
-from vrig.targets import check_target, identification_records, scale_to_limits
 
 DEFAULT_GAIN = 0.8  # vrig reconstruct's gain where the side-car names none
 

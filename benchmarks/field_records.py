@@ -49,7 +49,7 @@ def _lines(label: str, stats: list[dict]) -> list[str]:
 
 def main(argv=None) -> int:
     import vrig
-    from vrig.field import desired_response
+    from vrig.desired.kinds import desired_response
     from vrig.reconstruction.defaults import default_band
 
     ap = argparse.ArgumentParser(prog="python -m benchmarks.field_records",

@@ -44,7 +44,7 @@ def _hash(a) -> str:
 def reconstruction_line(rig_name: str, method: str, strategy: str) -> str:
     """The fingerprint of one fixed-seed reconstruction (see the module docstring)."""
     import vrig
-    from vrig.field import pseudo_field
+    from vrig.desired.pseudo_field import pseudo_field
     from vrig.reconstruction.defaults import default_band
 
     rig = vrig.load_rig(rig_name, seed=3, fidelity="fast")

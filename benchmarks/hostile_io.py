@@ -82,7 +82,7 @@ def _vrig(argv, cwd: Path) -> subprocess.Popen:
 
 def _result(seconds: float = 4.0):
     import vrig
-    from vrig.field import pseudo_field
+    from vrig.desired.pseudo_field import pseudo_field
 
     rig = vrig.load_rig("shock-absorber", seed=0)
     _, field = pseudo_field(rig, rig.bandwidth, seconds, seed=1)

@@ -26,7 +26,7 @@ import pytest
 import vrig
 from identification import Narx, regression_matrix
 from identification.solvers import SOLVERS
-from vrig.field import pseudo_field
+from vrig.desired.pseudo_field import pseudo_field
 from vrig.reconstruction import DriveIteration
 from vrig.reconstruction.defaults import default_band
 from vrig.signals import random_drive, triangular_psd

@@ -5,7 +5,6 @@ Short records on the fast shock-absorber rig (6 s, one iteration) keep this file
 
 from __future__ import annotations
 
-import importlib.util
 import json
 import os
 import re
@@ -456,18 +455,17 @@ def test_a_long_record_gets_status_lines_on_stderr(tmp_path, monkeypatch, capsys
 # ---------------------------------------------------------------------------------------------
 # the target axis (issue 22): pseudo-field (default) and field:<scenario> records
 # ---------------------------------------------------------------------------------------------
-HAVE_ROADS = importlib.util.find_spec("vrig.roads") is not None
 
 
 @pytest.fixture
 def fake_field(monkeypatch):
-    """``vrig.field.desired_response`` replaced for field targets: half the pseudo-field record
+    """``vrig.desired.kinds.desired_response`` replaced for field targets: half the pseudo-field record
     of the same seed (reachable and quick), with a source line naming it; the runner's
     per-process cache of desired responses is emptied before and after."""
-    import vrig.field
+    import vrig.desired.kinds
     from benchmarks.runner import record
 
-    real = vrig.field.desired_response
+    real = vrig.desired.kinds.desired_response
 
     def fake(rig, target="pseudo-field", seconds=30.0, *, seed=0, band=None):
         field, source, extra = real(rig, "pseudo-field", seconds, seed=seed, band=band)
@@ -477,7 +475,7 @@ def fake_field(monkeypatch):
         return half, f"stand-in service record {target} seed {seed}", {}
 
     record._target.cache_clear()
-    monkeypatch.setattr(vrig.field, "desired_response", fake)
+    monkeypatch.setattr(vrig.desired.kinds, "desired_response", fake)
     yield
     record._target.cache_clear()
 
@@ -597,7 +595,6 @@ def test_field_alone_is_each_rigs_first_scenario_and_a_target_no_rig_has_is_an_e
     assert not out.exists()  # refused before anything ran
 
 
-@pytest.mark.skipif(not HAVE_ROADS, reason="vrig.roads is not on this branch yet")
 def test_a_field_record_reconstructs_a_real_service_record():
     """The real field path: the radiator in its truck front end on a class road (4 s, fast)."""
     import vrig

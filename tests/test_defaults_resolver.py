@@ -130,7 +130,7 @@ SECONDS = 6.0
 
 
 def _desired(name: str) -> vrig.TimeHistory:
-    from vrig.field import pseudo_field
+    from vrig.desired.pseudo_field import pseudo_field
 
     rig = vrig.load_rig(name, seed=7, fidelity="fast")
     return pseudo_field(rig, default_band(rig), SECONDS, seed=7)[1]

@@ -1,14 +1,13 @@
 """The target of the drive-iteration envs (issue 22, deliverable 6): ``target="pseudo-field"``
 (default, unchanged), ``"field:<scenario>"`` and ``"field"``, made by
-:func:`vrig.field.desired_response` with each reset's seed.
+:func:`vrig.desired.kinds.desired_response` with each reset's seed.
 
-The field path needs ``vrig.roads``; without it the tests of the real service records skip, and
-the routing is tested with a stand-in for ``desired_response``.
+The routing is tested with a stand-in for ``desired_response``, the real service records with
+``vrig.roads``.
 """
 
 from __future__ import annotations
 
-import importlib.util
 import warnings
 
 import gymnasium as gym
@@ -20,10 +19,6 @@ import vrig
 from vrig.envs import DriveIterationEnv, DriveIterationVectorEnv, IterationPhysics
 from vrig.timehistory import TimeHistory
 
-HAVE_ROADS = importlib.util.find_spec("vrig.roads") is not None
-needs_roads = pytest.mark.skipif(
-    not HAVE_ROADS, reason="vrig.roads (ISO 8608 road inputs) is not on this branch yet"
-)
 KW = {"fast": True, "seconds": 2.0}
 
 
@@ -31,10 +26,10 @@ KW = {"fast": True, "seconds": 2.0}
 def fake_field(monkeypatch):
     """``desired_responses`` of the physics replaced: a field target gives half the
     pseudo-field record of the same seed (reachable, and known); every seed is logged."""
-    from vrig import field
+    from vrig.desired import kinds
     from vrig.envs import physics
 
-    real, calls = field.desired_response, []
+    real, calls = kinds.desired_response, []
 
     def fake(rig, target, seconds, *, seed=0, band=None):
         calls.append((rig, target, seconds, seed))
@@ -137,7 +132,6 @@ def test_the_vector_env_shares_one_field_target(fake_field):
         gym.make_vec("vrig/ShockAbsorber-v2", num_envs=2, target="field:nope", **KW)
 
 
-@needs_roads
 def test_a_field_target_env_resets_on_a_service_record_and_steps():
     """The real service record: the env's desired response is ``field_record`` of the drawn
     road seed (4 s: the road fades in and out over 1 s each), and the env steps on it (the

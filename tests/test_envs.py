@@ -10,8 +10,8 @@ from helpers import records_equal
 
 import vrig
 from identification import metrics
+from vrig.desired.pseudo_field import pseudo_field
 from vrig.envs import ENV_IDS, band_edges, band_error_ratios
-from vrig.field import pseudo_field
 from vrig.io import write
 from vrig.reconstruction import reconstruct
 
@@ -60,7 +60,7 @@ def test_environments_are_registered_on_import_vrig():
     assert vrig.envs.DriveIterationEnv is not None
 
 
-# check_env of every registered id: tests/test_gym_ids.py (the seven-channel tank's is slow)
+# check_env of every registered id: tests/test_env_ids.py (the seven-channel tank's is slow)
 
 
 def test_the_same_seed_gives_identical_trajectories():

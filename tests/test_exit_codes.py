@@ -258,7 +258,7 @@ def test_the_advice_acts_on_the_failure_at_hand(stage, kind, wanted, unwanted):
 # ---------------------------------------------------------------------------------------------
 def test_progress_is_quiet_by_default_and_on_stderr_when_enabled(capsys, monkeypatch):
     from vrig import progress
-    from vrig.field import pseudo_field
+    from vrig.desired.pseudo_field import pseudo_field
 
     rig = vrig.load_rig("shock-absorber")
     band = rig.bandwidth
@@ -279,7 +279,7 @@ def test_progress_is_quiet_by_default_and_on_stderr_when_enabled(capsys, monkeyp
 
 def test_the_engine_says_what_it_identifies_and_fits(capsys):
     from vrig import progress
-    from vrig.field import pseudo_field
+    from vrig.desired.pseudo_field import pseudo_field
 
     rig = vrig.load_rig("shock-absorber")
     _, field = pseudo_field(rig, rig.bandwidth, 2.0)

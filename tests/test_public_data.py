@@ -492,7 +492,7 @@ def test_pipeline_recovers_a_known_arx_model(tmp_path):
 
 
 def test_no_function_of_the_package_is_longer_than_80_lines():
-    # the standard of tests/test_code_shape.py (vrig/, identification/), counted with docstrings
+    # the standard of tests/test_function_length.py (vrig/, identification/), counted with docstrings
     import ast
 
     files = sorted((ROOT / "benchmarks" / "public_data").glob("*.py"))

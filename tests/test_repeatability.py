@@ -82,7 +82,7 @@ def test_rigs_order_as_physics_says():
 def test_motorcycle_strain_more_repeatable_than_acceleration():
     """At the text's procedure (``vrig repeatability``: a 20 s pseudo-field drive over 0-30 Hz,
     five runs, the number in that band)."""
-    from vrig.field import pseudo_field
+    from vrig.desired.pseudo_field import pseudo_field
 
     moto = vrig.load_rig("motorcycle-rear", seed=0)
     drive, first = pseudo_field(moto, (0.0, 30.0), 20.0, seed=0)

@@ -38,7 +38,7 @@ def _thesis(name):
 
 def test_the_non_linear_rigs_have_a_severity_axis_and_the_linear_ones_refuse_it():
     # fuel-tank-2ch since issue 23 (its progressive buffers and snubbers, tests/
-    # test_fuel_tank_split.py); not in NONLINEAR: on it the linear error is not monotonic in the
+    # test_rig_fuel_tank_2ch_split_and_severity.py); not in NONLINEAR: on it the linear error is not monotonic in the
     # severity (IT00 125 / 44 / 82 % at s = 0 / 1 / 2: its README, "Severity axis")
     assert set(NONLINEAR) | {"fuel-tank-2ch"} <= set(severity_rigs())
     for name in ("fuel-tank-7ch", "shaker"):  # linear in their operating range
@@ -241,7 +241,7 @@ def test_arx_inverse_of_the_linearised_damper_is_as_good_as_the_frf_inverse():
     model the same linear system: their IT00 errors agree (FRF: ~5 %). The automatic lead must
     not settle on a lead shorter than the rig's delay whose inverse only stays bounded with
     contracted poles (before: lead 3 -> 36-70 %, lead 2 with ARX(6) -> 220 %)."""
-    from vrig.field import pseudo_field
+    from vrig.desired.pseudo_field import pseudo_field
     from vrig.reconstruction import InverseArx, InverseFrf
     from vrig.reconstruction.defaults import default_band
 

@@ -92,7 +92,7 @@ def test_threaded_mounting_has_no_dead_band(variant):
     assert width < 0.2 * 2 * _p("free_play", "mild") <= 0.2 * 2 * _p("free_play", variant)
 
 
-@pytest.mark.parametrize("variant", ["mild"])  # thesis: the valve law, tests/test_damper_law.py
+@pytest.mark.parametrize("variant", ["mild"])  # thesis: the valve law, tests/test_element_damper.py
 def test_random_drive_runs_cleanly_and_load_follows_damping(variant):
     rig = vrig.load_rig("shock-absorber", mounting="threaded", variant=variant)
     d = 0.003 * band_limited_noise(2 * 500, 1, cutoff=10 / 250, seed=2)

@@ -128,7 +128,7 @@ def test_bad_input_is_one_clear_error(call, match):
 def test_a_rig_without_scenarios_has_none():
     assert field_scenarios("shaker") == []
     with pytest.raises(ValueError, match="its targets are pseudo-field"):
-        vrig.field.parse_target(vrig.load_rig("shaker"), "field")
+        vrig.desired.kinds.parse_target(vrig.load_rig("shaker"), "field")
 
 
 @pytest.mark.parametrize(

@@ -36,7 +36,7 @@ import pytest
 import vrig
 import vrig.io
 from vrig.cli import main
-from vrig.field import pseudo_field
+from vrig.desired.pseudo_field import pseudo_field
 from vrig.reconstruction.engine import DriveIteration
 from vrig.testfolder import TestFolder
 

@@ -6,6 +6,11 @@ signals, processing, reconstruction workflow, gymnasium environments and CLI liv
 
 from . import envs as _envs  # noqa: F401  (registers the vrig/ gymnasium environments)
 from . import roads
+from .desired.f2d import f2d
+from .desired.kinds import desired_response
+from .desired.pseudo_field import pseudo_field
+from .desired.range_report import range_report
+from .desired.reachability import TargetCheck, check_target
 from .errors import (
     ERRORS,
     FileFormatError,
@@ -18,12 +23,10 @@ from .errors import (
     SimulationInstabilityError,
     VrigError,
 )
-from .field import desired_response, pseudo_field
 from .linearity import LinearityResult, check_linearity, check_rig_linearity
 from .reconstruction import IterationSettings, ReconstructionResult, reconstruct
 from .rigs import ChannelSpec, FileRig, MujocoRig, list_rigs, load_rig, rig_path, severity_rigs
 from .service import field_record, field_scenarios
-from .targets import TargetCheck, check_target, f2d, range_report
 from .testfolder import TestFolder
 from .timehistory import TimeHistory
 

@@ -90,12 +90,8 @@ from pathlib import Path
 
 import numpy as np
 
-from .field import (
-    TARGET_KINDS,
-    desired_response,
-    parse_target,
-    pseudo_field,
-)
+from .desired.kinds import TARGET_KINDS, desired_response, parse_target
+from .desired.pseudo_field import pseudo_field
 from .files import file_kind, mount_points
 from .reconstruction.defaults import default_band
 
@@ -482,7 +478,7 @@ def _add_check_target_parser(sub) -> None:
         "transducer ranges; per response the fraction of the target no drive can reach (the "
         "residual of the best linear drive) and the rig's incoherence at the target's "
         "frequencies; per drive the peak drive and velocity the target needs against the "
-        "actuator's limits. The definitions: vrig.targets.",
+        "actuator's limits. The definitions: vrig.desired.reachability.",
         epilog=_EXIT_CODES,
     )
     chk.add_argument("--rig", required=True, help="rig name (see `vrig rigs`) or rig file")
@@ -759,7 +755,7 @@ def _cmd_describe(args) -> int:
 
 def _read_field(args, rig, band):
     """The desired (field) record: ``--desired``, else ``--target`` (a pseudo-field or a
-    service record, :func:`vrig.field.desired_response`).
+    service record, :func:`vrig.desired.kinds.desired_response`).
 
     Returns (field, description, extra records)."""
     target = getattr(args, "target", None)
@@ -1072,10 +1068,10 @@ def _nothing_saved(out: Path, exc: OSError) -> str:
 
 
 def _target_check(rig, result) -> dict:
-    """:func:`vrig.targets.check_target` of DESRES from the reconstruction's own identification
+    """:func:`vrig.desired.reachability.check_target` of DESRES from the reconstruction's own identification
     records (no rig run) as ``summary.json``'s ``target_check``; a failure is recorded as
     ``{"error": ...}``, never raised (it must not lose the run)."""
-    from .targets import check_target
+    from .desired.reachability import check_target
 
     if result.id_drive is None or result.id_response is None:
         return {"error": "no identification records: the identification drive was not played"}
@@ -1265,7 +1261,8 @@ def _check_linearity(args, hold: contextlib.ExitStack) -> int:
 
 
 def _cmd_check_target(args) -> int:
-    from .targets import check_target, range_report
+    from .desired.range_report import range_report
+    from .desired.reachability import check_target
 
     if args.seconds is not None and not (
         np.isfinite(args.seconds) and 2 <= args.seconds <= _MAX_SECONDS

@@ -101,7 +101,7 @@ NARX_GAIN = 0.2
 """ARX vs NARX: the NARX's held-out η0 must be at least this fraction lower than the ARX's."""
 DEFAULT_LEVEL = 0.10
 """Rig helper: the random drive's rms as a fraction of each drive channel's full scale (as the
-pseudo-field drive, :mod:`vrig.field`); ``2u`` then peaks near 70 % of full scale."""
+pseudo-field drive, :mod:`vrig.desired.pseudo_field`); ``2u`` then peaks near 70 % of full scale."""
 _RAMP_S = 1.0
 _SETTLE_S = 1.0
 _BLOCKS = 10

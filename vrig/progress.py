@@ -8,7 +8,7 @@ caller that wants progress switches it on for a block::
     with vrig.progress.enabled(None):      # on when stderr is a terminal (what `vrig` uses)
         ...
 
-Inside such a block, :func:`pseudo_field <vrig.field.pseudo_field>` reports each level it tries,
+Inside such a block, :func:`pseudo_field <vrig.desired.pseudo_field.pseudo_field>` reports each level it tries,
 the drive-iteration engine says what it identifies and fits, and a MuJoCo rig run shows a bar
 over its chunks when it lasts longer than :data:`RUN_BAR_DELAY_S`. The switch is a context
 variable: it holds for the thread (and task) that set it. Progress never changes a number.

@@ -512,7 +512,7 @@ class TestFolder:
             draw is removed with the records it showed); other files (notes...) are kept.
         summary_extra : mapping, optional
             Further top-level entries of ``summary.json`` (JSON-able), e.g. ``{"target_check":
-            ...}`` (:func:`vrig.targets.check_target`); a key the summary has already is refused.
+            ...}`` (:func:`vrig.desired.reachability.check_target`); a key the summary has already is refused.
         plots : bool
             Also draw the plots of :func:`vrig.plots.save_reconstruction_plots` into the new
             folder (before the swap; listed in the summary's ``plots``).

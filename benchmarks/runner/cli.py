@@ -103,7 +103,7 @@ def _parser() -> argparse.ArgumentParser:
         nargs="+",
         metavar="T",
         default=[PSEUDO_FIELD],
-        help="kinds of desired response (vrig.field.desired_response): 'pseudo-field' "
+        help="kinds of desired response (vrig.desired.kinds.desired_response): 'pseudo-field' "
         "(default), 'field:<scenario>' (a rig's service scenario; a rig without it is skipped, "
         "with a note), 'field' (each rig's first scenario); a record-key axis",
     )
@@ -542,7 +542,7 @@ def _rig_targets(rigs: list[str], targets: list[str], fidelity: str) -> dict[str
     the rigs; a target that no rig has (or that is not a target name) is a :class:`_BadInput`.
     Without a field target no rig is loaded.
     """
-    from vrig.field import parse_target
+    from vrig.desired.kinds import parse_target
 
     if targets == [PSEUDO_FIELD]:
         return {r: [PSEUDO_FIELD] for r in rigs}

@@ -6,10 +6,10 @@ run's settings:
 * the rig is ``vrig.load_rig(rig, seed=..., fidelity=..., severity=severity)``; severity None
   (the default, and every record written before the severity axis existed) is the rig as loaded,
   without ``severity=``;
-* the desired response is :func:`vrig.field.desired_response` of rig ``rig`` (loaded with seed
+* the desired response is :func:`vrig.desired.kinds.desired_response` of rig ``rig`` (loaded with seed
   0, at the record's severity) for ``target`` with seed ``desired``: for ``"pseudo-field"`` (the
   default, and every record written before the target axis existed: their keys have no
-  ``target``) the pseudo-field response (:func:`vrig.field.pseudo_field`) over the rig's default
+  ``target``) the pseudo-field response (:func:`vrig.desired.pseudo_field.pseudo_field`) over the rig's default
   simulation band; for ``"field:<scenario>"`` the service record of the rig's specimen in its
   vehicle (:func:`vrig.service.field_record`) on the road of seed ``desired``, at the
   scenario's speed and road class (the record's ``target_source`` says which);
@@ -149,7 +149,7 @@ PSEUDO_FIELD = "pseudo-field"
 def check_target(target) -> str:
     """``target`` as the record key holds it: ``"pseudo-field"`` or ``"field:<scenario>"``
     (resolved: ``"field"`` alone, the rig's first scenario, is named by the caller, see
-    :func:`vrig.field.parse_target`); raises ValueError otherwise."""
+    :func:`vrig.desired.kinds.parse_target`); raises ValueError otherwise."""
     if target == PSEUDO_FIELD:
         return target
     kind, _, scenario = target.partition(":") if isinstance(target, str) else ("", "", "")
@@ -407,9 +407,9 @@ def _target(rig_name: str, fidelity: str, seconds: float, desired: int, severity
     does), and the error measures the method, not an unreachable target (benchmarks/README.md,
     Runner). A field record is the service record of that rig's specimen in its vehicle on the
     road of seed ``desired``; it need not be reachable. Both are made by
-    :func:`vrig.field.desired_response` (the one place a target is made); ``band`` is the
+    :func:`vrig.desired.kinds.desired_response` (the one place a target is made); ``band`` is the
     rig's default simulation band for either."""
-    from vrig.field import desired_response
+    from vrig.desired.kinds import desired_response
     from vrig.reconstruction.defaults import default_band
 
     rig = _load_rig(rig_name, 0, fidelity, severity)

@@ -264,7 +264,8 @@ def leaderboard(records: list[dict], settings: dict | None = None, *, title: str
         s = settings
         lines += [
             f"{len(records)} records ({sum(r['status'] == 'ok' for r in records)} ok). "
-            f"Desired responses: pseudo-field records of {s['seconds']:g} s (vrig.field); "
+            f"Desired responses: pseudo-field records of {s['seconds']:g} s "
+            "(vrig.desired.pseudo_field); "
             f"{s['iterations']} iterations after IT00 at "
             + (f"gain {s['gain']:g}" if s.get("gain") is not None else "each rig's own gain")
             + "; rig fidelity "
@@ -295,7 +296,7 @@ def leaderboard(records: list[dict], settings: dict | None = None, *, title: str
 
 
 _PSEUDO_FIELD_TEXT = (
-    "Desired responses: pseudo-field records (`vrig.field.pseudo_field`: the rig's own response "
+    "Desired responses: pseudo-field records (`vrig.desired.pseudo_field.pseudo_field`: the rig's own response "
     "to a seeded road-like drive over its simulation band): reachable by construction."
 )
 
@@ -414,7 +415,7 @@ def field_section(records: list[dict]) -> list[str]:
         "## Field targets",
         "",
         "Desired responses: service records "
-        '(`vrig.field.desired_response(rig, "field:<scenario>")`): the rig\'s specimen in its '
+        '(`vrig.desired.kinds.desired_response(rig, "field:<scenario>")`): the rig\'s specimen in its '
         "vehicle (`vrig.service`) driven over a seeded ISO 8608 road at the scenario's speed; "
         "the road's seed is the record's desired-response seed. Unlike a pseudo-field record, a "
         "service record need not be reachable (the rig lacks the vehicle's boundary conditions "

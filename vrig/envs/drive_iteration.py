@@ -351,7 +351,7 @@ class DriveIterationEnv(gym.Env):
     ``damage_ratio``, ``mean_eta0``), the ``iteration``, ``success``, ``reason``, ``field_seed``,
     ``run_seed`` and any ``trip`` message.
 
-    **Targets** (``target``, :func:`vrig.field.desired_response`): ``"pseudo-field"``
+    **Targets** (``target``, :func:`vrig.desired.kinds.desired_response`): ``"pseudo-field"``
     (default), ``"field:<scenario>"`` (one of the rig's service scenarios,
     :func:`vrig.service.field_scenarios`) or ``"field"`` (its first). A field target's reset draws a new road: the field seed is the
     seed of the road profile (:func:`vrig.service.field_record`); the vehicle speed and the ISO
@@ -491,7 +491,7 @@ class DriveIterationEnv(gym.Env):
     target : str
         What each reset draws (see **Targets**): ``"pseudo-field"`` (default),
         ``"field:<scenario>"`` or ``"field"``; checked when the env is made
-        (:func:`vrig.field.parse_target`: an unknown scenario is a ``ValueError`` listing the
+        (:func:`vrig.desired.kinds.parse_target`: an unknown scenario is a ``ValueError`` listing the
         rig's scenarios, a rig without any is one too).
     render_mode : None
         Must be ``None``: the environment does not render (``metadata["render_modes"]`` is

@@ -7,7 +7,7 @@ and keeps it in a small process-wide cache, and starts one
 :class:`~vrig.reconstruction.DriveIteration` engine per episode around a desired response with
 a private copy of that model (re-identification during an episode never leaks into the next one).
 It makes the desired responses too, of its ``target`` (pseudo-field or a service scenario's field
-record, :func:`vrig.field.desired_response`), one per seed (:meth:`IterationPhysics.target_record`).
+record, :func:`vrig.desired.kinds.desired_response`), one per seed (:meth:`IterationPhysics.target_record`).
 """
 
 from __future__ import annotations
@@ -21,8 +21,8 @@ import numpy as np
 
 from identification.errors import SimulationDivergedError
 
+from ..desired.kinds import desired_responses, parse_target
 from ..errors import RigLimitError, SimulationInstabilityError, UnsupportedMethodWarning
-from ..field import desired_responses, parse_target
 from ..reconstruction import DriveIteration, IterationSettings
 from ..reconstruction.defaults import resolve
 from ..reconstruction.settings import cache_key
@@ -80,8 +80,8 @@ class IterationPhysics:
     rig_options : dict, optional
         Further ``load_rig`` options of a named rig (``variant``, ``severity``, parameters).
     target : str
-        What the desired responses are (:func:`vrig.field.desired_response`, checked here with
-        :func:`vrig.field.parse_target`): ``"pseudo-field"`` (default: the rig's response to a
+        What the desired responses are (:func:`vrig.desired.kinds.desired_response`, checked here with
+        :func:`vrig.desired.kinds.parse_target`): ``"pseudo-field"`` (default: the rig's response to a
         seeded road-like drive over the band), ``"field:<scenario>"`` (a service record of the
         rig's specimen in its vehicle, :func:`vrig.service.field_record`: each seed a new road
         profile, at the scenario's own speed and road class) or ``"field"`` (the rig's first
@@ -147,10 +147,10 @@ class IterationPhysics:
     def target_record(self, seed: int) -> TimeHistory:
         """The desired response of seed ``seed`` for this physics' :attr:`target`.
 
-        A pseudo-field record (:func:`vrig.field.pseudo_field` over ``self.band``, the drive's
+        A pseudo-field record (:func:`vrig.desired.pseudo_field.pseudo_field` over ``self.band``, the drive's
         seed ``seed``) or a service record (:func:`vrig.service.field_record`: the road's seed
         ``seed``; the scenario's speed and road class), ``self.seconds`` long, made by
-        :func:`vrig.field.desired_response`; the last 256 records are kept (a seed always gives
+        :func:`vrig.desired.kinds.desired_response`; the last 256 records are kept (a seed always gives
         the same record, bit for bit).
 
         Parameters
@@ -167,14 +167,14 @@ class IterationPhysics:
         Parameters
         ----------
         seed : int
-            Seed of :func:`vrig.field.pseudo_field` (over ``self.band``, ``self.seconds`` long);
+            Seed of :func:`vrig.desired.pseudo_field.pseudo_field` (over ``self.band``, ``self.seconds`` long);
             the last 256 records are kept.
         """
         return self._record("pseudo-field", seed)
 
     def target_records(self, seeds, *, threads: int | None = None) -> list:
         """:meth:`target_record` of many seeds, those not kept yet made together, their rig runs
-        batched (:func:`vrig.field.desired_responses`, across threads).
+        batched (:func:`vrig.desired.kinds.desired_responses`, across threads).
 
         Record ``i`` is bit for bit ``target_record(seeds[i])``; a seed whose record cannot be
         made (its last pseudo-field level trips, say) gets the exception in its slot, and
@@ -195,7 +195,7 @@ class IterationPhysics:
         return self._records(self.target, seeds, threads)
 
     def _record(self, target: str, seed: int) -> TimeHistory:
-        """:func:`vrig.field.desired_response`'s record of ``target`` and ``seed`` (cached; a
+        """:func:`vrig.desired.kinds.desired_response`'s record of ``target`` and ``seed`` (cached; a
         failure left by :meth:`target_records` is raised once)."""
         record = self._records(target, [seed], None)[0]
         if isinstance(record, BaseException):
@@ -205,7 +205,7 @@ class IterationPhysics:
 
     def _records(self, target: str, seeds, threads) -> list:
         """The records of ``target`` and ``seeds``: kept, failed before, or made in one batch
-        (:func:`vrig.field.desired_responses`), the made ones kept (the last 256) and the
+        (:func:`vrig.desired.kinds.desired_responses`), the made ones kept (the last 256) and the
         failures noted (for the next :meth:`_record`: they are made again after that)."""
         keys = [(target, int(s)) for s in seeds]
         found = {k: self._fields.get(k, self._failed.get(k)) for k in keys}

@@ -9,7 +9,7 @@ threads), and then lets ``SyncVectorEnv`` do exactly what it always does - with 
 ``step`` / ``reset`` *finishing* from the staged outcome instead of playing its own. So the
 vector semantics (autoreset mode, ``reset_mask``, info merging, ``TimeLimit`` truncation) are
 gymnasium's own, and the results are those of ``gymnasium.make_vec(id, n,
-vectorization_mode="sync")`` (and ``"async"``) bit for bit (``tests/test_vector_env.py``). The
+vectorization_mode="sync")`` (and ``"async"``) bit for bit (``tests/test_env_vector.py``). The
 sub-envs share one rig and one identified inverse model. The new target records of the resetting
 sub-envs (pseudo-field or service records: rig runs too) are made before, together, their rig
 runs batched (:meth:`~vrig.envs.IterationPhysics.target_records`), while the step's iteration

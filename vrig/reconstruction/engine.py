@@ -249,7 +249,7 @@ class DriveIteration:
         Default: IDDRV from ``id_psd`` (triangular over the identification band) at ``id_rms``
         (5 % of full scale), the RMS halved (up to ten times: 1/1024) while the rig refuses or
         trips on it (a level set from the drives' full scales knows nothing of the responses'
-        ranges: a user's rig may take only a small fraction of it, as vrig.field.pseudo_field
+        ranges: a user's rig may take only a small fraction of it, as vrig.desired.pseudo_field.pseudo_field
         says). With ``id_match`` the drive is matched to DESRES's spectrum and amplitude range
         (:func:`~vrig.reconstruction.matching.identify_matched`; what it did is kept in
         ``id_matching``). Either way ``id_report`` says which level was used and why, and how

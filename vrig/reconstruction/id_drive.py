@@ -10,7 +10,7 @@ ranges, and a user's rig may take only a small fraction of it.
 
 :meth:`vrig.reconstruction.DriveIteration.identify` identifies from it (its ``send`` keeps a
 refused or tripped drive as ``REFUSEDID`` / ``TRIPPEDID``), and the target check
-(:func:`vrig.targets.check_target`) makes its identification records with it, so a target
+(:func:`vrig.desired.reachability.check_target`) makes its identification records with it, so a target
 check and a reconstruction with the same band, level and seed see the same records.
 """
 

@@ -57,7 +57,7 @@ __all__ = [
 
 DEFAULT_FIELD_RANGE = 4.0
 """A field twin's transducer ranges as a multiple of the rig's (field transducers are sized for
-the service peaks; the rig's own ranges are checked by :func:`vrig.targets.range_report`)."""
+the service peaks; the rig's own ranges are checked by :func:`vrig.desired.range_report.range_report`)."""
 
 
 def _number(block: dict, key: str, where: str, *, default=None, positive=False) -> float:

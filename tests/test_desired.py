@@ -1,4 +1,4 @@
-"""vrig.targets and vrig.records: F2D, the transducer-range check, reachability (§2.3.2), the
+"""vrig.desired.reachability and vrig.desired.belgian_block: F2D, the transducer-range check, reachability (§2.3.2), the
 scaling rule, the CLI's check-target and reconstruct's summary entry, the Belgian-block record.
 
 Truths used: the multiple coherence of a linear system with independent output noise is
@@ -21,18 +21,14 @@ from scipy import signal
 
 import vrig
 from vrig.cli import main
-from vrig.field import pseudo_field
+from vrig.desired.f2d import f2d
+from vrig.desired.identification import identification_records
+from vrig.desired.pseudo_field import pseudo_field
+from vrig.desired.range_report import range_report
+from vrig.desired.reachability import check_target, multiple_coherence, scale_to_limits
 from vrig.processing import gprepro
 from vrig.reconstruction.defaults import default_band
 from vrig.signals import flat_psd, random_drive
-from vrig.targets import (
-    check_target,
-    f2d,
-    identification_records,
-    multiple_coherence,
-    range_report,
-    scale_to_limits,
-)
 
 FS = 250.0
 FIR = np.array(  # responses x drives x taps: a well-conditioned 2 x 2 system
@@ -457,12 +453,12 @@ def test_reconstruct_records_the_target_check_in_the_summary(tmp_path):
 
 
 def test_a_failing_target_check_never_loses_the_run(tmp_path, monkeypatch):
-    import vrig.targets
+    import vrig.desired.reachability
 
     def broken(*args, **kwargs):
         raise RuntimeError("no spectra today")
 
-    monkeypatch.setattr(vrig.targets, "check_target", broken)
+    monkeypatch.setattr(vrig.desired.reachability, "check_target", broken)
     code, _, _ = _reconstruct(tmp_path / "rec")
     assert code == 0
     summary = json.loads((tmp_path / "rec" / "summary.json").read_text())
@@ -473,7 +469,7 @@ def test_a_failing_target_check_never_loses_the_run(tmp_path, monkeypatch):
 # ----------------------------------------------------------------------- the Belgian record
 @pytest.fixture(scope="module")
 def belgian_path():
-    from vrig.records import belgian_block_path
+    from vrig.desired.belgian_block import belgian_block_path
 
     try:
         return belgian_block_path()
@@ -482,7 +478,11 @@ def belgian_path():
 
 
 def test_the_belgian_record_maps_to_the_four_vertical_responses(belgian_path):
-    from vrig.records import belgian_block_desired, belgian_block_record, belgian_block_rig
+    from vrig.desired.belgian_block import (
+        belgian_block_desired,
+        belgian_block_record,
+        belgian_block_rig,
+    )
 
     rig = vrig.load_rig("fuel-tank-7ch", fidelity="fast")
     desired = belgian_block_desired(rig, seconds=10.0, start=20.0, scale=0.25)
@@ -506,7 +506,7 @@ def test_the_belgian_record_maps_to_the_four_vertical_responses(belgian_path):
 
 
 def test_the_belgian_record_says_where_it_is_missing(tmp_path):
-    from vrig.records import belgian_block_desired
+    from vrig.desired.belgian_block import belgian_block_desired
 
     rig = vrig.load_rig("fuel-tank-7ch", fidelity="fast")
     with pytest.raises(FileNotFoundError, match=str(tmp_path)):
@@ -518,7 +518,7 @@ def test_the_belgian_record_says_where_it_is_missing(tmp_path):
 
 
 def test_the_belgian_record_is_scaled_to_the_actuator_velocity(belgian_path):
-    from vrig.records import belgian_block_desired, belgian_block_record
+    from vrig.desired.belgian_block import belgian_block_desired, belgian_block_record
 
     rig = vrig.load_rig("fuel-tank-7ch", fidelity="fast")
     desired = belgian_block_desired(rig, seconds=20.0, start=20.0)

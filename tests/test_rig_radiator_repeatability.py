@@ -18,7 +18,7 @@ import pytest
 
 import vrig
 from identification import metrics
-from vrig.field import pseudo_field
+from vrig.desired.pseudo_field import pseudo_field
 from vrig.processing import gprepro
 
 TEXT_BAND = (0.0, 25.0)  # Table 3.3's simulation bandwidth [Hz]

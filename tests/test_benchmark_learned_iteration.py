@@ -19,8 +19,6 @@ from vrig.errors import ReconstructionError
 from vrig.policies import FixedGain, run_episode
 from vrig.reconstruction import IterationSettings
 
-HAS_UPDATE = "update" in IterationSettings.field_names()
-
 
 @pytest.fixture(scope="module")
 def env():
@@ -38,7 +36,7 @@ def env():
 def test_without_an_update_the_runner_plays_the_envs_fixed_gain_episode(env):
     """Same model, target, run seed, tolerance and budget: the reconstruction's errors are the
     env's, iteration for iteration, and it stops where the env terminates."""
-    plain = [None, "none"] if HAS_UPDATE else [None]  # "none": today's loop, bit for bit
+    plain = [None, "none"]  # "none": today's loop, bit for bit
     for seed, update in ((3, plain[-1]), (4, None)):
         mine = li.play_update(env, update, field_seed=seed, run_seed=seed, gain=0.8)
         theirs = run_episode(
@@ -97,10 +95,6 @@ def test_an_it00_failure_is_a_trip_with_nothing_iterated(env):
 def test_update_rows_exist_exactly_when_the_settings_have_the_field(monkeypatch):
     args = SimpleNamespace(quick=True, rl_dir="no-such-folder")
     specs, note = li._specs("shock-absorber", [0.0] * 7, args)
-    if not HAS_UPDATE:
-        assert li.update_methods() == ()
-        assert not any(k.startswith("update") for k in specs)
-        assert "no 'update' field" in note
     names = (*IterationSettings.field_names(), "update")
     monkeypatch.setattr(IterationSettings, "field_names", classmethod(lambda cls: names))
     assert li.update_methods() == li.UPDATE_METHODS == ("frf", "secant", "reidentify", "ilc")
@@ -111,7 +105,6 @@ def test_update_rows_exist_exactly_when_the_settings_have_the_field(monkeypatch)
     assert specs["update ilc"] == ("update", "ilc") and "update" not in (note or "")
 
 
-@pytest.mark.skipif(not HAS_UPDATE, reason="IterationSettings has no 'update' field yet (upd26)")
 def test_the_runner_passes_the_update_method_to_the_reconstruction(env):
     seen = []
     for update in li.UPDATE_METHODS:

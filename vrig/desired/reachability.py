@@ -1,17 +1,12 @@
-"""Judging and preparing a desired response for a rig: field-to-desired processing (F2D), the
-transducer-range check and reachability (the reference text's §2.3.2, "physically unrealisable
-desired response data", made measurable).
+"""Reachability of a desired response on a rig (the reference text's §2.3.2, "physically
+unrealisable desired response data", made measurable), and the one rule that scales a target to
+what the rig can play.
 
-* :func:`f2d` turns a field record into DESRES for a rig: channels mapped by name, units checked
-  (and converted by a given factor), resampled to the rig's rate, band-limited with
-  :func:`vrig.processing.gprepro` (de-trend, DC removal, zero-phase band-pass), then checked
-  against the rig's transducer ranges (:func:`range_report`; one warning per channel beyond
-  its range).
 * :func:`check_target` says, per response channel, which fraction of the target no drive of the
   rig can reach, and per drive channel the peak drive (and velocity) the target would need
   against the actuator's limits. It needs one identification run of the rig (random drive over
   the identification band, the kind :func:`vrig.reconstruct` plays) or the records of one
-  (:func:`identification_records`).
+  (:func:`vrig.desired.identification.identification_records`).
 * :func:`scale_to_limits` is the one documented rule that scales a too-severe (or any) target
   down to what the rig can play.
 
@@ -68,401 +63,38 @@ on the rig's internals, are not predicted.
 from __future__ import annotations
 
 import math
-import warnings
-from collections.abc import Mapping
 from dataclasses import dataclass
-from fractions import Fraction
 
 import numpy as np
 from scipy import signal
 
-from .processing import gprepro, identification_band
-from .reconstruction.defaults import default_band
-from .timehistory import TimeHistory
+from ..processing import gprepro
+from ..reconstruction.defaults import default_band
+from ..timehistory import TimeHistory
+from ._checks import _check_band, _check_th
+from .identification import identification_records
+from .range_report import _columns, _pct, range_report
 
 __all__ = [
-    "UNIT_FACTORS",
     "ChannelReach",
     "DriveNeed",
-    "RangeReport",
-    "RangeRow",
     "TargetCheck",
     "TargetScale",
     "check_target",
-    "f2d",
-    "identification_records",
     "multiple_coherence",
-    "range_report",
     "scale_to_limits",
 ]
-
-UNIT_FACTORS = {
-    ("g", "m/s^2"): 9.80665,
-    ("mm", "m"): 1e-3,
-    ("in", "m"): 0.0254,
-    ("kN", "N"): 1e3,
-    ("lbf", "N"): 4.4482216152605,
-    ("um/m", "-"): 1e-6,
-}
-"""Known unit conversions ``(field unit, rig unit) -> factor``: named in :func:`f2d`'s error
-message (the factor to pass as ``scale``); never applied silently."""
 
 _MIN_LINES = 8  # spectral lines in the band a reachability estimate needs at least
 _WANT_LINES = 16  # ... and the resolution it asks for when the record is long enough
 _MIN_AVERAGES = 16  # Welch segments (also at least 4 per drive channel)
 _FALSE_ALARM = 0.01  # a response independent of the drives is taken as driven this often
-_MAX_DENOMINATOR = 1000  # of the rational resampling ratio
 _BLOCK = 64  # Welch segments transformed at once
 _DEFINITION = (
     "unreachable: residual of the best linear drive (usable drive directions of the "
     "identification run, relative-error weighting) as a fraction of the target's variance in "
-    "the band; incoherent: sum_f (1 - gamma^2_j) P_target_j / sum_f P_target_j (vrig.targets)"
+    "the band; incoherent: sum_f (1 - gamma^2_j) P_target_j / sum_f P_target_j (vrig.desired.reachability)"
 )
-
-
-# ------------------------------------------------------------------------------------- F2D
-def _check_th(th, what: str) -> None:
-    if not isinstance(th, TimeHistory):
-        raise TypeError(f"{what} must be a vrig.TimeHistory, got {type(th).__name__}")
-
-
-def _check_band(band, fs: float) -> tuple[float, float]:
-    try:
-        lo, hi = (float(b) for b in band)
-    except (TypeError, ValueError):
-        raise ValueError(f"band must be (low, high) in Hz, got {band!r}") from None
-    if not (np.isfinite(lo) and np.isfinite(hi) and 0 <= lo < hi <= fs / 2):
-        raise ValueError(
-            f"band must satisfy 0 <= low < high <= fs/2 = {fs / 2:g} Hz, got ({lo:g}, {hi:g})"
-        )
-    return lo, hi
-
-
-def _mapped_columns(field: TimeHistory, rig, channels) -> list[int]:
-    """Column of ``field`` for each rig output (``channels``: rig output -> field channel)."""
-    outputs = [c.name for c in rig.outputs]
-    mapping = dict(channels or {})
-    unknown = sorted(set(mapping) - set(outputs))
-    if unknown:
-        raise ValueError(f"channels maps {unknown}, which are not responses of the rig {outputs}")
-    wanted = [mapping.get(name, name) for name in outputs]
-    missing = [
-        f"{o} (<- {w})" if w != o else o
-        for o, w in zip(outputs, wanted, strict=True)
-        if w not in field.names
-    ]
-    if missing:
-        raise ValueError(
-            f"the field record has no channel for the rig's response(s) {missing}; its channels "
-            f"are {list(field.names)}: map them with channels={{rig response: field channel}}"
-        )
-    return [field.index(w) for w in wanted]
-
-
-def _unit_factors(field: TimeHistory, cols, rig, scale) -> np.ndarray:
-    """Per rig output: the factor from the field channel to the rig's unit (``scale``), checked."""
-    outputs = list(rig.outputs)
-    if scale is None:
-        given = {}
-    elif isinstance(scale, Mapping):
-        unknown = sorted(set(scale) - {c.name for c in outputs})
-        if unknown:
-            raise ValueError(f"scale names {unknown}, which are not responses of the rig")
-        given = {k: float(v) for k, v in scale.items()}
-    else:
-        given = dict.fromkeys((c.name for c in outputs), float(scale))
-    for name, value in given.items():
-        if not (np.isfinite(value) and value != 0):
-            raise ValueError(f"scale of {name!r} must be a finite non-zero factor, got {value!r}")
-    out = np.ones(len(outputs))
-    for k, (c, col) in enumerate(zip(outputs, cols, strict=True)):
-        unit = field.units[col]
-        if c.name in given:
-            out[k] = given[c.name]
-        elif unit != c.unit:
-            known = UNIT_FACTORS.get((unit, c.unit))
-            hint = f" (1 {unit} = {known:g} {c.unit})" if known else ""
-            raise ValueError(
-                f"field channel {field.names[col]!r} is in {unit!r} but the rig's response "
-                f"{c.name!r} is in {c.unit!r}: pass scale={{{c.name!r}: factor}}{hint}"
-            )
-    return out
-
-
-def _resample(x: np.ndarray, fs_in: float, fs_out: float) -> np.ndarray:
-    """``x`` at ``fs_out`` (``resample_poly`` by the rational approximation of the ratio)."""
-    if fs_in == fs_out:
-        return x
-    ratio = Fraction(fs_out / fs_in).limit_denominator(_MAX_DENOMINATOR)
-    up, down = ratio.numerator, ratio.denominator
-    error = abs(fs_in * up / down - fs_out) / fs_out
-    if error > 1e-6:
-        warnings.warn(
-            f"f2d: {fs_in:g} -> {fs_out:g} Hz resampled by {up}/{down} (the nearest ratio with "
-            f"a denominator <= {_MAX_DENOMINATOR}): the time scale is off by {error:.2g}",
-            UserWarning,
-            stacklevel=3,
-        )
-    return signal.resample_poly(x, up, down, axis=0, padtype="line")
-
-
-def f2d(field: TimeHistory, rig, band=None, *, channels=None, scale=None) -> TimeHistory:
-    """Field-to-desired processing (F2D): DESRES for ``rig`` from a field record.
-
-    In this order: the rig's responses are taken from the field channels of the same name
-    (or as ``channels`` maps them; other field channels are dropped); each is multiplied by its
-    ``scale`` factor (required where the field unit differs from the rig's: the factor from
-    the one to the other); the record is resampled to ``rig.fs`` with
-    :func:`scipy.signal.resample_poly` by the rational approximation ``up/down`` of
-    ``rig.fs / field.fs`` with ``down <= 1000`` (exact for rates with a common divisor, e.g.
-    256 -> 250 Hz by 125/128; a warning says so when the approximation changes the time scale
-    by more than 1e-6); then :func:`vrig.processing.gprepro` over ``band`` (linear de-trend, DC
-    removal, zero-phase Butterworth band-pass). Finally the result is checked against the rig's
-    transducer ranges: one :class:`UserWarning` line per channel whose peak exceeds its range
-    (:func:`range_report` gives the whole table).
-
-    Parameters
-    ----------
-    field : TimeHistory
-        The field record (any sample rate).
-    rig : Rig
-        The rig the desired response is for (its ``outputs``, ``fs`` and band).
-    band : (float, float), optional
-        Simulation band (low, high) [Hz]; default :func:`vrig.reconstruction.defaults.default_band` of the rig.
-    channels : mapping of str to str, optional
-        Rig response name -> field channel name, where the names differ (default: the same
-        names).
-    scale : float or mapping of str to float, optional
-        Factor from the field channel's unit to the rig response's unit (one for all channels or
-        one per rig response name), a level scaling included; required for a channel whose unit
-        differs from the rig's (:data:`UNIT_FACTORS` names the usual ones).
-
-    Returns
-    -------
-    TimeHistory
-        DESRES: the rig's responses (names and units) at ``rig.fs``.
-
-    Raises
-    ------
-    ValueError
-        A rig response without a field channel, a unit mismatch without a ``scale``, a bad
-        band or factor, a record too short to filter.
-    """
-    _check_th(field, "field")
-    cols = _mapped_columns(field, rig, channels)
-    factors = _unit_factors(field, cols, rig, scale)
-    band = _check_band(default_band(rig) if band is None else band, rig.fs)
-    x = signal.detrend(field.data[:, cols], axis=0, type="linear") * factors
-    x = _resample(x, field.fs, float(rig.fs))
-    if x.shape[0] < 16:
-        raise ValueError(f"the field record is too short: {x.shape[0]} samples at {rig.fs:g} Hz")
-    names, units = [c.name for c in rig.outputs], [c.unit for c in rig.outputs]
-    desired = gprepro(TimeHistory(x, rig.fs, names, units), band)
-    report = range_report(rig, desired)
-    for row in report.rows:
-        if row.exceeds:
-            warnings.warn(f"f2d: {row.describe()}", UserWarning, stacklevel=2)
-    return desired
-
-
-# ---------------------------------------------------------------------------- range check
-@dataclass(frozen=True)
-class RangeRow:
-    """One response channel of a desired response against its transducer range.
-
-    Attributes
-    ----------
-    name, unit : str
-        The rig's response channel and its unit.
-    peak : float
-        Largest ``|value|`` of the desired response [unit].
-    full_scale : float
-        The transducer range ± [unit] (beyond it the rig's range interlock trips).
-    fraction_beyond : float
-        Fraction of the samples with ``|value| > full_scale`` (0 .. 1).
-    """
-
-    name: str
-    unit: str
-    peak: float
-    full_scale: float
-    fraction_beyond: float
-
-    @property
-    def peak_fraction(self) -> float:
-        """``peak / full_scale`` (> 1: beyond the range)."""
-        return self.peak / self.full_scale
-
-    @property
-    def exceeds(self) -> bool:
-        """The peak lies beyond the transducer range."""
-        return self.peak > self.full_scale
-
-    def describe(self) -> str:
-        """One line: the channel, its peak against the range and the samples beyond it."""
-        return (
-            f"{self.name} peaks at {self.peak:.4g} {self.unit}, {100 * self.peak_fraction:.1f} % "
-            f"of the transducer range ±{self.full_scale:g} {self.unit}; "
-            f"{100 * self.fraction_beyond:.2f} % of the samples lie beyond it"
-        )
-
-
-@dataclass(frozen=True)
-class RangeReport:
-    """A desired response against the rig's transducer ranges (:func:`range_report`).
-
-    Attributes
-    ----------
-    rows : tuple of RangeRow
-        One per response channel, in the rig's order.
-    """
-
-    rows: tuple[RangeRow, ...]
-
-    @property
-    def exceeding(self) -> tuple[str, ...]:
-        """The channels whose peak exceeds the transducer range."""
-        return tuple(r.name for r in self.rows if r.exceeds)
-
-    def table(self) -> str:
-        """The report as a text table, one line per channel."""
-        rows = [["response", "peak", "transducer range", "of range", "samples beyond"]]
-        rows += [
-            [
-                r.name,
-                f"{r.peak:.4g} {r.unit}",
-                f"±{r.full_scale:.4g} {r.unit}",
-                _pct(r.peak_fraction),
-                _pct(r.fraction_beyond) + ("  EXCEEDS" if r.exceeds else ""),
-            ]
-            for r in self.rows
-        ]
-        return "\n".join(_columns(rows))
-
-    def __str__(self) -> str:
-        return self.table()
-
-    def to_dict(self) -> dict:
-        """The report as JSON-able data."""
-        return {
-            "exceeding": list(self.exceeding),
-            "channels": [
-                {
-                    "name": r.name,
-                    "unit": r.unit,
-                    "peak": r.peak,
-                    "full_scale": r.full_scale,
-                    "peak_fraction": r.peak_fraction,
-                    "fraction_beyond": r.fraction_beyond,
-                }
-                for r in self.rows
-            ],
-        }
-
-
-def range_report(rig, desired: TimeHistory) -> RangeReport:
-    """Check a desired response against the rig's transducer ranges.
-
-    Parameters
-    ----------
-    rig : Rig
-        The rig (its ``outputs``: name, unit, full scale = the transducer range).
-    desired : TimeHistory
-        The desired response with the rig's response channels (matched by name).
-
-    Returns
-    -------
-    RangeReport
-        Per channel: peak, range, peak / range and the fraction of samples beyond it.
-    """
-    _check_th(desired, "desired")
-    missing = [c.name for c in rig.outputs if c.name not in desired.names]
-    if missing:
-        raise ValueError(
-            f"the desired response has no channel {missing}; its channels: {list(desired.names)}"
-        )
-    rows = []
-    for c in rig.outputs:
-        x = np.abs(desired.channel(c.name))
-        rows.append(
-            RangeRow(
-                c.name,
-                c.unit,
-                float(x.max()),
-                float(c.full_scale),
-                float(np.mean(x > c.full_scale)),
-            )
-        )
-    return RangeReport(tuple(rows))
-
-
-# ------------------------------------------------------------------------ identification run
-def _default_id_rms(rig) -> np.ndarray:
-    """The identification level of ``vrig reconstruct``: the side-car's ``id_rms`` fraction of
-    each drive's full scale, else 5 %."""
-    full = np.array([c.full_scale for c in rig.inputs], dtype=float)
-    fraction = getattr(getattr(rig, "defaults", None), "id_rms", None)
-    return (0.05 if fraction is None else float(fraction)) * full
-
-
-def identification_records(
-    rig, *, band=None, seconds: float = 30.0, id_rms=None, seed: int = 0
-) -> tuple[TimeHistory, TimeHistory]:
-    """IDDRV and IDRES as :meth:`vrig.reconstruction.DriveIteration.identify` makes them.
-
-    A random drive with a triangular PSD over the identification band
-    (:func:`vrig.processing.identification_band` of ``band``), independent per drive channel,
-    ``id_rms`` RMS, seeded with ``seed``, checked against the drives' full scales and played with
-    ``rig.run(drive, seed=seed)``; the level is halved (up to three times) while the rig refuses
-    it or trips. The same arguments give the records a reconstruction with ``id_seed=seed``
-    identifies from.
-
-    Parameters
-    ----------
-    rig : Rig
-        The rig.
-    band : (float, float), optional
-        Simulation band [Hz] (default :func:`vrig.reconstruction.defaults.default_band`).
-    seconds : float
-        Record length [s].
-    id_rms : float or sequence of float, optional
-        Drive RMS per drive channel in its unit (default: the rig side-car's ``id_rms`` fraction
-        of full scale, else 5 %, as ``vrig reconstruct``).
-    seed : int
-        Seed of the drive and of the rig run.
-
-    Returns
-    -------
-    (drive, response) : TimeHistory, TimeHistory
-    """
-    from .errors import RigLimitError
-    from .rigs.limits import check_drive_limits
-    from .signals import random_drive, triangular_psd
-
-    band = _check_band(default_band(rig) if band is None else band, rig.fs)
-    if not (np.isfinite(seconds) and seconds > 0):
-        raise ValueError(f"seconds must be a finite duration > 0 s, got {seconds!r}")
-    id_band = identification_band(band, fs=rig.fs)
-    shape = triangular_psd((max(id_band[0], 0.0), id_band[1]))
-    rms = _default_id_rms(rig) if id_rms is None else np.asarray(id_rms, float)
-    names = [c.name for c in rig.inputs]
-    for _ in range(4):
-        drive = random_drive(
-            shape,
-            round(seconds * rig.fs),
-            rig.fs,
-            channels=len(names),
-            rms=rms,
-            seed=seed,
-            names=names,
-            unit=rig.inputs[0].unit,
-        )
-        try:
-            check_drive_limits(rig.inputs, drive.data, fs=rig.fs, what="the identification drive")
-            return drive, rig.run(drive, seed=seed)
-        except RigLimitError as exc:
-            rms, last = rms / 2, exc
-    raise last
 
 
 # ------------------------------------------------------------------------------ spectra
@@ -714,22 +346,6 @@ def _json(value):
     return value
 
 
-def _pct(x) -> str:
-    return "-" if x is None or not math.isfinite(x) else f"{100 * x:.1f} %"
-
-
-def _columns(rows: list[list[str]]) -> list[str]:
-    """Rows of cells as lines: the first column left-aligned, the others right-aligned."""
-    widths = [max(len(r[k]) for r in rows) for k in range(len(rows[0]))]
-    return [
-        "  ".join(
-            c.ljust(w) if k == 0 else c.rjust(w)
-            for k, (c, w) in enumerate(zip(r, widths, strict=True))
-        )
-        for r in rows
-    ]
-
-
 @dataclass(frozen=True)
 class TargetCheck:
     """Reachability of a desired response on a rig (:func:`check_target`; the definitions are
@@ -818,7 +434,7 @@ class TargetCheck:
             )
         return "\n".join(
             [
-                f"target check on {self.rig}, band {lo:g}-{hi:g} Hz (vrig.targets)",
+                f"target check on {self.rig}, band {lo:g}-{hi:g} Hz (vrig.desired.reachability)",
                 f"identification {self.id_seconds:g} s at {100 * max(self.id_level):.3g} % of full "
                 f"scale RMS; {self.averages} averages, {self.resolution_hz:.3g} Hz lines; {d0}-{d1} "
                 f"usable drive directions ({len(self.drives)} drives, {len(self.channels)} responses)",
@@ -859,7 +475,7 @@ def _ordered_target(rig, desired: TimeHistory) -> TimeHistory:
     if abs(desired.fs - rig.fs) > 1e-9 * rig.fs:
         raise ValueError(
             f"the target is sampled at {desired.fs:g} Hz but rig {rig.name!r} runs at "
-            f"{rig.fs:g} Hz: resample it first (vrig.targets.f2d)"
+            f"{rig.fs:g} Hz: resample it first (vrig.desired.f2d.f2d)"
         )
     if desired.n_channels != len(names):
         raise ValueError(
@@ -953,7 +569,7 @@ def check_target(
     Per response channel the fraction of the target no drive can reach (the residual of the
     best linear drive) and the rig's target-weighted incoherence; per drive channel the peak of
     that drive (and of its velocity) against the actuator's limits. The definitions are the
-    module's documentation (:mod:`vrig.targets`). The target is processed as a reconstruction
+    module's documentation (:mod:`vrig.desired.reachability`). The target is processed as a reconstruction
     processes it (:func:`vrig.processing.gprepro` over ``band``).
 
     Parameters

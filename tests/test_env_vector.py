@@ -131,7 +131,7 @@ def test_shared_physics_refuses_its_own_options():
 # ------------------------------------------------------------------ batched target records
 # Independent truth: the serial functions (``vrig.pseudo_field``, ``field_record``) and
 # gymnasium's SyncVectorEnv, whose sub-envs make their targets one after another. The pseudo-field
-# level is raised (vrig.field._FIELD_FRACTION) so that targets trip while they are made and are
+# level is raised (vrig.desired.pseudo_field._FIELD_FRACTION) so that targets trip while they are made and are
 # made again at a lower level; and on the elastomeric damper, so that drawn targets trip at IT00
 # and are redrawn (the env's FIELD_REDRAWS rule).
 
@@ -153,7 +153,7 @@ def _same_outcome(got, truth):
 
 
 def test_pseudo_fields_equal_pseudo_field_seed_by_seed_through_tripped_levels(monkeypatch):
-    import vrig.field as field
+    import vrig.desired.pseudo_field as field
 
     monkeypatch.setattr(field, "_FIELD_FRACTION", 0.4)  # 40 %: too large for some seeds
     monkeypatch.setattr(field, "_FIELD_ATTEMPTS", 2)  # ... and then 20 %, the last level
@@ -178,7 +178,7 @@ def test_pseudo_fields_equal_pseudo_field_seed_by_seed_through_tripped_levels(mo
 def test_a_lone_record_plays_its_check_ahead_and_equals_pseudo_field(monkeypatch):
     """One seed on two threads: each level's 1.5x check is played beside its run (the thread
     would idle); whatever the level's outcome, the record (or error) is pseudo_field's."""
-    import vrig.field as field
+    import vrig.desired.pseudo_field as field
 
     monkeypatch.setattr(field, "_FIELD_FRACTION", 0.4)  # as above: some seeds trip at 40 %
     monkeypatch.setattr(field, "_FIELD_ATTEMPTS", 2)
@@ -237,8 +237,8 @@ def test_batched_target_records_equal_serial_resets_when_targets_trip(monkeypatc
     """Elastomeric damper, pseudo-field level 20 %: sub-env 0's first drawn target trips at IT00
     and is redrawn, the others start on theirs; then autoresets (budget 2) make new targets in
     one batch. Every observation, reward and info equals the serial resets' bit for bit."""
+    import vrig.desired.pseudo_field as field
     import vrig.envs.drive_iteration as di
-    import vrig.field as field
 
     monkeypatch.setattr(field, "_FIELD_FRACTION", 0.2)
     damper = next(i for i, kw in ENV_IDS.items() if kw.get("rig") == "elastomeric-damper")
@@ -268,7 +268,7 @@ def test_batched_target_records_equal_serial_resets_when_targets_trip(monkeypatc
 
 
 def test_a_target_that_cannot_be_made_fails_the_batched_reset_as_the_serial_one(monkeypatch):
-    import vrig.field as field
+    import vrig.desired.pseudo_field as field
 
     monkeypatch.setattr(field, "_FIELD_FRACTION", 0.4)
     monkeypatch.setattr(field, "_FIELD_ATTEMPTS", 2)

@@ -118,7 +118,7 @@ def test_desired_response_is_the_rig_at_the_records_severity():
     import numpy as np
 
     from benchmarks.runner.record import _desired
-    from vrig.field import pseudo_field
+    from vrig.desired.pseudo_field import pseudo_field
     from vrig.reconstruction.defaults import default_band
 
     rig = vrig.load_rig(RIG, seed=0, fidelity="fast", severity=2.0)

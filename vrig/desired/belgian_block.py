@@ -7,7 +7,7 @@ pavé at 20 km/h (the vehicle is on the blocks from about 4 s to 280 s). Read in
 copied: :func:`external_data_root` finds the folder.
 
 :func:`belgian_block_desired` makes it the desired response of fuel-tank-7ch's four vertical
-accelerations (F2D, :func:`vrig.targets.f2d`):
+accelerations (F2D, :func:`vrig.desired.f2d.f2d`):
 
 * **channels**: the record's LF, RF, LR and RR wheel accelerations -> ``LF_vertical_acc``,
   ``RF_vertical_acc``, ``LR_vertical_acc``, ``RR_vertical_acc`` (the rig's frame corners, where
@@ -23,9 +23,9 @@ accelerations (F2D, :func:`vrig.targets.f2d`):
   and scored (an under-determined inverse: 7 drives from 4 responses);
 * **units, rate, band**: g -> m/s² (9.80665), 256 -> 250 Hz (``resample_poly`` 125/128), the
   rig's band (1-40 Hz) with de-trend and DC removal;
-* **level** (``scale="auto"``, :func:`vrig.targets.scale_to_limits`): one common factor for the
+* **level** (``scale="auto"``, :func:`vrig.desired.reachability.scale_to_limits`): one common factor for the
   four channels (their ratios are the vehicle's), the largest ``<= 1`` for which the best
-  linear drive (:func:`vrig.targets.check_target`, one identification run) needs at most half
+  linear drive (:func:`vrig.desired.reachability.check_target`, one identification run) needs at most half
   of every actuator's stroke, full scale and velocity limit, and the target at most half of
   every transducer range. Why: at its own level the record (2.4 g RMS, 14 g peak of wheel-hub
   acceleration, mostly at 5-20 Hz) needs about 2 m/s of actuator velocity where the rig's
@@ -40,8 +40,9 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
-from .targets import check_target, f2d, scale_to_limits
-from .timehistory import TimeHistory
+from ..timehistory import TimeHistory
+from .f2d import f2d
+from .reachability import check_target, scale_to_limits
 
 __all__ = [
     "BELGIAN_BLOCK_CHANNELS",
@@ -126,7 +127,7 @@ def belgian_block_record(path=None) -> TimeHistory:
     -------
     TimeHistory
     """
-    from .io import read_rpc3
+    from ..io import read_rpc3
 
     return read_rpc3(belgian_block_path(path))
 
@@ -144,7 +145,7 @@ def belgian_block_rig(rig):
     -------
     Rig
     """
-    from .rigs import OutputSubset
+    from ..rigs import OutputSubset
 
     names = list(BELGIAN_BLOCK_CHANNELS)
     if [c.name for c in rig.outputs] == names:
@@ -192,7 +193,7 @@ def belgian_block_desired(
         The rule's fraction of every actuator limit the best linear drive may use, in (0, 1].
     id_drive, id_response : TimeHistory, optional
         Identification records of :func:`belgian_block_rig` (``scale="auto"``); default: one
-        run of ``seconds`` (:func:`vrig.targets.check_target`).
+        run of ``seconds`` (:func:`vrig.desired.reachability.check_target`).
     seed : int
         Seed of that identification run.
 
