@@ -111,40 +111,16 @@ def split_spectra(split_hz: float, low: Callable, high: Callable, **options) -> 
 
 
 def forward_arx(order: int, **options) -> Callable:
-    """A factory ``(fs) -> identification.Arx`` (QanTiM, normal).
-
-    Parameters
-    ----------
-    order : int
-        Model order.
-    **options
-        Keywords of ``Arx`` (e.g. ``focus``).
-
-    Returns
-    -------
-    callable
-    """
+    """A factory ``(fs) -> identification.Arx`` (QanTiM, normal) of ``order``, with the
+    keywords ``options`` of ``Arx`` (e.g. ``focus``)."""
     from identification import Arx
 
     return lambda fs: Arx(order, **options)
 
 
 def forward_narx(order: int, degree: int, **options) -> Callable:
-    """A factory ``(fs) -> identification.Narx`` (normal).
-
-    Parameters
-    ----------
-    order : int
-        Model order.
-    degree : int
-        Polynomial degree.
-    **options
-        Keywords of ``Narx``.
-
-    Returns
-    -------
-    callable
-    """
+    """A factory ``(fs) -> identification.Narx`` (normal) of ``order`` and ``degree``, with the
+    keywords ``options`` of ``Narx``."""
     from identification import Narx
 
     return lambda fs: Narx(order, degree, **options)
@@ -221,19 +197,8 @@ class PerOutput:
 
 
 def forward_arx_per_output(order: int, **options) -> Callable:
-    """A factory ``(fs) -> PerOutput`` of one ``identification.Arx`` per output.
-
-    Parameters
-    ----------
-    order : int
-        Model order.
-    **options
-        Keywords of ``Arx``.
-
-    Returns
-    -------
-    callable
-    """
+    """A factory ``(fs) -> PerOutput`` of one ``identification.Arx`` of ``order`` per output,
+    with the keywords ``options`` of ``Arx``."""
     from identification import Arx
 
     return lambda fs: PerOutput(lambda: Arx(order, **options))

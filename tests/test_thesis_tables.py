@@ -555,9 +555,7 @@ def test_quick_leaves_out_only_vrig_rows_and_says_so_in_their_cells(monkeypatch)
 
     monkeypatch.setattr(vrig, "load_rig", lambda name, **_kw: types.SimpleNamespace(name=name))
     monkeypatch.setattr(vrig, "reconstruct", reconstruct)
-    monkeypatch.setattr(
-        thesis_tables.run, "_desired", lambda *_a: _records(np.ones(40))[1]
-    )
+    monkeypatch.setattr(thesis_tables.run, "_desired", lambda *_a: _records(np.ones(40))[1])
     table = Table(
         "Table X", "shaker", (0.0, 10.0), ["r"],
         [Row("text row", lambda: _Gain(fits)), Row("vrig: slow", lambda: _Gain(fits), quick=False)],

@@ -65,14 +65,14 @@ class ReferenceFigure:
         modelling error); ``""``: every objective channel (Fig. 3.9's resonance).
     method : str
         The text's procedure in its own words (the row label of its table).
-    condition : str
-        What else singles the figure out (the iteration, the mounting, the identification
-        PSD, the text's channel label); ``""``: nothing.
     order : int or None
         The model order of the procedure (QanTiM/NARX order; the linear part for a combined
         model); ``None`` where no model is fitted.
     band : tuple of float or None
         The simulation band the text used [Hz], where it states one.
+    condition : str
+        What else singles the figure out (the iteration, the mounting, the identification
+        PSD, the text's channel label); ``""``: nothing.
     """
 
     key: str
@@ -84,63 +84,32 @@ class ReferenceFigure:
     rig: str
     channel: str
     method: str
-    condition: str = ""
     order: int | None = None
     band: tuple[float, float] | None = None
+    condition: str = ""
 
 
-def _sim(key, value, table, section, rig, channel, method, order, band, condition=""):
+def _percent(quantity, key, value, table, section, rig, channel, method, order, band, condition=""):
+    """A figure [%] of ``quantity``; the other arguments in :class:`ReferenceFigure`'s order."""
+    return ReferenceFigure(key, value, "%", quantity, table, section, rig, channel, method,
+                           order=order, band=band, condition=condition)  # fmt: skip
+
+
+def _sim(*args, **kw):
     """A simulation error [%] (η0, eq. 5-28, of ITxxRES against DESRES)."""
-    return ReferenceFigure(
-        key,
-        value,
-        "%",
-        "simulation error",
-        table,
-        section,
-        rig,
-        channel,
-        method,
-        condition,
-        order,
-        band,
-    )
+    return _percent("simulation error", *args, **kw)
 
 
-def _model(key, value, table, section, rig, channel, method, order, band, condition=""):
+def _model(*args, **kw):
     """A modelling error [%] (η0 of a model's free run on a held-out record)."""
-    return ReferenceFigure(
-        key,
-        value,
-        "%",
-        "modelling error",
-        table,
-        section,
-        rig,
-        channel,
-        method,
-        condition,
-        order,
-        band,
-    )
+    return _percent("modelling error", *args, **kw)
 
 
 def _rep(key, value, table, section, rig, channel, band, condition=""):
     """A repeatability number [%] (§3.1: 100 - mean η0 of each run against the mean run)."""
-    return ReferenceFigure(
-        key,
-        value,
-        "%",
-        "repeatability number",
-        table,
-        section,
-        rig,
-        channel,
-        "five runs of one triangular-PSD random drive",
-        condition,
-        None,
-        band,
-    )
+    method = "five runs of one triangular-PSD random drive"
+    return _percent("repeatability number", key, value, table, section, rig, channel, method,
+                    None, band, condition)  # fmt: skip
 
 
 _T37 = "table-3.7/rig-specific-psd"
@@ -534,7 +503,7 @@ _ALL = [
         "fuel-tank-2ch",
         "",
         "identification frequency response",
-        "the resonant peak, where the spectrum is split (below / above 12 Hz)",
+        condition="the resonant peak, where the spectrum is split (below / above 12 Hz)",
     ),
 ]
 
