@@ -89,6 +89,9 @@ import math
 import time
 from pathlib import Path
 
+from benchmarks.method_factories import inverse_arx, inverse_narx, split_spectra
+from vrig.reference_figures import figure, repeatability_label
+
 __all__ = [
     "CALIBRATIONS",
     "calibrate",
@@ -106,29 +109,23 @@ REPEATABILITY_TOLERANCE = 1.0  # percentage points
 SECONDS, ID_SECONDS = 20.0, 30.0  # the quick settings: desired response, identification record
 
 
-def _narx(order, degree, **kw):
-    def make():
-        from vrig.reconstruction import InverseNarx
-
-        return InverseNarx(order, degree, **kw)
-
-    return make
+def _text(key: str) -> float:
+    """The reference text's figure of ``key`` (:mod:`vrig.reference_figures`)."""
+    return figure(key).value
 
 
-def _split(split_hz, order):
-    def make():
-        from vrig.reconstruction import InverseArx, SplitSpectra
-
-        return SplitSpectra(split_hz, InverseArx(order), InverseArx(order))
-
-    return make
+def _text_per_channel(*keys: str) -> dict:
+    """``{channel: the text's figure}`` of ``keys`` (:mod:`vrig.reference_figures`)."""
+    return {figure(k).channel: figure(k).value for k in keys}
 
 
-def _controller_noise(full_scale: float) -> dict:
+def _controller_noise(full_scale: float, *references: str) -> dict:
     """The ``repeatability`` block of a rig whose run-to-run variation is the servo controller's
     1/f command/feedback-path noise (``control_noise`` [m rms]): a grid over 0.1-0.4 % of the
-    drive's ``full_scale`` [m]; the text's table, band and numbers come from the side-car."""
+    drive's ``full_scale`` [m]; the text's table, band and numbers are the repeatability
+    figures of ``references`` (keys of :mod:`vrig.reference_figures`, one per channel)."""
     return {
+        "references": references,
         "parameter": "control_noise",
         "grid": [f * full_scale for f in (1e-3, 2e-3, 4e-3)],
         "quick_grid": [f * full_scale for f in (1e-3, 4e-3)],
@@ -139,12 +136,10 @@ def _controller_noise(full_scale: float) -> dict:
     }
 
 
-CALIBRATIONS = {
+_ENTRIES = {
     "elastomeric-damper": {
-        "table": "Table 6.3",
-        "target": 57.0,  # % QanTiM inverse ARX(6), IT00
+        "reference": "table-6.3/qantim-6-inverse",  # QanTiM inverse ARX(6), IT00
         "band": (0.0, 25.0),
-        "arx_order": 6,
         # severity s scales these together (their datasheet-typical defaults x s)
         "severity": ("quadratic_stiffness", "cubic_stiffness"),
         "grid": [1.0, 3.0, 10.0, 20.0, 40.0],
@@ -164,18 +159,20 @@ CALIBRATIONS = {
         # the rows NOT calibrated on: label -> (method factory, iteration, the text's figure %)
         "predict": {
             "NARX(4, 2) full, simulation focus, SEMP terms": (
-                _narx(4, 2, kind="full", focus="simulation", selection="simulation"),
+                inverse_narx(4, 2, kind="full", focus="simulation", selection="simulation"),
                 0,
-                24.0,
+                _text("table-6.3/narx-4-quadratic-inverse"),
             ),
-            "NARX(4, 2) input-polynomial": (_narx(4, 2, kind="input-polynomial"), 0, 24.0),
+            "NARX(4, 2) input-polynomial": (
+                inverse_narx(4, 2, kind="input-polynomial"),
+                0,
+                _text("table-6.3/narx-4-quadratic-inverse"),
+            ),
         },
     },
     "shock-absorber": {
-        "table": "Table 6.16",
-        "target": 27.0,  # % QanTiM inverse ARX(4), IT00 (IT05: 17 %, a prediction)
+        "reference": "table-6.16/qantim-4-inverse/IT00",  # QanTiM inverse ARX(4) (IT05: a prediction)
         "band": (0.0, 10.0),
-        "arx_order": 4,
         "severity": ("free_play",),  # 0.5 mm half-width x s
         "grid": [1.0, 2.0, 3.0, 4.0],  # 0.5 .. 2 mm (the declared maximum)
         "quick_grid": [1.0, 2.0, 4.0],
@@ -194,22 +191,24 @@ CALIBRATIONS = {
             "knee_velocity_rebound": 0.15,
             "knee_velocity_compression": 0.15,
         },
-        "repeatability": _controller_noise(0.05),  # Table 3.1 (the side-car's "repeatability")
+        "repeatability": _controller_noise(0.05, "table-3.1/rubber-bush/damper_load"),
         "predict": {
-            "inverse ARX(4) IT05": ("arx", 5, 17.0),
+            "inverse ARX(4) IT05": ("arx", 5, _text("table-6.16/qantim-4-inverse/IT05")),
             "NARX(4, 3) full, simulation focus, SEMP terms": (
-                _narx(4, 3, kind="full", focus="simulation", selection="simulation"),
+                inverse_narx(4, 3, kind="full", focus="simulation", selection="simulation"),
                 0,
-                18.0,
+                _text("table-6.16/narx-4-cubic-inverse/IT00"),
             ),
-            "NARX(4, 3) input-polynomial": (_narx(4, 3, kind="input-polynomial"), 0, 18.0),
+            "NARX(4, 3) input-polynomial": (
+                inverse_narx(4, 3, kind="input-polynomial"),
+                0,
+                _text("table-6.16/narx-4-cubic-inverse/IT00"),
+            ),
         },
     },
     "radiator": {
-        "table": "Table 6.12",
-        "target": 35.0,  # % QanTiM inverse ARX(6) on the top tank, IT00
+        "reference": "table-6.12/qantim-6-inverse/toptank_acc",  # inverse ARX(6), top tank, IT00
         "band": (2.0, 30.0),
-        "arx_order": 6,
         "responses": ["toptank_acc"],  # the inverse is built on the top tank only
         "channels": ["toptank_acc"],
         "severity": ("vertical_play", "radial_play"),  # 1 mm / 0.5 mm x s
@@ -222,10 +221,10 @@ CALIBRATIONS = {
         # Table 3.3; the doughnuts' contact damping stays at loss factor 0.25: it also sets the
         # text's modes (70 / 150 / 170 Hz, Fig. 3.5) and the rattle above 1 g, which a higher
         # loss factor (0.40 tried) flattens; so the noise alone is calibrated here
-        "repeatability": _controller_noise(0.04),
+        "repeatability": _controller_noise(0.04, "table-3.3/base_acc", "table-3.3/toptank_acc"),
         "predict": {
             "NARX(6, 2) full, simulation focus, SEMP terms, top tank": (
-                _narx(
+                inverse_narx(
                     6,
                     2,
                     kind="full",
@@ -234,17 +233,20 @@ CALIBRATIONS = {
                     responses=["toptank_acc"],
                 ),
                 0,
-                16.0,
+                _text("table-6.12/narx-6-quadratic-inverse/toptank_acc"),
             ),
             "NARX(6, 2) input-polynomial, top tank": (
-                _narx(6, 2, kind="input-polynomial", responses=["toptank_acc"]),
+                inverse_narx(6, 2, kind="input-polynomial", responses=["toptank_acc"]),
                 0,
-                16.0,
+                _text("table-6.12/narx-6-quadratic-inverse/toptank_acc"),
             ),
             "non-square NARX(6, 2) full, simulation focus, top tank + base": (
-                _narx(6, 2, kind="full", focus="simulation"),
+                inverse_narx(6, 2, kind="full", focus="simulation"),
                 0,
-                {"toptank_acc": 14.0, "base_acc": 12.0},
+                _text_per_channel(
+                    "table-6.12/non-square-narx-6-quadratic-inverse/toptank_acc",
+                    "table-6.12/non-square-narx-6-quadratic-inverse/base_acc",
+                ),
             ),
         },
     },
@@ -262,14 +264,14 @@ CALIBRATIONS = {
             "blowoff_ratio_rebound": 0.35,
             "series_stiffness": 1.4e7,
         },
-        "repeatability": _controller_noise(0.07),  # Table 3.2
+        "repeatability": _controller_noise(
+            0.07, "table-3.2/spindle_acc", "table-3.2/spring_strain"
+        ),
         "predict": {},
     },
     "fuel-tank-2ch": {
-        "table": "Table 3.4",
-        "target": 46.0,  # % QanTiM full-spectrum inverse ARX(4), IT00, both channels
+        "reference": "table-3.4/full-spectrum/fore_acc",  # inverse ARX(4), IT00; aft_acc's is the same
         "band": (1.0, 40.0),
-        "arx_order": 4,
         "channels": ["fore_acc", "aft_acc"],  # objective: their mean; each within ±25 %
         # the buffer's force law x s (110 N/mm and its neo-Hookean terms: one compound's E)
         "severity": ("buffer_stiffness", "buffer_quadratic_stiffness", "buffer_cubic_stiffness"),
@@ -281,43 +283,58 @@ CALIBRATIONS = {
         "what": "the rubber buffers' force law (buffer_stiffness with its neo-Hookean "
         "buffer_quadratic_stiffness and buffer_cubic_stiffness)",
         "resonance": {
-            "figure": "Figure 3.9",
-            "target_hz": 12.0,  # §3.2.1: the spectrum split at 12 Hz, at the resonant peak
+            "reference": "figure-3.9/resonance",  # §3.2.1: the split at the resonant peak
             "tolerance_hz": 1.0,  # the split read to the nearest Hz; 12 Hz inside the hump
             "nperseg": 1024,  # 0.24 Hz lines at 250 Hz; 30 s: 13 averages
             "level": 0.5,  # the half-power hump
         },
         "predict": {
             "split spectra (12 Hz), inverse ARX(4) below and above": (
-                _split(12.0, 4),
+                split_spectra(12.0, inverse_arx(4), inverse_arx(4)),
                 0,
-                {"fore_acc": 20.0, "aft_acc": 19.0},
+                _text_per_channel(
+                    "table-3.4/split-spectra-12hz/fore_acc", "table-3.4/split-spectra-12hz/aft_acc"
+                ),
             ),
         },
     },
 }
 
 
+def _with_the_texts_figures(entry: dict) -> dict:
+    """``entry`` with the reference text's figures it names by key (:mod:`vrig.reference_figures`)
+    written out: from its ``reference`` the ``table``, ``target`` and ``arx_order`` of the linear
+    baseline; from its resonance block's ``reference`` the ``figure`` and ``target_hz``; from its
+    repeatability block's ``references`` the ``table``, ``band`` and numbers as ``targets`` (the
+    side-car's ``"repeatability"`` block holds the same, checked by
+    ``tests/test_reference_figures.py``)."""
+    out = dict(entry)
+    if "reference" in entry:
+        base = figure(entry["reference"])
+        out.update(table=base.table, target=base.value, arx_order=base.order)
+    if "resonance" in entry:
+        res = figure(entry["resonance"]["reference"])
+        out["resonance"] = {**entry["resonance"], "figure": res.table, "target_hz": res.value}
+    if "repeatability" in entry:
+        figs = [figure(k) for k in entry["repeatability"]["references"]]
+        out["repeatability"] = {
+            "table": repeatability_label(figs[0]),
+            "band": figs[0].band,
+            "targets": {f.channel: f.value for f in figs},
+            **entry["repeatability"],
+        }
+    return out
+
+
+CALIBRATIONS = {name: _with_the_texts_figures(entry) for name, entry in _ENTRIES.items()}
+"""One entry per calibrated rig (the module documentation), the text's figures written out."""
+
+
 def _cal(rig_name: str) -> dict:
-    """The rig's ``CALIBRATIONS`` entry; its ``repeatability`` block completed from the
-    side-car's ``"repeatability"`` (the text's ``table``, ``band`` and numbers as ``targets``:
-    one source, also read by ``vrig repeatability``)."""
+    """The rig's ``CALIBRATIONS`` entry."""
     if rig_name not in CALIBRATIONS:
         raise SystemExit(f"no calibration defined for {rig_name!r}; have {sorted(CALIBRATIONS)}")
-    cal = CALIBRATIONS[rig_name]
-    if "repeatability" not in cal:
-        return cal
-    from vrig.rigs import rig_path
-    from vrig.rigs.spec import read_description
-
-    text = read_description(rig_path(rig_name)).repeatability  # parsed and checked by vrig
-    rep = {
-        "table": text["table"],
-        "band": text["band"],
-        "targets": dict(text["numbers"]),
-        **cal["repeatability"],
-    }
-    return {**cal, "repeatability": rep}
+    return CALIBRATIONS[rig_name]
 
 
 def _arx_label(cal: dict) -> str:
@@ -956,6 +973,7 @@ def write_variant(rig_name: str, result: dict, name: str = "thesis") -> Path:
         "description": desc,
         "parameters": {k: float(f"{x:.4g}") for k, x in v.items()},
         "calibration": {
+            "reference": cal["reference"],
             "observable": f"{cal['table']} {_arx_label(cal)} [%], quick settings",
             "target": cal["target"],
             "achieved": round(result["objective"], 2),
@@ -986,6 +1004,7 @@ def _resonance_description(res_cal: dict, result: dict) -> str:
 def _resonance_observable(res_cal: dict, result: dict) -> dict:
     """The variant's ``calibration.resonance`` block."""
     return {
+        "reference": res_cal["reference"],
         "observable": f"{res_cal['figure']} resonance [Hz]: centroid of the half-power hump of "
         "each direct identification H1 FRF",
         "target_hz": res_cal["target_hz"],
@@ -997,6 +1016,7 @@ def _resonance_observable(res_cal: dict, result: dict) -> dict:
 def _repeatability_observable(rep_cal: dict, result: dict) -> dict:
     lo, hi = rep_cal["band"]
     return {
+        "references": {figure(k).channel: k for k in rep_cal["references"]},
         "observable": f"{rep_cal['table']} repeatability number [%], {lo:g}-{hi:g} Hz",
         "target": dict(rep_cal["targets"]),
         "achieved": {n: round(r, 2) for n, r in result["repeatability"].items()},

@@ -38,6 +38,9 @@ from collections.abc import Callable
 
 import numpy as np
 
+from benchmarks.method_factories import inverse_arx, inverse_narx
+from vrig.reference_figures import figure
+
 __all__ = [
     "TARGET_SEED",
     "identification_levels",
@@ -49,8 +52,12 @@ __all__ = [
 
 TARGET_SEED = 11
 """Seed of the constructed targets' random drives (the identification seeds are 0, 1, 2)."""
-TEXT_ARX_ORDER = {"elastomeric-damper": 6, "shock-absorber": 4}
-"""The ARX order of the text's table for a rig (Tables 6.3 and 6.16) when its side-car sets none."""
+TEXT_ARX_ORDER = {
+    f.rig: f.order
+    for f in map(figure, ("table-6.3/qantim-6-inverse", "table-6.16/qantim-4-inverse/IT00"))
+}
+"""The ARX order of the text's table for a rig (Tables 6.3 and 6.16, :mod:`vrig.reference_figures`)
+when its side-car sets none."""
 
 
 def slow_ditch_drive(
@@ -163,19 +170,17 @@ def methods_for(rig) -> list[tuple[str, str, Callable]]:
     -------
     list of tuple
     """
-    from vrig.reconstruction import InverseArx, InverseNarx
-
     stem = rig.name.split("/")[-1].removesuffix(".xml")
     order = rig.defaults.method("arx").order or TEXT_ARX_ORDER.get(stem, 4)
     m = rig.defaults.method("narx")
     no, nd = m.order or 4, m.degree or 2
     return [
-        (f"ARX({order})", "arx", lambda: InverseArx(order)),
-        (f"NARX({no},{nd}) least squares", "narx", lambda: InverseNarx(no, nd)),
+        (f"ARX({order})", "arx", inverse_arx(order)),
+        (f"NARX({no},{nd}) least squares", "narx", inverse_narx(no, nd)),
         (
             f"NARX({no},{nd}) full, simulation focus",
             "narx",
-            lambda: InverseNarx(no, nd, kind="full", focus="simulation"),
+            inverse_narx(no, nd, kind="full", focus="simulation"),
         ),
     ]
 

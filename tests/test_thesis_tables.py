@@ -78,21 +78,21 @@ def _fake_runs(monkeypatch):
             calls.append((table.rig, variant, severity))
         return [[10.0 + len(calls.targets)] * len(table.channels) for _ in table.rows]
 
-    monkeypatch.setattr(thesis_tables, "run_table", run_table)
+    monkeypatch.setattr(thesis_tables.run, "run_table", run_table)
     monkeypatch.setattr(
-        thesis_tables,
+        thesis_tables.run,
         "table_3_7",
         lambda *, variant, **_kw: calls.append(("fuel-tank-7ch", variant, None)) or ([], {}),
     )
-    monkeypatch.setattr(thesis_tables, "_markdown_3_7", lambda names, out, setting: setting)
-    monkeypatch.setattr(thesis_tables, "belgian_road_example", lambda **_kw: "")
+    monkeypatch.setattr(thesis_tables.render, "_markdown_3_7", lambda names, out, setting: setting)
+    monkeypatch.setattr(thesis_tables.run, "belgian_road_example", lambda **_kw: "")
 
     def run_normal_table(table, *, level, variant, severity, **_kw):
         calls.normal.append((table.name.split(":")[0], variant, severity, level))
         vals = [[20.0 - k] * len(table.channels) for k in range(len(table.rows))]
         return vals, [""] * len(table.rows), "1 m"
 
-    monkeypatch.setattr(thesis_tables, "run_normal_table", run_normal_table)
+    monkeypatch.setattr(thesis_tables.run, "run_normal_table", run_normal_table)
     return calls
 
 
@@ -494,7 +494,7 @@ def test_a_tables_two_targets_share_the_fit_of_equal_identification_records(monk
     monkeypatch.setattr(vrig, "load_rig", lambda name, **_kw: types.SimpleNamespace(name=name))
     monkeypatch.setattr(vrig, "reconstruct", reconstruct)
     monkeypatch.setattr(
-        thesis_tables,
+        thesis_tables.run,
         "_desired",
         lambda rig, band, seconds, cache, target: _records(np.full(40, targets[target]))[1],
     )
@@ -555,9 +555,7 @@ def test_quick_leaves_out_only_vrig_rows_and_says_so_in_their_cells(monkeypatch)
 
     monkeypatch.setattr(vrig, "load_rig", lambda name, **_kw: types.SimpleNamespace(name=name))
     monkeypatch.setattr(vrig, "reconstruct", reconstruct)
-    monkeypatch.setattr(
-        thesis_tables, "_desired", lambda *_a: _records(np.ones(40))[1]
-    )
+    monkeypatch.setattr(thesis_tables.run, "_desired", lambda *_a: _records(np.ones(40))[1])
     table = Table(
         "Table X", "shaker", (0.0, 10.0), ["r"],
         [Row("text row", lambda: _Gain(fits)), Row("vrig: slow", lambda: _Gain(fits), quick=False)],
