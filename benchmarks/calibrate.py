@@ -358,7 +358,7 @@ def _reconstruct(rig, cal: dict, method, iterations: int = 0):
     """The text's procedure on ``rig`` at quick settings: a list (per iteration) of
     ``{channel: η %}``."""
     import vrig
-    from vrig.field import pseudo_field
+    from vrig.desired.pseudo_field import pseudo_field
 
     band = cal["band"]
     _drive, desired = pseudo_field(rig, band, SECONDS, seed=0)
@@ -623,7 +623,7 @@ def repeatability_channels(rig, rig_name: str) -> dict:
     block: the procedure of ``vrig repeatability --band LOW HIGH`` (a 20 s pseudo-field drive of
     seed 0 over the table's band, played five times, rig noise seeds 10 000 + k), the number of
     :func:`vrig.repeatability.repeatability_number` in that band."""
-    from vrig.field import pseudo_field
+    from vrig.desired.pseudo_field import pseudo_field
     from vrig.repeatability import repeatability_number
 
     rep_cal = _cal(rig_name)["repeatability"]
@@ -742,7 +742,7 @@ def resonance_channels(rig, rig_name: str) -> dict:
     procedure at quick settings (the engine's default identification drive, as the linear
     baseline's: triangular over the identification band, 5 % of full scale RMS halved while the
     rig trips, 30 s, seed 0; the desired response is the baseline's pseudo-field record)."""
-    from vrig.field import pseudo_field
+    from vrig.desired.pseudo_field import pseudo_field
     from vrig.reconstruction import DriveIteration
     from vrig.spectra import frf_resonance
 

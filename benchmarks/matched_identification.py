@@ -17,7 +17,7 @@ block sets one (``id_rms``; ``vrig reconstruct`` uses it), and the **matched** o
 Targets (``--desired`` replaces them with one record of the given rig):
 
 - ``pseudo-field``: the rig's response to a triangular-PSD drive at 10 % of full scale
-  (:func:`vrig.field.pseudo_field`, seed :data:`TARGET_SEED`: a seed different from the
+  (:func:`vrig.desired.pseudo_field.pseudo_field`, seed :data:`TARGET_SEED`: a seed different from the
   identification seeds, so that no identification drive shares the target drive's random
   phases), on the shock absorber and the elastomeric damper;
 - ``slow-ditch``: the damper's response to :func:`slow_ditch_drive`, two large slow half-cosine
@@ -321,7 +321,7 @@ def report(title: str, stats: dict, rows: list[dict]) -> str:
 def _targets(args, log):
     """(title, rig, desired) of every target of the run."""
     import vrig
-    from vrig.field import pseudo_field
+    from vrig.desired.pseudo_field import pseudo_field
     from vrig.reconstruction.defaults import default_band
 
     if args.desired is not None:

@@ -74,7 +74,7 @@ class Table:
     note: str = ""
     baseline: int = 0  # the row gains are measured from when no row was calibrated on
     target: str = (
-        "pseudo-field"  # the text's kind of desired response (vrig.field.desired_response)
+        "pseudo-field"  # the text's kind of desired response (vrig.desired.kinds.desired_response)
     )
 
     def verdict_rows(self):

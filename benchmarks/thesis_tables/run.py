@@ -49,9 +49,9 @@ def _setting(rig_name: str, requested: str | None, severity: float | None) -> tu
 
 def _desired(rig, band, seconds, cache, target: str = "pseudo-field"):
     """The table's desired response on ``rig`` (cached): ``target`` made by
-    :func:`vrig.field.desired_response` (a pseudo-field record over ``band``, or a service
+    :func:`vrig.desired.kinds.desired_response` (a pseudo-field record over ``band``, or a service
     record of the rig's field twin)."""
-    from vrig.field import desired_response
+    from vrig.desired.kinds import desired_response
 
     key = (rig.name, getattr(rig, "variant", None), getattr(rig, "severity", None), band,
            seconds, target)  # fmt: skip
@@ -82,7 +82,7 @@ def run_table(
 
     ``variant``/``severity``: as resolved by :func:`resolve_variant`/:func:`resolve_severity`
     (``None``: the rig's default, as loaded). ``target``: the desired response's kind
-    (:func:`vrig.field.desired_response`: ``"pseudo-field"`` or ``"field:<scenario>"``).
+    (:func:`vrig.desired.kinds.desired_response`: ``"pseudo-field"`` or ``"field:<scenario>"``).
     ``cache``: the desired responses and, under ``"fits"``, the rows' inverse fits, shared
     between the runs of a row on the same identification records
     (:class:`~benchmarks.shared_fits.SharedFit`: the default identification does not depend on
@@ -279,7 +279,7 @@ class TableRun(NamedTuple):
     setting: str  # the variant (and severity) in words, with the target
     values: list  # per row: per-channel η0 [%], or why the procedure failed (a string)
     variant: str  # the calibrated verdict's variant ("thesis on field:..." on a field target)
-    target: str  # the desired response's kind (vrig.field.desired_response)
+    target: str  # the desired response's kind (vrig.desired.kinds.desired_response)
 
 
 def table_3_7(*, seconds: float, order: int = 4, variant: str | None = None, log=print):
@@ -376,15 +376,19 @@ def belgian_road_example(
     of the seven-channel fuel-tank rig: Table 3.7's rig on the text's kind of target (a road
     simulation).
 
-    F2D by :func:`vrig.records.belgian_block_desired` (the one place it is done: the four outer
+    F2D by :func:`vrig.desired.belgian_block.belgian_block_desired` (the one place it is done: the four outer
     wheels to the four vertical accelerations, 256 -> 250 Hz, band 1-40 Hz, 5 s skipped, one
     common scale so the best linear drive needs at most half of every actuator limit); the
-    inverse is built on the four vertical responses (:func:`vrig.records.belgian_block_rig`: 7
+    inverse is built on the four vertical responses (:func:`vrig.desired.belgian_block.belgian_block_rig`: 7
     drives from 4 responses); the lateral and longitudinal responses are not controlled and not
     scored.
     """
     import vrig
-    from vrig.records import belgian_block_desired, belgian_block_path, belgian_block_rig
+    from vrig.desired.belgian_block import (
+        belgian_block_desired,
+        belgian_block_path,
+        belgian_block_rig,
+    )
 
     try:
         path = belgian_block_path()
@@ -405,7 +409,7 @@ def belgian_road_example(
     return (
         "### Belgian-block road record on the seven-channel fuel tank (ARX, 1-40 Hz)\n\n"
         f"rig `fuel-tank-7ch`, variant {full.variant!r}; "
-        f"{seconds:g} s of the four outer wheel accelerations (vrig.records.belgian_block_desired: "
+        f"{seconds:g} s of the four outer wheel accelerations (vrig.desired.belgian_block.belgian_block_desired: "
         f"scaled so the best linear drive needs at most half of every actuator limit; "
         f"{', '.join(f'{v:.2f}' for v in rms)} m/s² RMS)\n\n"
         "```\n" + res.table() + f"\n```\n{('stopped: ' + res.stopped) if res.stopped else ''}\n"
