@@ -4,7 +4,8 @@ A real road-load measurement (``vrig.desired.belgian_block``: six wheel accelera
 pavé at 20 km/h) becomes the desired response of fuel-tank-7ch's four vertical accelerations by
 the documented F2D and scaling rule (:func:`vrig.desired.belgian_block.belgian_block_desired`), and
 :func:`vrig.reconstruct` plays it on the rig at its default settings (fidelity full, the default
-variant, method ARX order 4, the side-car's gain, 5 % identification drive halved until the rig
+variant, method ARX, every other value resolved as ``vrig reconstruct`` resolves it:
+:func:`vrig.reconstruction.defaults.resolve`; the identification drive halved until the rig
 accepts it). Prints the reachability check at the record's own level and at the scaled level,
 the scaling rule's factor and what set it, the iteration table, IT00 and the best η0 per
 channel, whether an interlock tripped (which limit, on which channel), and the lateral and
@@ -28,17 +29,10 @@ import numpy as np
 
 import vrig
 from vrig.desired.belgian_block import belgian_block_desired, belgian_block_path, belgian_block_rig
-from vrig.desired.identification import identification_records
 from vrig.desired.reachability import check_target, scale_to_limits
 from vrig.files import atomic_write
-from vrig.reconstruction.defaults import default_band
-
-DEFAULT_GAIN = 0.8  # vrig reconstruct's gain where the side-car names none
-
-
-def _gain(rig, method: str) -> float:
-    d = rig.defaults
-    return next(g for g in (d.method(method).gain, d.gain, DEFAULT_GAIN) if g is not None)
+from vrig.reconstruction.defaults import default_band, resolve
+from vrig.reconstruction.id_drive import identification_run
 
 
 def _targets(view, seconds: float, start: float, seed: int, drive_fraction: float):
@@ -46,7 +40,9 @@ def _targets(view, seconds: float, start: float, seed: int, drive_fraction: floa
     check (one identification run, the one reconstruct makes with the same seed)."""
     band = default_band(view)
     physical = belgian_block_desired(view, seconds=seconds, start=start, scale=1.0)
-    iddrv, idres = identification_records(view, band=band, seconds=seconds, seed=seed)
+    level = resolve(view, method="arx", bandwidth=band).settings.id_rms  # reconstruct's own
+    run = identification_run(view, band, round(seconds * view.fs), level, seed=seed)
+    iddrv, idres = run.drive, run.response
     own = check_target(view, physical, id_drive=iddrv, id_response=idres)
     rule = scale_to_limits(view, physical, own, drive_fraction=drive_fraction)
     desired = physical.with_data(physical.data * rule.factor)
@@ -54,15 +50,14 @@ def _targets(view, seconds: float, start: float, seed: int, drive_fraction: floa
     return desired, own, rule, scaled
 
 
-def _play(view, desired, args, gain: float):
-    """(result or None, error text): the reconstruction at the rig's defaults."""
+def _play(view, desired, args):
+    """(result or None, error text): the reconstruction at the rig's defaults (resolved as
+    every door resolves them: :func:`vrig.reconstruction.defaults.resolve`)."""
     try:
         result = vrig.reconstruct(
             view,
             desired,
             method="arx",
-            order=4,
-            gain=gain,
             iterations=args.iterations,
             seed=args.seed,
             progress=True,
@@ -157,8 +152,7 @@ def main(argv=None) -> int:
     desired, own, rule, scaled = _targets(
         view, args.seconds, args.start, args.seed, args.drive_fraction
     )
-    gain = _gain(rig, "arx")
-    result, error = _play(view, desired, args, gain)
+    result, error = _play(view, desired, args)
     report = _report(result, error)
     horizontals = _horizontals(rig, result, args.seed)
     _print(rule, own, scaled, result, report, horizontals)
@@ -172,10 +166,7 @@ def main(argv=None) -> int:
             "start": args.start,
             "iterations": args.iterations,
             "seed": args.seed,
-            "method": "arx",
-            "order": 4,
-            "gain": gain,
-            "band_hz": list(default_band(view)),
+            "resolved": None if result is None else result.resolved,
             "drive_fraction": args.drive_fraction,
         },
         "scale": {"factor": rule.factor, "binding": rule.binding, "rule": rule.describe()},

@@ -22,7 +22,6 @@ from scipy import signal
 import vrig
 from vrig.cli import main
 from vrig.desired.f2d import f2d
-from vrig.desired.identification import identification_records
 from vrig.desired.pseudo_field import pseudo_field
 from vrig.desired.range_report import range_report
 from vrig.desired.reachability import check_target, multiple_coherence, scale_to_limits
@@ -355,16 +354,28 @@ def test_the_needed_drive_of_a_pseudo_field_target_is_its_drive():
     assert check.drives[0].needed_peak == pytest.approx(made, rel=0.15)
 
 
-def test_identification_records_are_the_reconstructions():
+def test_the_target_check_identifies_as_the_reconstruction_does(monkeypatch):
+    """check_target's own identification run is the engine's (one identification drive): with
+    the same band, level and seed it plays the same IDDRV and gets the same IDRES."""
+    from vrig.desired import reachability
     from vrig.reconstruction import DriveIteration
 
     rig = vrig.load_rig("shock-absorber", fidelity="fast")
     desired = rig.run(_drive_for(rig), seed=2)
     engine = DriveIteration(rig, desired, id_seed=4)
     engine.identify()
-    drive, response = identification_records(rig, seconds=desired.duration, seed=4)
-    np.testing.assert_array_equal(drive.data, engine.id_drive.data)
-    np.testing.assert_array_equal(response.data, engine.id_response.data)
+    seen = {}
+    real = reachability._lines
+
+    def lines(drive, response, *a):
+        seen["pair"] = (drive, response)
+        return real(drive, response, *a)
+
+    monkeypatch.setattr(reachability, "_lines", lines)
+    check_target(rig, desired, seed=4)
+    drive, response = seen["pair"]
+    np.testing.assert_array_equal(drive, engine.id_drive.data)
+    np.testing.assert_array_equal(response, engine.id_response.data)
 
 
 def _drive_for(rig, seconds=10.0):

@@ -12,8 +12,6 @@ One module per concept (import the names from their module; the most used ones a
 * :mod:`vrig.desired.range_report`: a desired response against the rig's transducer ranges;
 * :mod:`vrig.desired.reachability`: which part of a target no drive reaches, the drive it needs,
   and the rule that scales it to the rig's limits;
-* :mod:`vrig.desired.identification`: the identification records the reachability estimate is
-  made from;
 * :mod:`vrig.desired.belgian_block`: a real road record (the Belgian block) as fuel-tank-7ch's
   desired response.
 

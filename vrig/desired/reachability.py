@@ -6,7 +6,7 @@ what the rig can play.
   rig can reach, and per drive channel the peak drive (and velocity) the target would need
   against the actuator's limits. It needs one identification run of the rig (random drive over
   the identification band, the kind :func:`vrig.reconstruct` plays) or the records of one
-  (:func:`vrig.desired.identification.identification_records`).
+  (:func:`vrig.reconstruction.id_drive.identification_run`, the reconstruction's own).
 * :func:`scale_to_limits` is the one documented rule that scales a too-severe (or any) target
   down to what the rig can play.
 
@@ -72,7 +72,6 @@ from ..processing import gprepro
 from ..reconstruction.defaults import default_band
 from ..timehistory import TimeHistory
 from ._checks import _check_band, _check_th
-from .identification import identification_records
 from .range_report import _columns, _pct, range_report
 
 __all__ = [
@@ -488,12 +487,19 @@ def _ordered_target(rig, desired: TimeHistory) -> TimeHistory:
 
 
 def _id_pair(rig, id_drive, id_response, n: int, band, id_rms, seed: int):
-    """The identification records: given (checked) or made (:func:`identification_records`)."""
+    """The identification records: given (checked) or made by the one identification drive
+    (:func:`vrig.reconstruction.id_drive.identification_run`, at ``vrig reconstruct``'s level
+    unless ``id_rms`` is given: :func:`vrig.reconstruction.defaults.resolve`)."""
     if (id_drive is None) != (id_response is None):
         raise ValueError("give both id_drive and id_response, or neither")
     if id_drive is None:
-        seconds = n / rig.fs
-        return identification_records(rig, band=band, seconds=seconds, id_rms=id_rms, seed=seed)
+        from ..reconstruction.defaults import resolve
+        from ..reconstruction.id_drive import identification_run
+
+        if id_rms is None:
+            id_rms = resolve(rig, bandwidth=band).settings.id_rms
+        run = identification_run(rig, band, n, id_rms, seed=seed)
+        return run.drive, run.response
     for th, what, chans in (
         (id_drive, "id_drive", rig.inputs),
         (id_response, "id_response", rig.outputs),
@@ -585,8 +591,8 @@ def check_target(
         Length of the identification run [s] (default: the target's length, as a
         reconstruction identifies). Not used with ``id_drive`` / ``id_response``.
     id_rms : float or sequence of float, optional
-        Identification drive RMS per drive channel in its unit (default as ``vrig
-        reconstruct``: :func:`identification_records`).
+        Identification drive RMS per drive channel in its unit (default: ``vrig
+        reconstruct``'s level, :func:`vrig.reconstruction.defaults.resolve`).
     seed : int
         Seed of the identification drive and run.
     id_drive, id_response : TimeHistory, optional
