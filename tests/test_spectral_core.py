@@ -142,7 +142,7 @@ def _old_linearity_coherence(x, y, fs, nperseg):
 
 def _old_linearity_h1(x, y, fs, nperseg, inb):
     """PRE-REFACTOR vrig/linearity.py::_coherence_test's H1 (83cad8a): (F, nu, ny)."""
-    f, suu, suy, _ = _old_csd_matrix(x, y, fs, nperseg)
+    _f, suu, suy, _ = _old_csd_matrix(x, y, fs, nperseg)
     h1 = np.zeros_like(suy)
     for i in np.flatnonzero(inb):
         h1[i] = np.linalg.pinv(suu[i]) @ suy[i]
