@@ -45,6 +45,7 @@ __all__ = [
     "frf_from_spectra",
     "frf_h1",
     "frf_resonance",
+    "interpolate_lines",
     "matched_drive_psd",
     "psd_function",
     "spectral_matrix",
@@ -343,16 +344,33 @@ def frf_filter(M, f, fs: float, x, *, dc: bool = True) -> np.ndarray:
     n = x.shape[0]
     n_fft = 2 * n
     X = np.fft.rfft(x, n=n_fft, axis=0)
-    Mi = _interp_lines(M, f, np.fft.rfftfreq(n_fft, 1.0 / fs))
+    Mi = interpolate_lines(M, f, np.fft.rfftfreq(n_fft, 1.0 / fs))
     if not dc:
         Mi[0] = 0.0
     return np.fft.irfft(np.einsum("fij,fj->fi", Mi, X), n=n_fft, axis=0)[:n]
 
 
-def _interp_lines(M: np.ndarray, f: np.ndarray, f_new: np.ndarray) -> np.ndarray:
-    """``M`` (F, ...) complex interpolated linearly at ``f_new``, real and imaginary parts of
-    every entry at once, in :func:`numpy.interp`'s arithmetic (bit for bit): the end values
-    outside ``f``, a line's own value on it, ``slope (x - f_j) + M_j`` between."""
+def interpolate_lines(M, f, f_new) -> np.ndarray:
+    """A complex array given on spectral lines, interpolated linearly onto other frequencies:
+    real and imaginary parts of every entry at once, in :func:`numpy.interp`'s arithmetic (bit
+    for bit): the end values outside ``f``, a line's own value on it, ``slope (x - f_j) + M_j``
+    between (:func:`frf_filter`'s interpolation).
+
+    Parameters
+    ----------
+    M : array_like (F, ...), complex
+        Values on the lines ``f``.
+    f : array_like (F,)
+        Increasing lines [Hz], at least 2.
+    f_new : array_like (F_new,)
+        Frequencies to interpolate at [Hz].
+
+    Returns
+    -------
+    ndarray (F_new, ...), complex
+    """
+    M = np.asarray(M, dtype=complex)
+    f, f_new = np.asarray(f, dtype=float), np.asarray(f_new, dtype=float)
     flat = np.ascontiguousarray(M.reshape(M.shape[0], -1)).view(float)  # (F, 2 entries)
     j = np.clip(np.searchsorted(f, f_new, side="right") - 1, 0, f.size - 2)
     x0, x1 = f[j], f[j + 1]
