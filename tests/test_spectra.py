@@ -57,7 +57,8 @@ def test_h1_estimates_a_known_mimo_system_despite_output_noise():
     rng = np.random.default_rng(1)
     x = rng.standard_normal((2**17, 2))
     y = _run(x) + 0.05 * rng.standard_normal((2**17, 3))  # transducer noise on the responses
-    f, h = frf_h1(x, y, fs=FS, nperseg=512)
+    est = frf_h1(x, y, fs=FS, nperseg=512)
+    f, h = est.f, est.frf
     band = (f > 1) & (f < 40)
     truth = _frf(f)
     err = np.abs(h - truth)[band] / np.abs(truth[band]).max()  # (2, 1) is no path: H = 0
@@ -95,7 +96,8 @@ def test_the_shaped_drive_through_the_system_reproduces_the_target_psd():
     n, nper = 2**17, 512
     rng = np.random.default_rng(2)
     probe = rng.standard_normal((n, 2))
-    f, h = frf_h1(probe, _run(probe), fs=FS, nperseg=nper)
+    est = frf_h1(probe, _run(probe), fs=FS, nperseg=nper)
+    f, h = est.f, est.frf
     d = _drive_psds(f)
     df = f[1] - f[0]
     xt = random_drive(psd_function(f, d), n, FS, channels=2, rms=np.sqrt(d.sum(0) * df), seed=3)

@@ -80,6 +80,7 @@ import numpy as np
 from scipy import signal
 from scipy.signal import windows
 
+from .spectra import frf_h1
 from .timehistory import TimeHistory
 
 __all__ = [
@@ -442,7 +443,9 @@ class LinearityResult:
 
         sc = h.get("scaling") if h else None
         if sc is not None:
-            ax_b.plot(sc["t"], sc["expected"], color="k", lw=1.0, label=f"{sc['factor']:.3g} x ỹ(u)")
+            ax_b.plot(
+                sc["t"], sc["expected"], color="k", lw=1.0, label=f"{sc['factor']:.3g} x ỹ(u)"
+            )
             ax_b.plot(sc["t"], sc["measured"], lw=1.0, label=f"ỹ({sc['key']})")
             ax_b.set_xlabel("time [s]")
             ax_b.set_ylabel(f"{self.names[0]} [{self.units[0]}]")
@@ -474,7 +477,9 @@ def _pair(key, value, first):
     out = []
     for what, th in (("drive", drive), ("response", response)):
         if not isinstance(th, TimeHistory):
-            raise ValueError(f"records[{key!r}] {what} must be a TimeHistory, got {type(th).__name__}")
+            raise ValueError(
+                f"records[{key!r}] {what} must be a TimeHistory, got {type(th).__name__}"
+            )
         out.append(th)
     drive, response = out
     if drive.n_samples != response.n_samples or drive.fs != response.fs:
@@ -484,8 +489,10 @@ def _pair(key, value, first):
         )
     if first is not None:
         d0, r0 = first
-        if drive.data.shape != d0.data.shape or response.data.shape != r0.data.shape or (
-            drive.fs != d0.fs
+        if (
+            drive.data.shape != d0.data.shape
+            or response.data.shape != r0.data.shape
+            or (drive.fs != d0.fs)
         ):
             raise ValueError(
                 f"records[{key!r}] ({drive.n_samples} samples x {drive.n_channels} drives -> "
@@ -510,34 +517,17 @@ def _factor(d, u, key):
     return a
 
 
-def _csd_matrix(x, y, fs, nperseg):
-    """Welch auto/cross spectra: Suu (F, nu, nu), Suy (F, nu, ny), Syy (F, ny)."""
-    kw = dict(fs=fs, nperseg=nperseg, detrend="constant", axis=0)
-    nu, ny = x.shape[1], y.shape[1]
-    f, _ = signal.welch(x[:, 0], **kw)
-    suu = np.empty((f.size, nu, nu), complex)
-    suy = np.empty((f.size, nu, ny), complex)
-    for i in range(nu):
-        for j in range(nu):
-            suu[:, i, j] = signal.csd(x[:, i], x[:, j], **kw)[1]
-        for j in range(ny):
-            suy[:, i, j] = signal.csd(x[:, i], y[:, j], **kw)[1]
-    syy = signal.welch(y, **kw)[1]
-    return f, suu, suy, syy
-
-
 def _multiple_coherence(x, y, fs, nperseg):
     """Multiple coherence of every output with all inputs (F, ny); for one input it equals
     ``scipy.signal.coherence``. Also returns f and the output PSDs."""
-    f, suu, suy, syy = _csd_matrix(x, y, fs, nperseg)
-    if x.shape[1] == 1:
-        g = np.abs(suy[:, 0, :]) ** 2 / np.maximum(suu[:, 0, 0].real[:, None] * syy, 1e-300)
-    else:
-        g = np.empty_like(syy)
-        for i in range(f.size):
-            h = np.linalg.pinv(suu[i]) @ suy[i]  # (nu, ny)
-            g[i] = np.real(np.sum(np.conj(suy[i]) * h, axis=0)) / np.maximum(syy[i], 1e-300)
-    return f, np.clip(g, 0.0, 1.0), syy
+    h1 = _h1(x, y, fs, nperseg)
+    return h1.f, h1.coherence, np.real(np.einsum("fii->fi", h1.gyy))
+
+
+def _h1(x, y, fs, nperseg):
+    """The H1 estimate of the check (``S_uu`` inverted wherever numerically non-singular:
+    :func:`vrig.spectra.frf_h1` with ``regularisation="line"``)."""
+    return frf_h1(x, y, fs=fs, nperseg=nperseg, regularisation="line")
 
 
 def _fit_models(u, y, fs, notes):
@@ -642,7 +632,13 @@ def check_linearity(
     band = coh["band"]
     evidence["coherence"] = coh["ratio"] > K_NOISE
 
-    arx_order, eta_arx, eta_narx, kind, heldout = None, np.full(ny, np.nan), np.full(ny, np.nan), "", {}
+    arx_order, eta_arx, eta_narx, kind, heldout = (
+        None,
+        np.full(ny, np.nan),
+        np.full(ny, np.nan),
+        "",
+        {},
+    )
     eta_noise = np.full(ny, np.nan)
     if models:
         arx_order, eta_arx, eta_narx, kind, heldout = _fit_models(u, floor.yt, fs, notes)
@@ -651,7 +647,9 @@ def check_linearity(
         if arx_order is not None:
             eta_noise = _model_noise(floor, n)
             gain = eta_arx - eta_narx
-            evidence["narx"] = (eta_narx <= (1 - NARX_GAIN) * eta_arx) & (gain > K_NOISE * eta_noise)
+            evidence["narx"] = (eta_narx <= (1 - NARX_GAIN) * eta_arx) & (
+                gain > K_NOISE * eta_noise
+            )
     if scaling and "scaling" in evidence:
         heldout = dict(heldout)
         heldout["scaling"] = _scaling_example(scaling, floor, n, fs, s0)
@@ -810,10 +808,10 @@ def _coherence_test(u, floor: _NoiseFloor, fs: float, band) -> dict:
     bias γ² low on any system with memory)."""
     yt, n, ny = floor.yt, u.shape[0], floor.yt.shape[1]
     nperseg = int(min(2 ** round(math.log2(fs)), n // 4))
-    f, suu, suy, _ = _csd_matrix(u, yt, fs, nperseg)
-    f, gamma, pyy = _multiple_coherence(u, yt, fs, nperseg)
+    est = _h1(u, yt, fs, nperseg)
+    f, gamma, pyy = est.f, est.coherence, np.real(np.einsum("fii->fi", est.gyy))
     if band is None:
-        puu = np.real(np.einsum("fii->fi", suu))
+        puu = np.real(np.einsum("fii->fi", est.gxx))
         active = np.flatnonzero(puu.max(axis=1) >= 0.01 * puu.max())
         band = (float(f[active[0]]), float(f[active[-1]]))
     band = (float(band[0]), float(band[1]))
@@ -822,9 +820,7 @@ def _coherence_test(u, floor: _NoiseFloor, fs: float, band) -> dict:
     inb = (f >= band[0]) & (f <= band[1]) & (f > 0)
     if not np.any(inb):
         raise ValueError(f"no spectral line in the band {band} Hz: use a longer record")
-    h1 = np.zeros_like(suy)
-    for i in np.flatnonzero(inb):
-        h1[i] = np.linalg.pinv(suu[i]) @ suy[i]
+    h1 = np.where(inb[:, None, None], np.swapaxes(est.frf, 1, 2), 0.0)  # (F, nu, ny)
     h = np.roll(np.fft.irfft(h1, n=nperseg, axis=0), nperseg // 2, axis=0)
     y_lin = np.zeros_like(yt)
     for j in range(ny):

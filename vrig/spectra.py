@@ -1,5 +1,11 @@
 """Spectral matrices, the H1 FRF, its resonances and the drive PSD a target response needs (§3.3).
 
+The one spectral core of vrig: the cross-spectral matrix (:func:`spectral_matrix`), the H1
+estimate with the multiple coherence (:func:`frf_h1`, :func:`frf_from_spectra`), the filtering
+of a record by an FRF given on lines (:func:`frf_filter`) and the log-spaced band edges
+(:func:`band_edges`); the FRF method, the iteration updates, the Rattlesnake adapter, the
+linearity check, the gym environments and the benchmarks' forward FRF all use these.
+
 Pure signal processing on arrays (time is axis 0), no rig: the matched identification of
 :class:`~vrig.reconstruction.DriveIteration` (``IterationSettings(id_match=True)``) uses these
 to shape its identification drive from the desired response, and they serve any other caller
@@ -10,12 +16,12 @@ resonance at the 12 Hz split, §3.2.1, Fig. 3.9).
 Conventions (one-sided Welch spectra, ``scipy.signal.csd``):
 
 - the cross-spectral matrix of records ``a`` (n, p) and ``b`` (n, q) is
-  ``G_ab[f, i, j] = E[A_i(f) conj(B_j(f))]`` (:func:`spectral_matrix`, the convention of
-  :func:`vrig.reconstruction.cross_spectra`), so the auto-spectral matrix ``G_aa`` is Hermitian
-  with the auto PSDs on its diagonal;
+  ``G_ab[f, i, j] = E[A_i(f) conj(B_j(f))]`` (:func:`spectral_matrix`), so the auto-spectral
+  matrix ``G_aa`` is Hermitian with the auto PSDs on its diagonal;
 - for a linear system ``y = H x`` (``H`` of shape (n_freq, q, p)), ``G_yy = H G_xx H^H`` and
   ``G_yx = H G_xx``, so the H1 estimate is ``H = G_yx G_xx^-1`` (Bendat & Piersol, *Random
-  Data*, ch. 7: the estimate unbiased by noise on the output);
+  Data*, ch. 7: the estimate unbiased by noise on the output; :func:`frf_h1`, with the
+  multiple coherence and one documented regularisation of ``G_xx^-1``);
 - the drive that makes a target ``G_yy`` has ``G_xx = H^+ G_yy H^+^H`` with ``H^+`` the
   pseudo-inverse of ``H`` (exact for a square invertible ``H`` and a reachable target).
 """
@@ -23,12 +29,27 @@ Conventions (one-sided Welch spectra, ``scipy.signal.csd``):
 from __future__ import annotations
 
 from collections.abc import Callable
+from dataclasses import dataclass
 
 import numpy as np
 from scipy import signal
 from scipy.ndimage import uniform_filter1d
 
-__all__ = ["frf_h1", "frf_resonance", "matched_drive_psd", "psd_function", "spectral_matrix"]
+__all__ = [
+    "DEFAULT_RCOND",
+    "MAX_OCTAVES",
+    "REGULARISATIONS",
+    "FrfEstimate",
+    "band_edges",
+    "frf_filter",
+    "frf_from_spectra",
+    "frf_h1",
+    "frf_resonance",
+    "interpolate_lines",
+    "matched_drive_psd",
+    "psd_function",
+    "spectral_matrix",
+]
 
 
 def _as_2d(x, name: str) -> np.ndarray:
@@ -52,7 +73,15 @@ def _check_nperseg(nperseg, n: int) -> int:
 
 def spectral_matrix(a, b=None, *, fs: float, nperseg: int) -> tuple[np.ndarray, np.ndarray]:
     """Welch cross-spectral matrix of two multichannel records (of ``a`` with itself without
-    ``b``), in the convention of :func:`vrig.reconstruction.cross_spectra`.
+    ``b``): the one spectral matrix of vrig, in the module docstring's convention.
+
+    The Welch estimate of :func:`scipy.signal.csd` (Hann window, 50 % overlap, each segment's
+    mean removed, one-sided density, the mean over the segments), computed in ``csd``'s own
+    order of operations (:class:`scipy.signal.ShortTimeFFT`) but with each channel's short-time
+    transform taken once, not once per channel pair, and the products formed for a block of
+    lines at a time (memory: a block of lines x channel pairs x segments, about 32 MB). Bit for
+    bit, ``S[:, i, j]`` is ``conj(scipy.signal.csd(a[:, i], b[:, j], fs=fs, nperseg=nperseg))``
+    (``csd(x, y)`` averages ``conj(X) Y``).
 
     Parameters
     ----------
@@ -63,8 +92,8 @@ def spectral_matrix(a, b=None, *, fs: float, nperseg: int) -> tuple[np.ndarray, 
     fs : float
         Sample rate [Hz].
     nperseg : int
-        Welch segment length [samples] (Hann window, 50 % overlap, segment means removed); the
-        line spacing is ``fs / nperseg``.
+        Welch segment length [samples], from 8 to the record's length; the line spacing is
+        ``fs / nperseg``.
 
     Returns
     -------
@@ -80,46 +109,320 @@ def spectral_matrix(a, b=None, *, fs: float, nperseg: int) -> tuple[np.ndarray, 
     if not (np.isfinite(fs) and fs > 0):
         raise ValueError(f"fs must be a finite sample rate > 0 Hz, got {fs!r}")
     nperseg = _check_nperseg(nperseg, a.shape[0])
-    # scipy's csd(x, y) averages conj(X) Y: x = b_j, y = a_i gives A_i conj(B_j)
-    f, s = signal.csd(b[:, None, :], a[:, :, None], fs=fs, nperseg=nperseg, axis=0)
-    return f, s
+    f, A = _short_time_spectra(a, fs, nperseg)
+    B = A if b is a else _short_time_spectra(b, fs, nperseg)[1]
+    (p, n_freq, k), q = A.shape, B.shape[0]
+    # the one-sided density doubles every line but DC and (even nperseg) Nyquist
+    doubled = np.arange(n_freq) >= 1
+    if nperseg % 2 == 0:
+        doubled[-1] = False
+    # csd forms ``Y * conj(X)`` per channel pair; for a pair of at least 256 kB numpy's temporary
+    # elision evaluates it in place as ``conj(X) * Y``, which rounds differently (the complex
+    # product is not commutative bit for bit): the same order here keeps csd's bits
+    swapped = n_freq * k * 16 >= 256 * 1024
+    S = np.empty((n_freq, p, q), dtype=complex)
+    step = max(1, _BLOCK_ELEMENTS // (p * q * k))
+    for lo in range(0, n_freq, step):  # a block of lines at a time: bounded memory
+        sl = slice(lo, lo + step)
+        prod = np.conj(np.broadcast_to(A[:, None, sl], (p, q, *A[:, sl].shape[1:])))
+        if swapped:
+            np.multiply(prod, B[None, :, sl], out=prod)
+        else:
+            np.multiply(B[None, :, sl], prod, out=prod)
+        prod[:, :, doubled[sl]] *= 2
+        S[sl] = np.moveaxis(np.conj(prod.mean(axis=-1)), -1, 0)
+    return f, S
 
 
-def frf_h1(drive, response, *, fs: float, nperseg: int, rcond: float = 1e-10):
-    """H1 estimate of the frequency response matrix from drives to responses.
+_BLOCK_ELEMENTS = 2**21
+"""Complex products per block of :func:`spectral_matrix` (32 MB)."""
 
-    ``H(f) = G_yx(f) G_xx(f)^+``: the pseudo-inverse (singular values below ``rcond`` times the
-    largest *over all frequencies* treated as zero) keeps a line where the drive has no power
-    (e.g. 0 Hz of de-trended records, or outside the drive's band) at ``H = 0`` instead of
-    dividing by round-off.
+
+def _short_time_spectra(x: np.ndarray, fs: float, nperseg: int) -> tuple[np.ndarray, np.ndarray]:
+    """Each column's Welch segments' spectra (channels, lines, segments), as
+    :func:`scipy.signal.csd` makes them: Hann window scaled to a density, 50 % overlap, the
+    mean of each segment removed."""
+    n, hop = x.shape[0], nperseg - nperseg // 2
+    window = signal.get_window("hann", nperseg)
+    stft = signal.ShortTimeFFT(
+        window, hop, fs, fft_mode="onesided", mfft=nperseg, scale_to="psd", phase_shift=None
+    )
+    spectra = stft.stft_detrend(
+        np.ascontiguousarray(x.T), "constant", 0, (n - nperseg // 2) // hop,
+        k_offset=nperseg // 2, axis=-1,
+    )  # fmt: skip
+    return stft.f, spectra
+
+
+REGULARISATIONS = ("global", "line", "solve")
+"""The inverses of ``G_xx`` :func:`frf_from_spectra` offers (its docstring)."""
+
+DEFAULT_RCOND = {"global": 1e-10, "line": 1e-15}
+"""The default ``rcond`` of each truncated-SVD regularisation: ``"line"``'s is
+:func:`numpy.linalg.pinv`'s own."""
+
+
+@dataclass(frozen=True)
+class FrfEstimate:
+    """An H1 estimate and the spectral matrices it is made of (:func:`frf_h1`).
+
+    Attributes
+    ----------
+    f : ndarray (n_freq,)
+        Frequencies [Hz].
+    frf : ndarray (n_freq, q, p), complex
+        ``H = G_yx G_xx^+``: response per unit drive.
+    coherence : ndarray (n_freq, q)
+        Multiple coherence of each response with all the drives, in [0, 1].
+    gxx, gyx, gyy : ndarray (n_freq, p, p), (n_freq, q, p), (n_freq, q, q), complex
+        The drive, response-drive and response spectral matrices (:func:`spectral_matrix`).
+    """
+
+    f: np.ndarray
+    frf: np.ndarray
+    coherence: np.ndarray
+    gxx: np.ndarray
+    gyx: np.ndarray
+    gyy: np.ndarray
+
+
+def frf_h1(
+    drive,
+    response,
+    *,
+    fs: float,
+    nperseg: int,
+    regularisation: str = "global",
+    rcond: float | None = None,
+) -> FrfEstimate:
+    """H1 estimate of the frequency response matrix from drives to responses, with the
+    multiple coherence: :func:`spectral_matrix` of the records, then :func:`frf_from_spectra`
+    (its docstring has the regularisation).
 
     Parameters
     ----------
     drive : array_like (n, p)
-        Drive record(s) x.
+        Drive record(s) x (a 1-D array is one channel).
     response : array_like (n, q)
         Response record(s) y, same length.
     fs : float
         Sample rate [Hz].
     nperseg : int
         Welch segment length [samples].
-    rcond : float
-        Relative cut-off of the drive spectral matrix's singular values.
+    regularisation : {"global", "line", "solve"}
+        How ``G_xx`` is inverted (:func:`frf_from_spectra`).
+    rcond : float, optional
+        The truncation's relative cut-off (default :data:`DEFAULT_RCOND` of the
+        regularisation).
 
     Returns
     -------
-    f : ndarray (n_freq,)
-        Frequencies [Hz].
-    H : ndarray (n_freq, q, p), complex
-        Response per unit drive at each frequency.
+    FrfEstimate
     """
     f, gxx = spectral_matrix(drive, fs=fs, nperseg=nperseg)
     _, gyx = spectral_matrix(response, drive, fs=fs, nperseg=nperseg)
+    _, gyy = spectral_matrix(response, fs=fs, nperseg=nperseg)
+    return frf_from_spectra(f, gxx, gyx, gyy, regularisation=regularisation, rcond=rcond)
+
+
+def frf_from_spectra(
+    f, gxx, gyx, gyy, *, regularisation: str = "global", rcond: float | None = None
+) -> FrfEstimate:
+    """The H1 estimate ``H = G_yx G_xx^+`` and the multiple coherence from given spectral
+    matrices (e.g. spectra accumulated over several records, as the ``"frf"`` update does).
+
+    The default regularisation, ``"global"``, is a truncated-SVD pseudo-inverse of ``G_xx``
+    whose cut-off is relative to the largest singular value *over all lines*: at each line the
+    singular values (``G_xx`` is Hermitian positive semi-definite: its eigenvalues) below
+    ``rcond`` (1e-10) times the largest of the whole estimate are treated as zero. A line where
+    the drive has no power (outside the drive's band, or a direction two collinear drives do
+    not excite) is thus left at ``H = 0`` instead of dividing round-off by round-off, while a
+    line that is merely weak (the skirt of a band-limited drive, 60 dB down) is still estimated,
+    which a cut-off relative to each line's own largest singular value could not tell apart.
+
+    The named alternatives, for callers whose figures were made with them:
+
+    - ``"line"``: the cut-off relative to each line's largest singular value,
+      :func:`numpy.linalg.pinv` with ``rcond`` (default 1e-15, numpy's: an inverse wherever
+      ``G_xx`` is numerically non-singular; every line keeps an estimate);
+    - ``"solve"``: no regularisation, ``H^H = G_xx^-1 G_xy`` by :func:`numpy.linalg.solve`
+      (``rcond`` is not used; a singular line raises :class:`numpy.linalg.LinAlgError`).
+
+    The multiple coherence of response ``i`` is ``γ²_i = (H G_xy)_ii / G_yy,ii``, the fraction
+    of its power a linear function of all the drives explains (Bendat & Piersol, *Random Data*,
+    ch. 7), clipped to [0, 1] (round-off); 0 where the response has no power.
+
+    Parameters
+    ----------
+    f : array_like (n_freq,)
+        Frequencies [Hz].
+    gxx, gyx, gyy : array_like (n_freq, p, p), (n_freq, q, p), (n_freq, q, q), complex
+        Drive, response-drive and response spectral matrices (:func:`spectral_matrix`).
+    regularisation : {"global", "line", "solve"}
+        How ``G_xx`` is inverted (above).
+    rcond : float, optional
+        Relative cut-off of the truncation, >= 0 (default :data:`DEFAULT_RCOND`).
+
+    Returns
+    -------
+    FrfEstimate
+    """
+    gxx, gyx, gyy = (np.asarray(g, dtype=complex) for g in (gxx, gyx, gyy))
+    n_freq, q, p = gyx.shape if gyx.ndim == 3 else (None, None, None)
+    if (
+        gyx.ndim != 3
+        or gxx.shape != (n_freq, p, p)
+        or gyy.shape != (n_freq, q, q)
+        or np.shape(f) != (n_freq,)
+    ):
+        raise ValueError(
+            "gxx, gyx, gyy must be (n_freq, p, p), (n_freq, q, p), (n_freq, q, q) on f's lines,"
+            f" got {gxx.shape}, {gyx.shape}, {gyy.shape} and f {np.shape(f)}"
+        )
+    if regularisation not in REGULARISATIONS:
+        raise ValueError(
+            f"regularisation must be one of {', '.join(REGULARISATIONS)}, got {regularisation!r}"
+        )
+    if regularisation == "solve":
+        gxy = np.conj(np.swapaxes(gyx, -1, -2))
+        H = np.conj(np.swapaxes(np.linalg.solve(gxx, gxy), -1, -2))
+    else:
+        rcond = DEFAULT_RCOND[regularisation] if rcond is None else rcond
+        if not (isinstance(rcond, (int, float, np.number)) and np.isfinite(rcond) and rcond >= 0):
+            raise ValueError(f"rcond must be a finite relative cut-off >= 0, got {rcond!r}")
+        H = np.einsum("fij,fjk->fik", gyx, _pinv(gxx, regularisation, rcond))  # (F, q, p)
+    explained = np.real(np.einsum("fij,fij->fi", H, np.conj(gyx)))  # (H G_xy)_ii
+    power = np.maximum(np.real(np.einsum("fii->fi", gyy)), 1e-300)
+    coherence = np.clip(explained / power, 0.0, 1.0)
+    return FrfEstimate(np.asarray(f), H, coherence, gxx, gyx, gyy)
+
+
+def _pinv(gxx: np.ndarray, regularisation: str, rcond: float) -> np.ndarray:
+    """The truncated-SVD pseudo-inverse of each line's ``G_xx`` (:func:`frf_from_spectra`)."""
+    if regularisation == "line":
+        return np.linalg.pinv(gxx, rcond=rcond)
     u, s, vh = np.linalg.svd(gxx)  # Hermitian PSD: s are its eigenvalues
     keep = s > rcond * s.max()
     s_inv = np.where(keep, 1.0 / np.where(keep, s, 1.0), 0.0)
-    gxx_pinv = np.einsum("fij,fj,fkj->fik", vh.conj().transpose(0, 2, 1), s_inv, u.conj())
-    return f, gyx @ gxx_pinv
+    return np.einsum("fij,fj,fkj->fik", vh.conj().transpose(0, 2, 1), s_inv, u.conj())
+
+
+def frf_filter(M, f, fs: float, x, *, dc: bool = True) -> np.ndarray:
+    """Filter a record by a frequency-response matrix given on a grid of lines.
+
+    The record is zero-padded to twice its length (no circular wrap-around of the filter's
+    impulse response), ``M`` is interpolated linearly (real and imaginary parts, every entry at
+    once; :func:`numpy.interp`'s rule: the end values beyond the grid) onto the padded record's
+    lines and applied per line: ``Y(f) = M(f) X(f)``.
+
+    Parameters
+    ----------
+    M : array_like (F, n_out, n_in), complex
+        The frequency response per line of ``f``.
+    f : array_like (F,)
+        Its increasing frequency lines [Hz].
+    fs : float
+        Sample rate of ``x`` [Hz].
+    x : array_like (n_samples, n_in)
+        The record.
+    dc : bool
+        ``False`` leaves the DC line out (sets it to 0).
+
+    Returns
+    -------
+    ndarray (n_samples, n_out)
+    """
+    M = np.asarray(M, dtype=complex)
+    f = np.asarray(f, dtype=float)
+    x = np.asarray(x, dtype=float)
+    if M.ndim != 3 or f.shape != (M.shape[0],) or f.size < 2 or np.any(np.diff(f) <= 0):
+        raise ValueError(
+            f"M must be (F, n_out, n_in) on F >= 2 increasing lines f, got {M.shape} and {f.shape}"
+        )
+    if x.ndim != 2 or x.shape[1] != M.shape[2]:
+        raise ValueError(f"x must be (n_samples, {M.shape[2]}), got {x.shape}")
+    n = x.shape[0]
+    n_fft = 2 * n
+    X = np.fft.rfft(x, n=n_fft, axis=0)
+    Mi = interpolate_lines(M, f, np.fft.rfftfreq(n_fft, 1.0 / fs))
+    if not dc:
+        Mi[0] = 0.0
+    return np.fft.irfft(np.einsum("fij,fj->fi", Mi, X), n=n_fft, axis=0)[:n]
+
+
+def interpolate_lines(M, f, f_new) -> np.ndarray:
+    """A complex array given on spectral lines, interpolated linearly onto other frequencies:
+    real and imaginary parts of every entry at once, in :func:`numpy.interp`'s arithmetic (bit
+    for bit): the end values outside ``f``, a line's own value on it, ``slope (x - f_j) + M_j``
+    between (:func:`frf_filter`'s interpolation).
+
+    Parameters
+    ----------
+    M : array_like (F, ...), complex
+        Values on the lines ``f``.
+    f : array_like (F,)
+        Increasing lines [Hz], at least 2.
+    f_new : array_like (F_new,)
+        Frequencies to interpolate at [Hz].
+
+    Returns
+    -------
+    ndarray (F_new, ...), complex
+    """
+    M = np.asarray(M, dtype=complex)
+    f, f_new = np.asarray(f, dtype=float), np.asarray(f_new, dtype=float)
+    flat = np.ascontiguousarray(M.reshape(M.shape[0], -1)).view(float)  # (F, 2 entries)
+    j = np.clip(np.searchsorted(f, f_new, side="right") - 1, 0, f.size - 2)
+    x0, x1 = f[j], f[j + 1]
+    y0, y1 = flat[j], flat[j + 1]
+    slope = (y1 - y0) / (x1 - x0)[:, None]
+    out = slope * (f_new - x0)[:, None] + y0
+    on_line = (f_new == x0) | (f_new < f[0])
+    out[on_line] = y0[on_line]
+    beyond = f_new >= f[-1]
+    out[beyond] = flat[-1]
+    return out.view(complex).reshape(f_new.size, *M.shape[1:])
+
+
+MAX_OCTAVES = 6
+"""The octaves below the upper edge that bands from 0 Hz split (:func:`band_edges`)."""
+
+
+def band_edges(band: tuple[float, float], n_bands: int) -> np.ndarray:
+    """``n_bands + 1`` log-spaced band edges [Hz] over ``band``: the one band rule of vrig (the
+    gym environments' bands, the ``"secant"`` update's).
+
+    A band from 0 Hz: the first band reaches down to DC and the others split geometrically the
+    octaves below the upper edge, one octave each up to :data:`MAX_OCTAVES` + 1 bands
+    (``[0, hi / 2**(n-1), ..., hi / 2, hi]``) and the six octaves finer beyond, rather than
+    piling up near DC, where a record has no lines (13 bands below 40 Hz in octaves would put
+    the second edge at 0.01 Hz; capped, they are half-octaves down to 0.625 Hz). A band from
+    ``low > 0``: ``geomspace(low, high, n_bands + 1)``. As in :func:`vrig.processing.band_gains`,
+    the first band also holds every line below ``edges[1]`` and the last every line above
+    ``edges[-2]``.
+
+    Parameters
+    ----------
+    band : (float, float)
+        ``(low, high)`` [Hz], ``0 <= low < high``.
+    n_bands : int
+        Number of bands (>= 1).
+
+    Returns
+    -------
+    ndarray (n_bands + 1,)
+    """
+    if not isinstance(n_bands, (int, np.integer)) or isinstance(n_bands, bool) or n_bands < 1:
+        raise ValueError(f"n_bands must be a positive integer, got {n_bands!r}")
+    lo, hi = float(band[0]), float(band[1])
+    if not (0 <= lo < hi and np.isfinite(hi)):
+        raise ValueError(f"band must satisfy 0 <= low < high, got {band}")
+    if lo > 0:
+        return np.geomspace(lo, hi, n_bands + 1)
+    if n_bands == 1:
+        return np.array([0.0, hi])
+    octaves = np.arange(n_bands - 1, -1, -1) * (min(n_bands - 1, MAX_OCTAVES) / (n_bands - 1))
+    return np.concatenate([[0.0], hi / 2.0**octaves])
 
 
 def frf_resonance(
@@ -171,7 +474,8 @@ def frf_resonance(
         raise ValueError(f"band must satisfy 0 <= low < high <= fs/2 = {fs / 2:g} Hz, got {band!r}")
     if not (np.isfinite(level) and 0 < level < 1):
         raise ValueError(f"level must be a fraction in (0, 1), got {level!r}")
-    f, h = frf_h1(x, y, fs=fs, nperseg=nperseg)
+    est = frf_h1(x, y, fs=fs, nperseg=nperseg)
+    f, h = est.f, est.frf
     inside = (f >= lo) & (f <= hi)
     if np.count_nonzero(inside) < 3:
         raise ValueError(

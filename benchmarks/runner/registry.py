@@ -192,27 +192,17 @@ class ForwardFrf:
         self.nperseg = nperseg
 
     def identify(self, iddrv, idres) -> None:
-        from vrig.reconstruction import cross_spectra
+        from vrig.spectra import frf_h1
 
         x, y = idres.data, iddrv.data  # input: the rig's drive, output: its response
         nper = min(self.nperseg, x.shape[0] // 4)
-        f, sxx = cross_spectra(x, x, idres.fs, nper)
-        _, syx = cross_spectra(y, x, idres.fs, nper)
-        self.f, self.fs = f, idres.fs
-        self.H = np.einsum("fij,fjk->fik", syx, np.linalg.pinv(sxx))  # (F, n_out, n_in)
+        h1 = frf_h1(x, y, fs=idres.fs, nperseg=nper, regularisation="line")  # the FRF method's
+        self.f, self.fs, self.H = h1.f, idres.fs, h1.frf  # (F, n_out, n_in)
 
     def drive(self, response) -> np.ndarray:
-        x = response.data
-        n = x.shape[0]
-        X = np.fft.rfft(x, n=2 * n, axis=0)
-        fr = np.fft.rfftfreq(2 * n, 1.0 / self.fs)
-        H = np.empty((fr.size, *self.H.shape[1:]), dtype=complex)
-        for i in range(self.H.shape[1]):
-            for j in range(self.H.shape[2]):
-                H[:, i, j] = np.interp(fr, self.f, self.H[:, i, j].real) + 1j * np.interp(
-                    fr, self.f, self.H[:, i, j].imag
-                )
-        return np.fft.irfft(np.einsum("fij,fj->fi", H, X), n=2 * n, axis=0)[:n]
+        from vrig.spectra import frf_filter
+
+        return frf_filter(self.H, self.f, self.fs, response.data)
 
     def describe(self) -> str:
         return f"forward H1 FRF with {self.f.size} lines"

@@ -13,6 +13,7 @@ import numpy as np
 from gymnasium import spaces
 
 from ..reconstruction.settings import MAX_ITERATIONS
+from ..spectra import band_edges  # the one band rule, re-exported
 
 __all__ = [
     "ITERATION_MAX",
@@ -35,31 +36,6 @@ ITERATION_MAX = MAX_ITERATIONS
 """Upper bound of the ``iteration`` observation (99: the records are named IT00..IT99; the env
 does not know the episode's budget, which is the ``TimeLimit`` wrapper's); later iterations are
 observed as 99."""
-
-
-def band_edges(band: tuple[float, float], n_bands: int) -> np.ndarray:
-    """``n_bands + 1`` log-spaced band edges [Hz] over the simulation ``band``.
-
-    A band starting at 0 Hz gets ``[0, hi / 2**(n-1), ..., hi / 2, hi]`` (octaves below ``hi``,
-    the first band reaching down to DC); otherwise ``geomspace(lo, hi, n_bands + 1)``. As in
-    :func:`vrig.reconstruction.band_gains`, the first band also holds everything below
-    ``edges[1]`` and the last everything above ``edges[-2]``.
-
-    Parameters
-    ----------
-    band : tuple of float
-        ``(low, high)`` simulation band in Hz, ``0 <= low < high``.
-    n_bands : int
-        Number of bands (>= 1).
-    """
-    if not isinstance(n_bands, (int, np.integer)) or n_bands < 1:
-        raise ValueError(f"n_bands must be a positive integer, got {n_bands!r}")
-    lo, hi = float(band[0]), float(band[1])
-    if not (0 <= lo < hi):
-        raise ValueError(f"band must satisfy 0 <= low < high, got {band}")
-    if lo <= 0:
-        return np.concatenate([[0.0], hi / 2.0 ** np.arange(n_bands - 1, -1, -1)])
-    return np.geomspace(lo, hi, n_bands + 1)
 
 
 def band_error_ratios(desired: np.ndarray, response: np.ndarray, fs: float, edges) -> np.ndarray:

@@ -17,7 +17,6 @@ from .methods import (
     InverseFrf,
     InverseNarx,
     SplitSpectra,
-    cross_spectra,
     make_method,
 )
 from .protocol import InverseModelMethod, Method, ObservingMethod, SavableMethod, SizedMethod
@@ -48,7 +47,6 @@ __all__ = [
     "SizedMethod",
     "SplitSpectra",
     "band_gains",
-    "cross_spectra",
     "make_method",
     "method_spec",
     "pseudo_damage",

@@ -217,7 +217,8 @@ def identify_matched(engine) -> tuple[TimeHistory, TimeHistory, MatchedIdentific
     band = engine.id_band
     x = gprepro(probe, band).data
     y = gprepro(probe_res, band).data
-    f, frf = frf_h1(x, y, fs=rig.fs, nperseg=nperseg)
+    h1 = frf_h1(x, y, fs=rig.fs, nperseg=nperseg)
+    f, frf = h1.f, h1.frf
     _, target = spectral_matrix(engine.desres.data, fs=rig.fs, nperseg=nperseg)
     mask = (f > 0) & (f >= band[0]) & (f <= band[1])
     psd = matched_drive_psd(frf, target, mask=mask, floor=FLOOR)

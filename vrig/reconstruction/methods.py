@@ -26,11 +26,11 @@ import inspect
 from collections.abc import Mapping
 
 import numpy as np
-from scipy import signal
 
 from identification import Arx, ErrorSignalModel, InverseModel, Narx, NarxSearch
 
 from ..processing import band_split
+from ..spectra import frf_filter, frf_h1
 from ..timehistory import TimeHistory
 from .protocol import InverseModelMethod, SavableMethod, SizedMethod
 
@@ -43,10 +43,6 @@ __all__ = [
     "InverseFrf",
     "InverseNarx",
     "SplitSpectra",
-    "cross_spectra",
-    "frf_filter",
-    "h1_from_spectra",
-    "h1_spectra",
     "make_method",
 ]
 
@@ -570,7 +566,9 @@ def _names(names, what):
 class InverseFrf:
     """Frequency-domain inverse (RPC/TWR baseline): H1 estimate and a regularised inverse.
 
-    ``H(f) = S_yu(f) S_uu(f)^-1`` from Welch cross-spectra of the identification records; the
+    ``H(f) = S_yu(f) S_uu(f)^-1`` from Welch cross-spectra of the identification records
+    (:func:`vrig.spectra.frf_h1` with ``regularisation="line"``: ``S_uu`` inverted wherever it
+    is numerically non-singular, the estimate the method's figures were made with); the
     inverse per frequency line is the truncated-SVD pseudo-inverse (singular values below
     ``rcond`` of the largest dropped) with Tikhonov damping ``tikhonov * s_max``. The drive for a
     response is ``irfft(H^-1(f) R(f))`` on the record's own frequency grid (H^-1 interpolated).
@@ -609,9 +607,10 @@ class InverseFrf:
             The response measured for it (same length and sample rate).
         """
         fs = iddrv.fs
-        h1 = h1_spectra(iddrv.data, idres.data, fs, min(self.nperseg, iddrv.n_samples // 4))
-        self.set_frf(h1["f"], h1["H"], fs)
-        self.coherence = h1["coherence"]
+        nperseg = min(self.nperseg, iddrv.n_samples // 4)
+        h1 = frf_h1(iddrv.data, idres.data, fs=fs, nperseg=nperseg, regularisation="line")
+        self.set_frf(h1.f, h1.frf, fs)
+        self.coherence = h1.coherence
 
     def set_frf(self, f: np.ndarray, H: np.ndarray, fs: float) -> None:
         """Take the FRF matrix ``H`` (drive -> response) and invert it per line, by the
@@ -674,126 +673,6 @@ class InverseFrf:
         :meth:`identify`."""
         hinv = getattr(self, "Hinv", None)
         return None if hinv is None else int(2 * np.asarray(hinv).size)
-
-
-def h1_spectra(u: np.ndarray, y: np.ndarray, fs: float, nperseg: int) -> dict:
-    """The H1 FRF of drive ``u`` to response ``y`` and the spectra it is made of (Welch,
-    :func:`cross_spectra`): what :class:`InverseFrf` inverts and a Rattlesnake control law is
-    given (:mod:`vrig.reconstruction.rattlesnake`).
-
-    Parameters
-    ----------
-    u, y : ndarray (n_samples, nu), (n_samples, ny)
-        Drive and response records sampled at ``fs`` [Hz].
-    fs : float
-        Sample rate [Hz].
-    nperseg : int
-        Welch segment length [samples].
-
-    Returns
-    -------
-    dict
-        ``f`` (F,) [Hz]; ``suu`` (F, nu, nu), ``syu`` (F, ny, nu), ``syy`` (F, ny, ny) the
-        cross-spectral matrices; ``H`` (F, ny, nu) ``= syu suu^+`` (units of y per unit of u);
-        ``coherence`` (F, ny) the multiple coherence of each response with all drives.
-    """
-    f, suu = cross_spectra(u, u, fs, nperseg)
-    _, syu = cross_spectra(y, u, fs, nperseg)
-    _, syy = cross_spectra(y, y, fs, nperseg)
-    return h1_from_spectra(f, suu, syu, syy)
-
-
-def h1_from_spectra(f: np.ndarray, suu: np.ndarray, syu: np.ndarray, syy: np.ndarray) -> dict:
-    """:func:`h1_spectra` from given cross-spectral matrices (e.g. spectra accumulated over
-    several records, as the ``"frf"`` update does: :mod:`vrig.reconstruction.updates`).
-
-    Parameters
-    ----------
-    f : ndarray (F,)
-        Frequency lines [Hz].
-    suu, syu, syy : ndarray (F, nu, nu), (F, ny, nu), (F, ny, ny), complex
-        Cross-spectral matrices of drives and responses (:func:`cross_spectra`).
-
-    Returns
-    -------
-    dict
-        As :func:`h1_spectra`'s: ``f``, ``suu``, ``syu``, ``syy``, ``H`` (F, ny, nu) and
-        ``coherence`` (F, ny).
-    """
-    suu_inv = np.linalg.pinv(suu)
-    H = np.einsum("fij,fjk->fik", syu, suu_inv)  # (F, ny, nu)
-    coherence = np.real(
-        np.einsum("fij,fjk,fki->fi", syu, suu_inv, syu.conj().transpose(0, 2, 1))
-        / np.maximum(np.real(np.einsum("fii->fi", syy)), 1e-300)
-    )
-    return {"f": f, "suu": suu, "syu": syu, "syy": syy, "H": H, "coherence": coherence}
-
-
-def frf_filter(M: np.ndarray, f: np.ndarray, fs: float, x: np.ndarray, *, dc: bool = True):
-    """Filter a record by a frequency-response matrix given on a grid of lines.
-
-    The record is zero-padded to twice its length (no circular wrap-around of the filter's
-    impulse response), ``M`` is interpolated linearly (real and imaginary parts) onto the padded
-    record's lines and applied per line: ``Y(f) = M(f) X(f)``.
-
-    Parameters
-    ----------
-    M : ndarray (F, n_out, n_in), complex
-        The frequency response per line of ``f``.
-    f : ndarray (F,)
-        Its frequency lines [Hz].
-    fs : float
-        Sample rate of ``x`` [Hz].
-    x : ndarray (n_samples, n_in)
-        The record.
-    dc : bool
-        ``False`` leaves the DC line out (sets it to 0).
-
-    Returns
-    -------
-    ndarray (n_samples, n_out)
-    """
-    n = x.shape[0]
-    n_fft = 2 * n
-    X = np.fft.rfft(x, n=n_fft, axis=0)
-    fr = np.fft.rfftfreq(n_fft, 1.0 / fs)
-    Mi = np.empty((fr.size, *M.shape[1:]), dtype=complex)
-    for i in range(M.shape[1]):
-        for j in range(M.shape[2]):
-            Mi[:, i, j] = np.interp(fr, f, M[:, i, j].real) + 1j * np.interp(fr, f, M[:, i, j].imag)
-    if not dc:
-        Mi[0] = 0.0
-    return np.fft.irfft(np.einsum("fij,fj->fi", Mi, X), n=n_fft, axis=0)[:n]
-
-
-def cross_spectra(a: np.ndarray, b: np.ndarray, fs: float, nperseg: int):
-    """Cross-spectral matrices by Welch averaging.
-
-    Parameters
-    ----------
-    a, b : ndarray (n_samples, na), (n_samples, nb)
-        Records sampled at ``fs`` [Hz].
-    fs : float
-        Sample rate [Hz].
-    nperseg : int
-        Welch segment length [samples].
-
-    Returns
-    -------
-    f : ndarray (F,)
-        Frequencies [Hz].
-    S : ndarray (F, na, nb), complex
-        ``S[f, i, j] = E[A_i(f) conj(B_j(f))]`` (units of a times units of b per Hz).
-    """
-    f = None
-    out = []
-    for i in range(a.shape[1]):
-        row = []
-        for j in range(b.shape[1]):
-            f, s = signal.csd(a[:, i], b[:, j], fs=fs, nperseg=nperseg)
-            row.append(np.conj(s))  # scipy's csd(x, y) = conj(X) Y: conj gives X conj(Y)
-        out.append(row)
-    return f, np.array(out).transpose(2, 0, 1)
 
 
 METHODS = {

@@ -33,8 +33,8 @@ What vrig gives the law (all from the identification records, at the model rate)
 * ``sample_rate`` [Hz]; ``specification_signals`` (n_responses, n_samples): the response the
   drive is asked for; ``frequency_spacing`` [Hz] ``= sample_rate / nperseg``;
 * ``transfer_function`` (F, n_responses, n_drives), complex: the H1 estimate (Welch,
-  ``nperseg`` samples a frame, Hann window, half overlap: :func:`~vrig.reconstruction.methods.
-  h1_spectra`, the estimate :class:`~vrig.reconstruction.InverseFrf` inverts);
+  ``nperseg`` samples a frame, Hann window, half overlap: :func:`vrig.spectra.frf_h1` with
+  ``regularisation="line"``, the estimate :class:`~vrig.reconstruction.InverseFrf` inverts);
 * ``sysid_response_cpsd`` (F, n_responses, n_responses), ``sysid_reference_cpsd`` (F, n_drives,
   n_drives): one-sided cross-power spectral densities of the identification response and drive;
 * ``noise_response_cpsd``: what the linear FRF does not explain of the identification response,
@@ -69,8 +69,9 @@ from pathlib import Path
 
 import numpy as np
 
+from ..spectra import frf_h1
 from ..timehistory import TimeHistory
-from .methods import FRF_MIN_SAMPLES, h1_spectra
+from .methods import FRF_MIN_SAMPLES
 
 __all__ = ["FUNCTION_ARGUMENTS", "RattlesnakeLaw", "load_law"]
 
@@ -264,8 +265,8 @@ class RattlesnakeLaw:
         """
         n = iddrv.n_samples
         nper = min(self.nperseg, n // 4)
-        h1 = h1_spectra(iddrv.data, idres.data, iddrv.fs, nper)
-        H, suu, syy = h1["H"], h1["suu"], h1["syy"]
+        h1 = frf_h1(iddrv.data, idres.data, fs=iddrv.fs, nperseg=nper, regularisation="line")
+        H, suu, syy = h1.frf, h1.gxx, h1.gyy
         noise = syy - np.einsum("fij,fjk,flk->fil", H, suu, H.conj())
         frames = 1 + (n - nper) // (nper - nper // 2)  # scipy's Welch: half-overlapping frames
         self.n_drives, self.fs = iddrv.n_channels, float(iddrv.fs)
@@ -276,7 +277,7 @@ class RattlesnakeLaw:
             "noise_reference_cpsd": np.zeros_like(suu),
             "sysid_response_cpsd": syy,
             "sysid_reference_cpsd": suu,
-            "multiple_coherence": h1["coherence"],
+            "multiple_coherence": h1.coherence,
             "frames": frames,
             "total_frames": frames,
         }

@@ -18,7 +18,7 @@ bracket, the *correction*, by one that learns from the drives played and the res
     function of commercial time waveform replication.
 ``"secant"`` (:class:`SecantUpdate`)
     The method's correction ``c`` is multiplied, per band ``b`` of ``n_bands`` log-spaced bands
-    over the simulation band (:func:`log_band_edges`), by a matrix ``S_b`` (drive channels x
+    over the simulation band (:func:`vrig.spectra.band_edges`), by a matrix ``S_b`` (drive channels x
     drive channels; on a SISO rig 1 x 1, a complex gain), starting at the
     identity. After each iteration the realised change, seen through the model
     (``z = c_{n-1} - c_n``, the model's drive for the response change), is compared with the
@@ -87,8 +87,9 @@ import numpy as np
 from identification import MemoryBudgetError
 
 from ..processing import gprepro
+from ..spectra import band_edges, frf_filter, frf_from_spectra, spectral_matrix
 from ..timehistory import TimeHistory
-from .methods import InverseFrf, cross_spectra, frf_filter, h1_from_spectra
+from .methods import InverseFrf
 
 __all__ = [
     "DEFAULT_OPTIONS",
@@ -97,7 +98,6 @@ __all__ = [
     "ReidentifyUpdate",
     "SecantUpdate",
     "check_update_options",
-    "log_band_edges",
     "make_update",
 ]
 
@@ -194,34 +194,6 @@ def make_update(update: str, options: Mapping | None = None):
     return cls(**opts)
 
 
-def log_band_edges(band: tuple[float, float], n_bands: int) -> np.ndarray:
-    """``n_bands + 1`` log-spaced band edges [Hz] over ``band``. A band from 0 Hz: the first band
-    reaches down to DC, the others split geometrically the (at most) six octaves below the upper
-    edge (up to 7 bands: octaves, the rule of the gym environments' bands; more bands split the
-    six octaves finer, rather than piling up near DC). A band from ``low > 0``: geometric
-    spacing. The first band also holds every line below ``edges[1]``, the last every line above
-    ``edges[-2]``.
-
-    Parameters
-    ----------
-    band : (low, high) Hz
-        The simulation band, ``0 <= low < high``.
-    n_bands : int
-        Number of bands (>= 1).
-
-    Returns
-    -------
-    ndarray (n_bands + 1,)
-    """
-    lo, hi = float(band[0]), float(band[1])
-    if lo <= 0:
-        if n_bands == 1:
-            return np.array([0.0, hi])
-        low = hi / 2.0 ** min(n_bands - 1, 6)
-        return np.concatenate([[0.0], np.geomspace(low, hi, n_bands)])
-    return np.geomspace(lo, hi, n_bands + 1)
-
-
 def _model_records(engine, drive: TimeHistory, response: TimeHistory):
     """A drive and its raw response as the identification sees them: the identification band
     (GPREPRO), at the model rate."""
@@ -249,9 +221,9 @@ class _Spectra:
         self.suu = self.syu = self.syy = None
 
     def add(self, u: np.ndarray, y: np.ndarray, fs: float) -> None:
-        self.f, suu = cross_spectra(u, u, fs, self.nperseg)
-        _, syu = cross_spectra(y, u, fs, self.nperseg)
-        _, syy = cross_spectra(y, y, fs, self.nperseg)
+        self.f, suu = spectral_matrix(u, fs=fs, nperseg=self.nperseg)
+        _, syu = spectral_matrix(y, u, fs=fs, nperseg=self.nperseg)
+        _, syy = spectral_matrix(y, fs=fs, nperseg=self.nperseg)
         w = float(u.shape[0])
         if self.suu is None:
             self.suu, self.syu, self.syy = w * suu, w * syu, w * syy
@@ -262,8 +234,11 @@ class _Spectra:
         self.syy = lam * self.syy + w * syy
 
     def h1(self):
-        h1 = h1_from_spectra(self.f, self.suu, self.syu, self.syy)
-        return h1["H"], h1["coherence"]
+        """The H1 estimate and the multiple coherence of the accumulated spectra (``S_uu``
+        inverted wherever numerically non-singular: ``regularisation="line"``, as the FRF
+        method's estimate)."""
+        h1 = frf_from_spectra(self.f, self.suu, self.syu, self.syy, regularisation="line")
+        return h1.frf, h1.coherence
 
 
 def _segment(engine, nperseg: int, id_samples: int) -> int:
@@ -380,7 +355,7 @@ class SecantUpdate:
         engine : DriveIteration
             The identified engine.
         """
-        self.edges = log_band_edges(engine.band, self.n_bands)
+        self.edges = band_edges(engine.band, self.n_bands)
         eye = np.eye(engine.n_inputs, dtype=complex)
         self.S = np.repeat(eye[None], self.n_bands, axis=0)
         self.drives: list[np.ndarray] = []
