@@ -4,9 +4,10 @@ analytic truth.
 Equivalence: each ``_old_*`` function below is a frozen copy of the PRE-REFACTOR implementation
 (commit 83cad8a, the start of issue 33's spectral-core work), kept here verbatim (names changed,
 comments added) so the core can be compared with it: bit for bit where the arithmetic is the
-same, else to the stated tolerance with the reason. ``vrig/targets.py`` was not rewired (it is
-being split into a package at the same time): its spectral functions are frozen here too and
-the tests say which core call reproduces each, for the rewiring.
+same, else to the stated tolerance with the reason. The target check's spectral functions (then
+``vrig/targets.py``, now :mod:`vrig.desired.reachability`) are frozen here too: the tests say
+which core call reproduces each, and the rewired ``multiple_coherence`` is compared with its old
+self, singular lines included.
 
 Truth: a 2 x 2 FIR system driven by white noise (its FRF exactly from ``scipy.signal.freqz``),
 with and without output noise of known level (coherence ``S / (S + N)``), and a drive spectral
@@ -418,6 +419,23 @@ def test_targets_multiple_coherence_is_h1_solves_coherence_to_round_off():
     est = frf_h1(x, y, fs=FS, nperseg=256, regularisation="solve")
     np.testing.assert_allclose(est.f, f0, rtol=1e-15)
     np.testing.assert_allclose(est.coherence, g0, rtol=0, atol=1e-12)
+
+
+def test_the_rewired_multiple_coherence_is_the_old_one_singular_lines_included():
+    """:func:`vrig.desired.reachability.multiple_coherence` on the core (spectral_matrix, H1 by
+    "solve" on the lines whose drives' matrix has full rank, NaN elsewhere) against the frozen
+    pre-refactor one: the same NaN lines, the others to 1e-12 (summation order)."""
+    from vrig.desired.reachability import multiple_coherence
+
+    x, y = _records(20000, 2, 3)
+    f0, g0 = _targets_multiple_coherence(x, y, FS, 256)
+    f1, g1 = multiple_coherence(x, y, FS, nperseg=256)
+    np.testing.assert_array_equal(f1, f0)
+    np.testing.assert_allclose(g1, g0, rtol=0, atol=1e-12)
+    twin = np.hstack([x[:, :1], x[:, :1]])  # two identical drives: singular on every line
+    f0, g0 = _targets_multiple_coherence(twin, y, FS, 256)
+    f1, g1 = multiple_coherence(twin, y, FS, nperseg=256)
+    assert np.isnan(g0).all() and np.isnan(g1).all()
 
 
 # ---------------------------------------------------------------- analytic truth

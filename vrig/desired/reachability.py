@@ -66,10 +66,10 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from scipy import signal
 
 from ..processing import gprepro
 from ..reconstruction.defaults import default_band
+from ..spectra import frf_from_spectra, interpolate_lines, spectral_matrix
 from ..timehistory import TimeHistory
 from ._checks import _check_band, _check_th
 from .range_report import _columns, _pct, range_report
@@ -88,7 +88,6 @@ _MIN_LINES = 8  # spectral lines in the band a reachability estimate needs at le
 _WANT_LINES = 16  # ... and the resolution it asks for when the record is long enough
 _MIN_AVERAGES = 16  # Welch segments (also at least 4 per drive channel)
 _FALSE_ALARM = 0.01  # a response independent of the drives is taken as driven this often
-_BLOCK = 64  # Welch segments transformed at once
 _DEFINITION = (
     "unreachable: residual of the best linear drive (usable drive directions of the "
     "identification run, relative-error weighting) as a fraction of the target's variance in "
@@ -97,35 +96,11 @@ _DEFINITION = (
 
 
 # ------------------------------------------------------------------------------ spectra
-def _spectra(z: np.ndarray, fs: float, nperseg: int) -> tuple[np.ndarray, np.ndarray]:
-    """Welch cross-spectral matrices ``G[f, i, j] = E[Z_i Z_j*]`` of the columns of ``z``.
-
-    The one-sided densities :func:`scipy.signal.csd` gives (Hann window, 50 % overlap, the mean
-    removed per segment), accumulated over blocks of segments: the memory is that of one block,
-    not of the channel pairs times the record."""
-    step = nperseg - nperseg // 2  # scipy's noverlap = nperseg // 2
-    window = signal.get_window("hann", nperseg)
-    segments = np.lib.stride_tricks.sliding_window_view(z, nperseg, axis=0)[::step]
-    f = np.fft.rfftfreq(nperseg, 1.0 / fs)
-    G = np.zeros((f.size, z.shape[1], z.shape[1]), dtype=complex)
-    for i in range(0, segments.shape[0], _BLOCK):  # one block of segments at a time
-        seg = segments[i : i + _BLOCK]
-        Z = np.fft.rfft((seg - seg.mean(axis=-1, keepdims=True)) * window, axis=-1)
-        G += np.einsum("kif,kjf->fij", Z, np.conj(Z))
-    G *= 2.0 / (fs * np.sum(window**2) * segments.shape[0])
-    G[0] /= 2
-    if nperseg % 2 == 0:
-        G[-1] /= 2
-    return f, G
-
-
+# (the one spectral core: vrig.spectra's Welch matrix and H1; the reachability's H1 is the
+# unregularised "solve": a line whose drives' matrix is singular is not driven - its coherence is
+# NaN in multiple_coherence, and its H is left out of the usable directions in _lines)
 def _averages(n: int, nperseg: int) -> int:
     return (n - nperseg) // (nperseg - nperseg // 2) + 1 if n >= nperseg else 0
-
-
-def _h1(Sxx: np.ndarray, Sxy: np.ndarray) -> np.ndarray:
-    """``H = S_yx S_xx^-1`` per line (``Sxy``: (F, m, n) = ``S_xy``)."""
-    return np.conj(np.swapaxes(np.linalg.solve(Sxx, Sxy), -1, -2))
 
 
 def multiple_coherence(x, y, fs: float, *, nperseg: int = 256):
@@ -161,14 +136,14 @@ def multiple_coherence(x, y, fs: float, *, nperseg: int = 256):
     if not (isinstance(nperseg, (int, np.integer)) and 2 <= nperseg <= x.shape[0]):
         raise ValueError(f"nperseg must be an integer in 2..{x.shape[0]} samples, got {nperseg!r}")
     m = x.shape[1]
-    f, S = _spectra(np.hstack([x, y]), fs, nperseg)
-    Sxx, Sxy, Syy = S[:, :m, :m], S[:, :m, m:], S[:, m:, m:]
-    with np.errstate(invalid="ignore", divide="ignore"):
-        ok = np.linalg.matrix_rank(Sxx) == m
-        Sc = np.full(Syy.shape, np.nan, dtype=complex)
-        Sc[ok] = np.conj(np.swapaxes(Sxy[ok], -1, -2)) @ np.linalg.solve(Sxx[ok], Sxy[ok])
-        gamma2 = np.diagonal(Sc, axis1=1, axis2=2).real / np.diagonal(Syy, axis1=1, axis2=2).real
-    return f, np.clip(gamma2, 0.0, 1.0)
+    f, S = spectral_matrix(np.hstack([x, y]), fs=fs, nperseg=nperseg)
+    Sxx, Syx, Syy = S[:, :m, :m], S[:, m:, :m], S[:, m:, m:]
+    ok = np.linalg.matrix_rank(Sxx) == m
+    gamma2 = np.full((f.size, y.shape[1]), np.nan)
+    if ok.any():
+        est = frf_from_spectra(f[ok], Sxx[ok], Syx[ok], Syy[ok], regularisation="solve")
+        gamma2[ok] = est.coherence
+    return f, gamma2
 
 
 def _sqrt_psd(S: np.ndarray, floor: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -177,15 +152,6 @@ def _sqrt_psd(S: np.ndarray, floor: np.ndarray) -> tuple[np.ndarray, np.ndarray]
     lam = np.maximum(lam, floor[:, None])
     root = np.sqrt(lam)
     return Q * root[:, None, :], np.conj(np.swapaxes(Q, -1, -2)) / root[:, :, None]
-
-
-def _interp_lines(f: np.ndarray, M: np.ndarray, f_new: np.ndarray) -> np.ndarray:
-    """``M`` (F, a, b) complex, linearly interpolated (real and imaginary parts) at ``f_new``."""
-    flat = M.reshape(M.shape[0], -1)
-    out = np.empty((f_new.size, flat.shape[1]), dtype=complex)
-    for k in range(flat.shape[1]):  # one column per matrix entry (a few dozen), not per sample
-        out[:, k] = np.interp(f_new, f, flat[:, k].real) + 1j * np.interp(f_new, f, flat[:, k].imag)
-    return out.reshape(f_new.size, *M.shape[1:])
 
 
 @dataclass(frozen=True)
@@ -233,14 +199,14 @@ def _lines(drive, response, fs: float, nperseg: int, band, target_rms) -> _Lines
     """The identification run's spectra on the band's lines and the best linear drive."""
     m = drive.shape[1]
     level = _significant(m, _averages(drive.shape[0], nperseg))
-    f, S = _spectra(np.hstack([drive, response]), fs, nperseg)
+    f, S = spectral_matrix(np.hstack([drive, response]), fs=fs, nperseg=nperseg)
     keep = (f >= band[0]) & (f <= band[1]) & (f > 0)
     f, S = f[keep], S[keep]
-    Sxx, Sxy, Syy = S[:, :m, :m], S[:, :m, m:], S[:, m:, m:]
-    H = _h1(Sxx, Sxy)
+    Sxx, Sxy, Syx, Syy = S[:, :m, :m], S[:, :m, m:], S[:, m:, :m], S[:, m:, m:]
+    est = frf_from_spectra(f, Sxx, Syx, Syy, regularisation="solve")
+    H, gamma2 = est.frf, est.coherence
     Sc = H @ Sxy
     syy = np.diagonal(Syy, axis1=1, axis2=2).real
-    gamma2 = np.clip(np.diagonal(Sc, axis1=1, axis2=2).real / syy, 0.0, 1.0)
     Sn = Syy - Sc
     Sn = 0.5 * (Sn + _hermitian(Sn))
     noise = np.clip(np.diagonal(Sn, axis1=1, axis2=2).real, 0.0, None)
@@ -260,7 +226,7 @@ def _needed_drive(lines: _Lines, target: np.ndarray, fs: float, band):
     ff = np.fft.rfftfreq(n, 1.0 / fs)
     inband = (ff >= band[0]) & (ff <= band[1]) & (ff > 0)
     X = np.zeros((ff.size, lines.B.shape[1]), dtype=complex)
-    X[inband] = np.einsum("fmn,fn->fm", _interp_lines(lines.f, lines.B, ff[inband]), Y[inband])
+    X[inband] = np.einsum("fmn,fn->fm", interpolate_lines(lines.B, lines.f, ff[inband]), Y[inband])
     x = np.fft.irfft(X, n, axis=0)
     v = np.fft.irfft(X * (2j * np.pi * ff)[:, None], n, axis=0)
     return np.abs(x).max(axis=0), np.abs(v).max(axis=0)
@@ -618,7 +584,7 @@ def check_target(
     drive, response = _id_pair(rig, id_drive, id_response, n_id, band, id_rms, seed)
     nperseg, averages = _segment(min(target.n_samples, drive.n_samples), rig.fs, band, m)
     desres = gprepro(target, band)
-    f, G = _spectra(desres.data, rig.fs, nperseg)
+    f, G = spectral_matrix(desres.data, fs=rig.fs, nperseg=nperseg)
     keep = (f >= band[0]) & (f <= band[1]) & (f > 0)
     G = G[keep]
     g = np.diagonal(G, axis1=1, axis2=2).real
