@@ -193,8 +193,8 @@ def test_every_shipped_side_car_method_default_says_why():
 def _args(**kw):
     base = dict(
         method="arx", gain=None, order=None, degree=None, split_hz=None, strategy="fixed",
-        tolerance=None,
-    )
+        tolerance=None, iterations=5, band=None, seed=0,
+    )  # fmt: skip
     return SimpleNamespace(**{**base, **kw})
 
 
@@ -202,39 +202,39 @@ def _rig(defaults):
     return SimpleNamespace(
         name="r",
         defaults=defaults,
+        bandwidth=(0.0, 20.0),
+        fs=100.0,
         inputs=(ChannelSpec("a", "m", 0.05, "direct"), ChannelSpec("b", "m", 0.2, "direct")),
     )
 
 
 def test_cli_defaults_come_from_the_method_then_the_rig_then_the_global_ones():
+    from vrig.reconstruction.defaults import DEFAULT_GAIN
+
     d = RigDefaults(
         gain=0.6,
         id_rms=0.02,
         methods={"narx": MethodDefaults("why", order=3, degree=3, gain=0.4, id_rms=0.01)},
     )
-    args = _args(method="narx")
-    extra = cli._defaults(args, _rig(d))
-    assert (args.gain, args.order, args.degree) == (0.4, 3, 3)
-    assert extra["id_rms"] == pytest.approx((0.01 * 0.05, 0.01 * 0.2))  # fraction of full scale
-    args = _args(method="arx")
-    extra = cli._defaults(args, _rig(d))
-    assert (args.gain, args.order) == (0.6, None)
-    assert extra["id_rms"] == pytest.approx((0.02 * 0.05, 0.02 * 0.2))
-    args = _args(method="narx", gain=1.0, order=5)  # the user's flags win
-    cli._defaults(args, _rig(d))
-    assert (args.gain, args.order, args.degree) == (1.0, 5, 3)
-    args = _args()
-    extra = cli._defaults(args, _rig(RigDefaults()))
-    assert args.gain == cli.DEFAULT_GAIN and "id_rms" not in extra
-    assert extra["strategy"] == "fixed" and extra["tolerance"] is None
+    r = cli._resolve(_args(method="narx"), _rig(d))
+    assert (r.settings.gain, r.method.order, r.method.degree) == (0.4, 3, 3)
+    assert r.settings.id_rms == pytest.approx((0.01 * 0.05, 0.01 * 0.2))  # of full scale
+    r = cli._resolve(_args(method="arx"), _rig(d))
+    assert (r.settings.gain, r.method.order) == (0.6, 4)  # InverseArx's own order
+    assert r.settings.id_rms == pytest.approx((0.02 * 0.05, 0.02 * 0.2))
+    r = cli._resolve(_args(method="narx", gain=1.0, order=5), _rig(d))  # the user's flags win
+    assert (r.settings.gain, r.method.order, r.method.degree) == (1.0, 5, 3)
+    r = cli._resolve(_args(), _rig(RigDefaults()))
+    assert r.settings.gain == DEFAULT_GAIN == 0.8  # the documented global gain
+    assert r.settings.id_rms == pytest.approx((0.05 * 0.05, 0.05 * 0.2))  # 5 % of full scale
+    assert r.settings.strategy == "fixed" and r.settings.tolerance is None
 
 
 def test_an_unsupported_method_warns_in_one_line_and_takes_its_defaults(capsys):
     text = "full-spectrum models fail here\n  (Table 3.4: 46 % / 46 %)"
     methods = {"narx": MethodDefaults("text", order=3, degree=2, gain=0.4, unsupported=text)}
-    args = _args(method="narx")
-    cli._defaults(args, _rig(RigDefaults(methods=methods)))  # no exception: it runs
-    assert (args.gain, args.order, args.degree) == (0.4, 3, 2)  # the method's own defaults
+    r = cli._resolve(_args(method="narx"), _rig(RigDefaults(methods=methods)))  # it runs
+    assert (r.settings.gain, r.method.order, r.method.degree) == (0.4, 3, 2)  # its defaults
     err = capsys.readouterr().err.splitlines()
     assert len(err) == 1 and err[0].startswith("warning: ")
     assert '"full-spectrum models fail here (Table 3.4: 46 % / 46 %)"' in err[0]  # quoted
@@ -243,7 +243,7 @@ def test_an_unsupported_method_warns_in_one_line_and_takes_its_defaults(capsys):
 
 def test_a_supported_method_prints_no_warning(capsys):
     methods = {"narx": MethodDefaults("text", unsupported="Table 3.4")}
-    cli._defaults(_args(method="arx"), _rig(RigDefaults(methods=methods)))
+    cli._resolve(_args(method="arx"), _rig(RigDefaults(methods=methods)))
     assert "warning" not in capsys.readouterr().err
 
 
@@ -286,9 +286,10 @@ def test_cli_settings_carry_strategy_tolerance_and_the_method(monkeypatch, tmp_p
          "--tolerance", "3", "--out", str(tmp_path / "o")]
     )
     assert code == cli.ExitCode.BAD_INPUT  # a ValueError from reconstruct() is bad input
-    s = seen["settings"]
+    resolved = seen["settings"]  # resolved once, before the run: the engine uses it as it is
+    s = resolved.settings
     assert (s.strategy, s.tolerance) == ("adaptive", 3.0)
-    assert s.method.name == "error-signal"
+    assert s.method == "error-signal" and resolved.method.name == "error-signal"
 
 
 def test_a_plain_numeric_csv_is_refused_with_the_expected_format(tmp_path, capsys):

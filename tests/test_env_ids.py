@@ -113,15 +113,13 @@ def test_check_env_passes_for_the_generic_id():
 # the rig's own defaults: method, options, identification level, band, tolerance
 # ---------------------------------------------------------------------------------------------
 def _expected_settings(name: str, method: str) -> tuple[dict, tuple | None]:
-    """The method options and identification RMS [drive units] the side-car asks for."""
+    """The method options and identification RMS [drive units] the side-car asks for (the
+    built-in 5 % of full scale where it names none)."""
     block = CARS[name].get("reconstruction", {})
     m = block.get("methods", {}).get(method, {})
     options = {OPTION_NAMES[method][k]: v for k, v in m.items() if k in OPTION_NAMES[method]}
-    level = m.get("id_rms", block.get("id_rms"))
-    id_rms = None
-    if level is not None:
-        id_rms = tuple(level * c["full_scale"] for c in CARS[name]["inputs"])
-    return options, id_rms
+    level = m.get("id_rms", block.get("id_rms", 0.05))  # the documented built-in: 5 %
+    return options, tuple(level * c["full_scale"] for c in CARS[name]["inputs"])
 
 
 @pytest.mark.parametrize("name", sorted(CARS))
@@ -133,10 +131,7 @@ def test_the_env_of_an_id_takes_the_side_cars_method_options_band_and_tolerance(
     options, id_rms = _expected_settings(name, method)
     for key, value in options.items():
         assert s.method_options[key] == value, key
-    if id_rms is None:
-        assert s.id_rms is None
-    else:
-        np.testing.assert_allclose(s.id_rms, id_rms, rtol=1e-12)
+    np.testing.assert_allclose(s.id_rms, id_rms, rtol=1e-12)
     block = CARS[name]["reconstruction"]
     band = block.get("band", CARS[name].get("bandwidth_hz", [0.0, CARS[name]["fs"] / 4]))
     assert env.physics.band == tuple(band)
@@ -198,8 +193,7 @@ def test_an_unsupported_method_warns_quoting_the_side_car_and_the_env_steps(name
     options, id_rms = _expected_settings(name, method)
     for key, value in options.items():
         assert s.method_options[key] == value, key
-    if id_rms is not None:
-        np.testing.assert_allclose(s.id_rms, id_rms, rtol=1e-12)
+    np.testing.assert_allclose(s.id_rms, id_rms, rtol=1e-12)
     try:
         obs, _ = env.reset(seed=0)
     except vrig.errors.RigLimitError as exc:

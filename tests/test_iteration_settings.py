@@ -123,7 +123,9 @@ def test_a_settings_object_and_keywords_give_the_same_reconstruction():
     r1 = vrig.reconstruct(rig1, desired, s)
     r2 = vrig.reconstruct(rig2, desired, method="arx", order=2, iterations=1, gain=0.6)
     np.testing.assert_array_equal(r1.errors, r2.errors)
-    assert r1.settings == s
+    # the result keeps the settings with every default resolved: the given ones as given
+    assert r1.settings == r2.settings == s.replace(bandwidth=rig1.bandwidth, id_rms=r1.settings.id_rms)
+    assert r1.settings.id_rms == tuple(0.05 * c.full_scale for c in rig1.inputs)  # the built-in
     r3 = vrig.reconstruct(_SeedRecordingRig(), desired, s, iterations=0)  # keyword over object
     assert len(r3.errors) == 1 and r3.settings.iterations == 0
 
@@ -138,7 +140,10 @@ def test_the_engine_takes_the_same_settings_object():
     # the 1 s raised-cosine taper: the drive grows from rest no faster than the ramp allows
     ramp = 0.5 - 0.5 * np.cos(np.pi * np.arange(m) / m)
     assert np.all(np.abs(drive[:m]) <= ramp * np.abs(drive).max() + 1e-15)
-    assert engine.settings is s and rig.seeds == [2]
+    # the engine keeps the given settings with the defaults resolved (nothing given changed)
+    assert engine.settings == vrig.reconstruction.defaults.resolve(rig, s).settings
+    assert engine.settings.replace(gain=None, bandwidth=None, id_rms=None) == s
+    assert rig.seeds == [2]
 
 
 def test_env_takes_taper_and_id_psd_from_settings_and_keeps_its_run_seed():

@@ -231,7 +231,7 @@ def resolve(rig, settings=None, **options) -> ResolvedSettings:
             (getattr(defaults, "id_rms", None), RIG_BLOCK),
             (DEFAULT_ID_RMS_FRACTION, BUILT_IN),
         )
-        changes["id_rms"] = tuple(default_id_rms(rig, fraction))
+        changes["id_rms"] = tuple(float(v) for v in default_id_rms(rig, fraction))
 
     given = dict(s.method_options)
     model: dict[str, Any] = {}
