@@ -17,12 +17,12 @@ or ``"async"`` for gymnasium's own; the results are the same bit for bit). The `
 survives a reset that raises (:mod:`vrig.envs.checker`: the stock one is broken for good by a
 failed first reset), and the spec has ``disable_env_checker=True`` so the stock one is not added.
 
-**Rig defaults.** The env takes the rig's own defaults from its side-car, as ``vrig reconstruct``
-does, unless the caller passes them (:func:`vrig.envs.physics.rig_settings`): the band
-(:func:`vrig.reconstruction.defaults.default_band`), the method's options (``reconstruction.methods.METHOD``:
-``order``, ``degree``, ``focus``, ``split_hz``; a key of ``method_options`` wins) and its
-identification level (``id_rms``). A method the side-car marks ``unsupported`` (the reference text
-reports it failing on the rig) runs all the same, after a one-line ``UserWarning`` quoting why (a
+**Rig defaults.** The env resolves its settings as every door does
+(:func:`vrig.reconstruction.defaults.resolve`: what the caller passes, then the side-car's method
+block, then its rig block, then the built-in defaults): the band, the method's options
+(``order``, ``degree``, ``focus``, ``split_hz``) and its identification level (``id_rms``). A
+method the side-car marks ``unsupported`` (the reference text reports it failing on the rig) runs
+all the same, after a one-line :class:`~vrig.errors.UnsupportedMethodWarning` quoting why (a
 benchmark lets a user see a method do badly). The gains are the actions: the
 side-car gain enters only the tolerance rule below.
 

@@ -1,11 +1,11 @@
-"""One method vocabulary: a method name and its options (plus the rig's side-car defaults and the
-simulation band) become a method object and its one-line description here, and only here.
+"""One method vocabulary: a method name and its options become a method object and its one-line
+description here, and only here.
 
 ``vrig reconstruct`` (``--method``, ``--order``, ``--degree``, ``--split-hz``, ``--search``,
 ``--budget``), :func:`vrig.reconstruct` / :class:`~vrig.reconstruction.DriveIteration` (``method``
 and the method options of :class:`~vrig.reconstruction.IterationSettings`), the gymnasium envs
-(:func:`vrig.envs.physics.rig_settings`) and the benchmark runner's built-in methods all build
-their methods with :func:`method_spec`.
+and the benchmark runner's built-in methods all build their methods with :func:`method_spec`,
+through the one defaults resolver (:func:`vrig.reconstruction.defaults.resolve`).
 
 The vocabulary's own options, shared by the methods that take them (None: not given); their
 defaults are the method classes' own (:mod:`vrig.reconstruction.defaults`: the precedence):
