@@ -138,15 +138,19 @@ def _desired(name: str) -> vrig.TimeHistory:
 
 @pytest.fixture(scope="module")
 def desired_records(tmp_path_factory):
-    """One pseudo-field record per rig, saved as the CLI reads it (``.npz``: exact)."""
-    folder = tmp_path_factory.mktemp("desired")
-    out = {}
-    for name in vrig.list_rigs():
-        record = _desired(name)
-        path = folder / f"{name}.npz"
-        vrig.io.write(path, record)
-        out[name] = (record, path)
-    return out
+    """A pseudo-field record per rig, made when first asked for and saved as the CLI reads it
+    (``.npz``: exact): ``desired_records(name) -> (record, path)``."""
+    folder, made = tmp_path_factory.mktemp("desired"), {}
+
+    def get(name):
+        if name not in made:
+            record = _desired(name)
+            path = folder / f"{name}.npz"
+            vrig.io.write(path, record)
+            made[name] = (record, path)
+        return made[name]
+
+    return get
 
 
 def _cli_it00(name: str, method: str, path, out, monkeypatch):
@@ -168,12 +172,31 @@ def _cli_it00(name: str, method: str, path, out, monkeypatch):
     return code, drives
 
 
-@pytest.mark.parametrize("method", METHODS)
-@pytest.mark.parametrize("name", vrig.list_rigs())
+FAST_CASES = {
+    *(("shock-absorber", m) for m in METHODS),  # the README's rig, every method
+    ("elastomeric-damper", "narx"),  # the two cases issue 33 measured apart (36 % vs 60 %)
+    ("motorcycle-rear", "narx"),
+    ("shaker", "arx"),
+    ("radiator", "arx"),
+    ("pneumatic-trailer", "arx"),
+    ("fuel-tank-2ch", "split"),
+}
+"""The rig x method cases of the default test run; the other ones (the 7-channel tank and the
+light truck take 15-90 s a case) are marked slow: ``.ci/run`` runs them beside the test suite."""
+
+
+def _case(name: str, method: str):
+    marks = () if (name, method) in FAST_CASES else (pytest.mark.slow,)
+    return pytest.param(name, method, marks=marks, id=f"{name}-{method}")
+
+
+@pytest.mark.parametrize(
+    ("name", "method"), [_case(n, m) for n in vrig.list_rigs() for m in METHODS]
+)
 def test_the_cli_and_python_play_the_same_it00_and_the_env_uses_the_same_settings(
     name, method, desired_records, tmp_path, monkeypatch
 ):
-    desired, path = desired_records[name]
+    desired, path = desired_records(name)
     code, cli_drives = _cli_it00(name, method, path, tmp_path / "out", monkeypatch)
     rig = vrig.load_rig(name, seed=0, fidelity="fast")  # the CLI's rig: --seed 0
     with warnings.catch_warnings():
