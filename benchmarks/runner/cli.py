@@ -59,7 +59,7 @@ _POLICIES_HELP = (
 
 __all__ = ["FULL", "QUICK", "main"]
 
-FULL = Settings(seconds=30.0, iterations=5, fidelity="full", tolerance=5.0)
+FULL = Settings(seconds=30.0, fidelity="full", tolerance=5.0)
 """The full run: every rig × every registered method × desired 0, 1, 2 × seed 0."""
 QUICK = Settings(seconds=12.0, iterations=3, fidelity="fast", tolerance=5.0)
 """``--quick``: every rig but fuel-tank-7ch × the quick methods × desired 0 × seed 0, short

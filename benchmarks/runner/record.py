@@ -92,7 +92,7 @@ class Settings:
     """Settings shared by every record of a run (part of every record)."""
 
     seconds: float = 30.0
-    iterations: int = 5
+    iterations: int = IterationSettings.iterations  # vrig reconstruct's
     gain: float | None = None
     fidelity: str = "full"
     tolerance: float = 5.0

@@ -237,7 +237,7 @@ def _register_builtins() -> None:
     )
     register_method(
         "narx-search",
-        _built("narx", search=True, budget=60.0),
+        _built("narx", search=True),
         description="inverse NARX searched by free-run validation (orders 1-8, degrees 1-2, "
         "both term kinds, least squares / simulation focus, all / FROLS / SEMP terms; 60 s "
         "budget; identification.NarxSearch)",

@@ -335,8 +335,11 @@ def table_3_7(*, seconds: float, order: int = 4, variant: str | None = None, log
             )
         return recs
 
-    # same RMS for both PSDs: 5 % of full scale, halved (for both) while either trips the rig
-    rms = 0.05 * np.array([c.full_scale for c in rig.inputs])
+    # same RMS for both PSDs: the default identification level, halved (for both) while either
+    # trips the rig
+    from vrig.reconstruction.defaults import default_id_rms
+
+    rms = default_id_rms(rig)
     for _attempt in range(5):
         try:
             data = {label: records(psd, rms) for label, psd in shapes.items()}

@@ -34,6 +34,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..reconstruction.defaults import DEFAULT_GAIN
+
 __all__ = [
     "AdaptiveBandGain",
     "BandRatioPolicy",
@@ -152,10 +154,11 @@ class FixedGain(Policy):
         A :class:`vrig.envs.DriveIterationEnv` (or a wrapper of one); its action layout sets the
         shape of the actions.
     gain : float, optional
-        The gain applied to every band and drive channel.
+        The gain applied to every band and drive channel (default: ``vrig reconstruct``'s
+        built-in, :data:`vrig.reconstruction.defaults.DEFAULT_GAIN`).
     """
 
-    def __init__(self, env, gain: float = 0.8):
+    def __init__(self, env, gain: float = DEFAULT_GAIN):
         super().__init__(env)
         self.gain = _real(gain, "FixedGain: gain")
         self.name = f"fixed {self.gain:g}"
@@ -380,7 +383,7 @@ class BandRatioPolicy(Policy):
         return lay.n_bands + 3 + (lay.n_bands if lay.mode == "complex" else 0)
 
     @staticmethod
-    def initial(env, gain: float = 0.8) -> np.ndarray:
+    def initial(env, gain: float = DEFAULT_GAIN) -> np.ndarray:
         """Parameters of the fixed gain ``gain`` (a starting point for the search; phases 0).
 
         Parameters
