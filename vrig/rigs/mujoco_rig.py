@@ -170,8 +170,7 @@ class MujocoRig:
         chosen = desc.variants[self.variant].values if self.variant in desc.variants else {}
         chosen = {**chosen, **overrides}  # explicit overrides win over the variant's values
         self.parameters = {
-            k: (p.check(chosen[k]) if k in chosen else p.value)
-            for k, p in desc.parameters.items()
+            k: (p.check(chosen[k]) if k in chosen else p.value) for k, p in desc.parameters.items()
         }
         self.severity = self._severity(severity)
         if severity is not None:
@@ -181,7 +180,9 @@ class MujocoRig:
         except ValueError as exc:
             raise RigModelError(f"{desc.mjcf}: MuJoCo could not read the model: {exc}") from exc
         self._inputs, self._outputs = list(desc.inputs), list(desc.outputs)
-        self._air = list(desc.air_springs)  # gas springs (vrig.rigs.gas_spring), parameter rules may change them
+        self._air = list(
+            desc.air_springs
+        )  # gas springs (vrig.rigs.gas_spring), parameter rules may change them
         self._dampers = list(desc.dampers)  # hydraulic dampers (vrig.rigs.damper), likewise
         self._maxwell = list(desc.maxwell)  # rubber Maxwell chains (vrig.rigs.maxwell), likewise
         for name, value in self.parameters.items():
@@ -239,7 +240,7 @@ class MujocoRig:
             if severity is not None:
                 raise RigParameterError(
                     f"rig {desc.name!r} has no severity axis (no non-linear element in its "
-                    "operating range is declared in its side-car's \"severity\"); rigs with one: "
+                    'operating range is declared in its side-car\'s "severity"); rigs with one: '
                     "see vrig.rigs.severity_rigs()",
                     key="severity",
                     value=severity,
@@ -277,7 +278,9 @@ class MujocoRig:
         if "maxwell" in rule:
             i = next((k for k, c in enumerate(self._maxwell) if c.name == rule["maxwell"]), None)
             if i is None:
-                raise RigModelError(f"parameter {param.name!r}: no maxwell chain {rule['maxwell']!r}")
+                raise RigModelError(
+                    f"parameter {param.name!r}: no maxwell chain {rule['maxwell']!r}"
+                )
             self._maxwell[i] = self._maxwell[i].with_branch(rule["field"], rule["index"], float(v))
             return
         if "air_spring" in rule or "damper" in rule:
@@ -393,12 +396,16 @@ class MujocoRig:
             adr = -1
             if a.sensor is not None:
                 s = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_SENSOR, a.sensor)
-                if s < 0 or m.sensor_type[s] != mujoco.mjtSensor.mjSENS_USER or (
-                    m.sensor_dim[s] != 1 or m.sensor_needstage[s] != mujoco.mjtStage.mjSTAGE_POS
+                if (
+                    s < 0
+                    or m.sensor_type[s] != mujoco.mjtSensor.mjSENS_USER
+                    or (
+                        m.sensor_dim[s] != 1 or m.sensor_needstage[s] != mujoco.mjtStage.mjSTAGE_POS
+                    )
                 ):
                     raise RigModelError(
                         f"{self.name}: air spring {a.name!r}: its sensor {a.sensor!r} must be an "
-                        "MJCF <user dim=\"1\" needstage=\"pos\"/> sensor"
+                        'MJCF <user dim="1" needstage="pos"/> sensor'
                     )
                 adr = int(m.sensor_adr[s])
             self._air_bound.append((a, t, adr))
@@ -929,9 +936,7 @@ class MujocoRig:
             )
         return sys.maxsize if math.isinf(value) else max(1, round(value * self.fs))
 
-    def _play(
-        self, x, chunk: int, valve_rng, daq_rng, data=None, *, cancel=None
-    ) -> np.ndarray:
+    def _play(self, x, chunk: int, valve_rng, daq_rng, data=None, *, cancel=None) -> np.ndarray:
         """Simulate the settling period and the drive ``x`` in chunks of ``chunk`` DAQ samples
         on ``data`` (default :attr:`data`; :meth:`run_batch` passes each thread's clone): from
         the presettled state ``_state0`` and callback states ``_hyd_states``, its callback
