@@ -7,8 +7,10 @@ control callback; the physics-rate sensor signals then pass through the transduc
 state across — MuJoCo's full physics state and solver warm start, the callback's states and
 interlock record in ``mjData.userdata``, the DAQ filter states, the noise streams — so a run is
 bit for bit the same in any chunking and only the sensors the DAQ samples are kept: memory does
-not grow with the record length. Interlock trips raise :class:`~vrig.errors.RigLimitError`;
-MuJoCo warnings or non-finite states raise :class:`~vrig.errors.SimulationInstabilityError`.
+not grow with the record length. As a real rig's interlock stops the rig, a run stops at the end
+of the chunk in which its first interlock trip (stroke, force, following error) happened and
+raises :class:`~vrig.errors.RigLimitError`; MuJoCo warnings or non-finite states detected up to
+there raise :class:`~vrig.errors.SimulationInstabilityError` instead (see :meth:`MujocoRig.run`).
 """
 
 from __future__ import annotations
@@ -122,7 +124,8 @@ class MujocoRig:
 
     chunk_seconds = 1.0
     """Default simulated seconds per chunk of :meth:`run` (memory: about 1 kB per physics step
-    of a chunk on the 7-channel rig)."""
+    of a chunk on the 7-channel rig); a run that trips an interlock stops at the end of the
+    trip's chunk."""
 
     def __init__(
         self,
@@ -167,8 +170,7 @@ class MujocoRig:
         chosen = desc.variants[self.variant].values if self.variant in desc.variants else {}
         chosen = {**chosen, **overrides}  # explicit overrides win over the variant's values
         self.parameters = {
-            k: (p.check(chosen[k]) if k in chosen else p.value)
-            for k, p in desc.parameters.items()
+            k: (p.check(chosen[k]) if k in chosen else p.value) for k, p in desc.parameters.items()
         }
         self.severity = self._severity(severity)
         if severity is not None:
@@ -178,7 +180,9 @@ class MujocoRig:
         except ValueError as exc:
             raise RigModelError(f"{desc.mjcf}: MuJoCo could not read the model: {exc}") from exc
         self._inputs, self._outputs = list(desc.inputs), list(desc.outputs)
-        self._air = list(desc.air_springs)  # gas springs (vrig.rigs.gas_spring), parameter rules may change them
+        self._air = list(
+            desc.air_springs
+        )  # gas springs (vrig.rigs.gas_spring), parameter rules may change them
         self._dampers = list(desc.dampers)  # hydraulic dampers (vrig.rigs.damper), likewise
         self._maxwell = list(desc.maxwell)  # rubber Maxwell chains (vrig.rigs.maxwell), likewise
         for name, value in self.parameters.items():
@@ -236,7 +240,7 @@ class MujocoRig:
             if severity is not None:
                 raise RigParameterError(
                     f"rig {desc.name!r} has no severity axis (no non-linear element in its "
-                    "operating range is declared in its side-car's \"severity\"); rigs with one: "
+                    'operating range is declared in its side-car\'s "severity"); rigs with one: '
                     "see vrig.rigs.severity_rigs()",
                     key="severity",
                     value=severity,
@@ -274,7 +278,9 @@ class MujocoRig:
         if "maxwell" in rule:
             i = next((k for k, c in enumerate(self._maxwell) if c.name == rule["maxwell"]), None)
             if i is None:
-                raise RigModelError(f"parameter {param.name!r}: no maxwell chain {rule['maxwell']!r}")
+                raise RigModelError(
+                    f"parameter {param.name!r}: no maxwell chain {rule['maxwell']!r}"
+                )
             self._maxwell[i] = self._maxwell[i].with_branch(rule["field"], rule["index"], float(v))
             return
         if "air_spring" in rule or "damper" in rule:
@@ -390,12 +396,16 @@ class MujocoRig:
             adr = -1
             if a.sensor is not None:
                 s = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_SENSOR, a.sensor)
-                if s < 0 or m.sensor_type[s] != mujoco.mjtSensor.mjSENS_USER or (
-                    m.sensor_dim[s] != 1 or m.sensor_needstage[s] != mujoco.mjtStage.mjSTAGE_POS
+                if (
+                    s < 0
+                    or m.sensor_type[s] != mujoco.mjtSensor.mjSENS_USER
+                    or (
+                        m.sensor_dim[s] != 1 or m.sensor_needstage[s] != mujoco.mjtStage.mjSTAGE_POS
+                    )
                 ):
                     raise RigModelError(
                         f"{self.name}: air spring {a.name!r}: its sensor {a.sensor!r} must be an "
-                        "MJCF <user dim=\"1\" needstage=\"pos\"/> sensor"
+                        'MJCF <user dim="1" needstage="pos"/> sensor'
                     )
                 adr = int(m.sensor_adr[s])
             self._air_bound.append((a, t, adr))
@@ -669,10 +679,28 @@ class MujocoRig:
         physics state (including the constraint solver's warm start), the servo callback's
         states and the DAQ filter states and noise streams where the previous one ended, so the
         result is bit for bit the same for any chunk length and memory does not grow with the
-        record length (only the drive and the sampled response do). Errors are those of one
-        piece: an instability stops the run and takes precedence over an earlier interlock trip
-        (which is usually its symptom); otherwise the first trip is raised, then the first
-        response channel beyond its transducer range, at its first sample beyond it.
+        record length (only the drive and the sampled response do).
+
+        An interlock trip stops the run, as it stops a real rig: the trip record (stroke, force,
+        following error, checked every physics step) is read after each chunk, and no chunk is
+        simulated after the one in which the first trip happened. The error is then, in this
+        order of precedence:
+
+        1. :class:`~vrig.errors.SimulationInstabilityError` if a MuJoCo warning or a non-finite
+           value (sensor, or after the transducer chain) was detected in the part played, i.e.
+           before the trip or after it within the trip's chunk (a blow-up usually trips an
+           interlock first: the trip is its symptom). An instability that would only have
+           shown in a later chunk is not reached: the trip is reported;
+        2. :class:`~vrig.errors.RigLimitError` of the first trip: its kind, channel, time and
+           value, which do not depend on the chunk length (the run up to the trip is the same
+           bit for bit in any chunking);
+        3. :class:`~vrig.errors.RigLimitError` of the first response channel beyond its
+           transducer range, at its first sample beyond it (this check does not stop the run:
+           without a trip the whole drive is played, so any chunking gives the same error).
+
+        The error is the same for any chunk length unless an instability follows the first
+        trip: it is reported if it shows within the trip's chunk (with ``math.inf``: anywhere
+        in the drive), else the trip is.
 
         Parameters
         ----------
@@ -690,9 +718,11 @@ class MujocoRig:
             wrong shape, sample rate or channel names; NaN; a chunk length that is not a
             positive number.
         RigLimitError
-            a drive beyond full scale (not sent), or an interlock trip during the run.
+            a drive beyond full scale (not sent), an interlock trip during the run (the run
+            stopped at the end of the trip's chunk) or a response beyond its transducer range.
         SimulationInstabilityError
-            a MuJoCo warning or a non-finite state.
+            a MuJoCo warning or a non-finite state in the part played (before the first trip or
+            within its chunk): it takes precedence over the trip.
         """
         x = self._check_drive(drive)
         chunk = self._chunk_samples(chunk_seconds)
@@ -732,7 +762,9 @@ class MujocoRig:
         then=None,
     ) -> list:
         """Play many drives at once across threads; result ``i`` is bit for bit
-        ``run(drives[i], seed=seeds[i], chunk_seconds=chunk_seconds)``, errors included.
+        ``run(drives[i], seed=seeds[i], chunk_seconds=chunk_seconds)``, errors included: a
+        drive that trips an interlock stops at the end of the trip's chunk (its error as in
+        :meth:`run`) and its thread goes on with the next drive, the other runs unaffected.
 
         Every drive is checked (shape, NaN, limits) before anything is simulated. Each thread
         plays its drives one after another on its own ``MjData`` (the rig's own and clones of
@@ -904,14 +936,14 @@ class MujocoRig:
             )
         return sys.maxsize if math.isinf(value) else max(1, round(value * self.fs))
 
-    def _play(
-        self, x, chunk: int, valve_rng, daq_rng, data=None, *, cancel=None
-    ) -> np.ndarray:
+    def _play(self, x, chunk: int, valve_rng, daq_rng, data=None, *, cancel=None) -> np.ndarray:
         """Simulate the settling period and the drive ``x`` in chunks of ``chunk`` DAQ samples
         on ``data`` (default :attr:`data`; :meth:`run_batch` passes each thread's clone): from
         the presettled state ``_state0`` and callback states ``_hyd_states``, its callback
         context installed for the run and removed after, whatever happens. Returns the sampled
-        responses of the drive period (errors: see :meth:`run`); ``cancel``: an event checked
+        responses of the drive period (errors: see :meth:`run`); the trip record is read after
+        each chunk and the run stops after the chunk of the first trip (its stability and
+        transducer-chain checks made first: they take precedence); ``cancel``: an event checked
         after each chunk (set: :class:`_Cancelled` is raised)."""
         m, dec = self.model, self.decimation
         d = self.data if data is None else data
@@ -931,7 +963,7 @@ class MujocoRig:
         steps = min(chunk, total) * dec
         state_buf = np.empty((1, steps, self._state0.size))
         sens_buf = np.empty((1, steps, m.nsensordata))
-        state, warm = self._state0, None
+        state, warm, trip = self._state0, None, None
         over = {}  # channel -> (first sample beyond the transducer range, value)
         noise = (valve_rng, self._control_noise(valve_rng))  # valve, controller
         hydraulics.install(m, d, self._hyd, self.timestep, states=self._hyd_states)
@@ -964,13 +996,15 @@ class MujocoRig:
                     lo = max(k0, settle)
                     out[lo - settle : k1 - settle] = sampled[lo - k0 :]
                     self._note_range(over, lo - settle, sampled[lo - k0 :], full)
+                shown.update(k1 - k0)
+                trip = hydraulics.trip_record(d)
+                if trip is not None:  # the interlock stopped the rig: no further chunk
+                    break
                 state = np.empty(self._state0.size)
                 mujoco.mj_getState(m, d, state, _STATE)
                 warm = d.qacc_warmstart[None, :].copy()
-                shown.update(k1 - k0)
                 if cancel is not None and cancel.is_set():
                     raise _Cancelled
-            trip = hydraulics.trip_record(d)
         finally:
             shown.close()
             hydraulics.uninstall(d)

@@ -13,6 +13,15 @@ and a user's own class alike); nothing else of a rig is read by the iteration::
                plays a drive (ndarray (n_samples, n_inputs) or TimeHistory at ``fs``) and returns
                the sampled responses, one column per output, at ``fs``
 
+A run's errors, as the iteration reads them: :class:`~vrig.errors.RigLimitError` for a drive
+refused before it is sent or an interlock trip during the run (a trip stops the run, as it stops
+a real rig; the error names the first trip's channel, time and value), and
+:class:`~vrig.errors.SimulationInstabilityError` for a simulated rig that became numerically
+unstable in the part it played — that takes precedence over a trip, which is often its symptom
+(:meth:`MujocoRig.run <vrig.rigs.MujocoRig.run>`: the part played is up to the end of the chunk
+in which the first trip happened). Callers that retry at a lower level (the identification
+drive, :func:`vrig.field.pseudo_field`) retry on the first, never on the second.
+
 ``isinstance(obj, Rig)`` checks that the members exist (``typing.runtime_checkable``), not their
 signatures or types. :class:`DescribedRig` adds ``describe()`` (the CLI's ``vrig describe``).
 """
@@ -68,6 +77,15 @@ class Rig(Protocol):
         seed : int, optional
             Noise seed for this run; None: the rig's own choice (a shipped rig: the next stream
             of its generator).
+
+        Raises
+        ------
+        RigLimitError
+            The drive is beyond a channel's full scale (not sent), or an interlock tripped (the
+            run stopped there).
+        SimulationInstabilityError
+            The simulation became unstable before the run stopped (it takes precedence over a
+            trip).
         """
         ...
 
