@@ -68,8 +68,7 @@ import numpy as np
 
 from .commands import bench, check_target, demo, info, linearity, reconstruct_options, repeatability
 from .commands.common import MAX_SECONDS as _MAX_SECONDS
-from .commands.common import Failure as _Failure
-from .commands.common import UsageError as _UsageError
+from .commands.common import _Failure, _UsageError
 from .commands.common import check_content as _check_content
 from .commands.common import check_seed as _check_seed
 from .commands.common import load_rig as _load_rig

@@ -616,16 +616,18 @@ def interrupted_line(result, out: Path) -> str:
 # the Python door
 # ---------------------------------------------------------------------------------------------
 def settings_record(settings, rig, desired, *, command: str = "vrig.reconstruct") -> dict:
-    """``summary.json``'s ``settings`` of a run of ``settings`` (every resolved value the job
-    was given, the update rule and its options included), in the keys ``vrig reconstruct``
-    records."""
+    """``summary.json``'s ``settings`` of a Python run of ``settings``, in the keys ``vrig
+    reconstruct`` records (``argv`` ``None``; ``method`` the name, or the class of a method
+    object, and the options given): the values the caller resolved, the update rule and its
+    options included (the band, the model decimation and the identification report are
+    ``summary.json``'s own entries)."""
     method = settings.method
+    options = "".join(f" {k} {v}" for k, v in settings.method_options.items())
     record = {
         "command": command,
         "argv": None,
         "variant": getattr(rig, "variant", None),
-        "method": method if isinstance(method, str) else type(method).__name__,
-        "method_options": dict(settings.method_options),
+        "method": (method if isinstance(method, str) else type(method).__name__) + options,
         "gain": settings.gain,
         "iterations": settings.iterations,
         "seed": settings.id_seed,
@@ -653,10 +655,12 @@ def reconstruct_into(
         try:
             result = job.run(rig, desired, settings, progress=progress, save=save)
         except ReconstructionInterrupted as exc:  # keep what was played, then the interrupt
-            job.save(exc.result, rig, **save)
-            raise ReconstructionInterrupted(
-                f"{exc}; {interrupted_line(exc.result, job.out)}", result=exc.result
-            ) from exc
+            try:
+                job.save(exc.result, rig, **save)
+                kept = interrupted_line(exc.result, job.out)
+            except ResultsNotSavedError as failed:  # the interrupt still goes first
+                kept = str(failed)
+            raise ReconstructionInterrupted(f"{exc}; {kept}", result=exc.result) from exc
         except ReconstructionError as exc:
             if job.interrupts.seen:  # Ctrl-C while what was made was saved: saved whole
                 raise ReconstructionInterrupted(str(exc), result=exc.result) from exc

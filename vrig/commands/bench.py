@@ -11,7 +11,7 @@ import sys
 import threading
 from pathlib import Path
 
-from .common import UsageError
+from .common import _UsageError
 
 
 def add_parser(sub) -> None:
@@ -36,7 +36,7 @@ def run(argv: list[str]) -> int:
     interpreter; returns its exit code."""
     bench = benchmarks_dir()
     if not (bench / "runner" / "cli.py").is_file():
-        raise UsageError(
+        raise _UsageError(
             f"vrig bench needs a source checkout: there is no benchmark runner at {bench} (a "
             "wheel ships none); clone the vrig repository (git clone ...), run `pip install -e .` "
             "in it, and run `vrig bench ...` again"

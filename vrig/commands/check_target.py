@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from .common import UsageError, check_seconds, check_seed, load_rig, read_desired, simulation_band
+from .common import _UsageError, check_seconds, check_seed, load_rig, read_desired, simulation_band
 
 
 def add_parser(sub, epilog: str) -> None:
@@ -51,7 +51,7 @@ def run(args) -> int:
     check_seed(args.seed)
     if not Path(args.desired).is_file():
         what = "a folder, not a file" if Path(args.desired).is_dir() else "no file"
-        raise UsageError(f"--desired: {what} {args.desired}")
+        raise _UsageError(f"--desired: {what} {args.desired}")
     rig = load_rig(args.rig, seed=args.seed)
     band = simulation_band(rig, args.band)
     desired, notes = read_desired(args.desired, rig)
@@ -63,6 +63,6 @@ def run(args) -> int:
     try:
         check = check_target(rig, desired, band=band, seconds=args.seconds, seed=args.seed)
     except ValueError as exc:  # a record too short for the spectral estimate
-        raise UsageError(str(exc)) from exc
+        raise _UsageError(str(exc)) from exc
     print(check.table())
     return 0

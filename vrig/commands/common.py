@@ -13,11 +13,12 @@ from ..reconstruction.defaults import default_band
 MAX_SECONDS = 3600.0  # longest record a command plays or reconstructs (--seconds, --desired)
 
 
-class UsageError(Exception):
-    """A bad argument: reported with the command's name, exit code 2."""
+class _UsageError(Exception):
+    """A bad argument: reported with the command's name, exit code 2 (the command line's own
+    control flow, never raised to a library caller: private)."""
 
 
-class Failure(Exception):
+class _Failure(Exception):
     """The rig or the iteration failed: reported with the command's name and exit code ``code``
     (default 1)."""
 
@@ -42,21 +43,21 @@ def load_rig(name: str, *, seed: int = 0):
     from .. import list_rigs, load_rig
 
     if not name.endswith((".json", ".xml")) and name not in list_rigs():
-        raise UsageError(f"unknown rig {name!r}; available rigs: {', '.join(list_rigs())}")
+        raise _UsageError(f"unknown rig {name!r}; available rigs: {', '.join(list_rigs())}")
     if name.endswith((".json", ".xml")) and not Path(name).is_file():
-        raise UsageError(f"no rig file {name}")
+        raise _UsageError(f"no rig file {name}")
     return load_rig(name, seed=seed)
 
 
 def check_seed(seed: int) -> None:
     if seed < 0:
-        raise UsageError(f"--seed must be an integer >= 0, got {seed}")
+        raise _UsageError(f"--seed must be an integer >= 0, got {seed}")
 
 
 def check_seconds(seconds: float | None) -> None:
     """``--seconds``, when given, lies in 2..:data:`MAX_SECONDS`."""
     if seconds is not None and not (np.isfinite(seconds) and 2 <= seconds <= MAX_SECONDS):
-        raise UsageError(f"--seconds must be 2..{MAX_SECONDS:g}, got {seconds:g}")
+        raise _UsageError(f"--seconds must be 2..{MAX_SECONDS:g}, got {seconds:g}")
 
 
 def simulation_band(rig, band) -> tuple[float, float]:
@@ -64,7 +65,7 @@ def simulation_band(rig, band) -> tuple[float, float]:
         return default_band(rig)
     lo, hi = (float(b) for b in band)
     if not (np.isfinite(lo) and np.isfinite(hi) and 0 <= lo < hi < rig.fs / 2):
-        raise UsageError(
+        raise _UsageError(
             f"--band {lo:g} {hi:g}: need 0 <= LOW < HIGH < fs/2 = {rig.fs / 2:g} Hz for rig "
             f"{rig.name!r}"
         )
@@ -75,7 +76,7 @@ def check_desired(desired, rig):
     """Match a read desired record to the rig's responses (by name, else by position)."""
     names = [c.name for c in rig.outputs]
     if abs(desired.fs - rig.fs) > 1e-6 * rig.fs:
-        raise UsageError(
+        raise _UsageError(
             f"--desired is sampled at {desired.fs:g} Hz but rig {rig.name!r} runs at "
             f"{rig.fs:g} Hz: resample it first"
         )
@@ -92,7 +93,7 @@ def check_desired(desired, rig):
         )
         desired = type(desired)(desired.data, desired.fs, names, desired.units)
     else:
-        raise UsageError(
+        raise _UsageError(
             f"--desired has {desired.n_channels} channels {list(desired.names)} but rig "
             f"{rig.name!r} has {len(names)} responses {names}"
         )
@@ -108,12 +109,12 @@ def check_content(desired, rig) -> None:
     for k, c in enumerate(rig.outputs):
         peak = float(np.max(np.abs(data[:, k])))
         if peak > c.full_scale:
-            raise UsageError(
+            raise _UsageError(
                 f"--desired channel {c.name!r} peaks at {peak:.6g} {c.unit}, beyond the rig's "
                 f"transducer range ±{c.full_scale:g} {c.unit}: the rig cannot produce it"
             )
         if np.ptp(data[:, k]) == 0:
-            raise UsageError(
+            raise _UsageError(
                 f"--desired channel {c.name!r} is constant: there is nothing to reconstruct"
             )
 
@@ -126,5 +127,5 @@ def read_desired(path, rig):
     try:
         field = io.read(path)
     except Exception as exc:  # whatever a damaged file makes the reader raise: bad input
-        raise UsageError(f"--desired: cannot read {path}: {exc}") from None
+        raise _UsageError(f"--desired: cannot read {path}: {exc}") from None
     return check_desired(field, rig)

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from .common import Failure, UsageError, check_seed, whole_number
+from .common import _Failure, _UsageError, check_seed, whole_number
 
 SAMPLES = (2000, 100_000)  # = vrig.demo's MIN/MAX_SAMPLES (454 terms per output)
 
@@ -36,14 +36,14 @@ def run(args) -> int:
 
     lo, hi = SAMPLES
     if not lo <= args.samples <= hi:
-        raise UsageError(f"--samples must be >= {lo} and <= {hi}, got {args.samples}")
+        raise _UsageError(f"--samples must be >= {lo} and <= {hi}, got {args.samples}")
     if not 0 <= args.noise < 1:
-        raise UsageError(f"--noise must be in [0, 1), got {args.noise:g}")
+        raise _UsageError(f"--noise must be in [0, 1), got {args.noise:g}")
     check_seed(args.seed)
     try:
         run_demo(seed=args.seed, n_samples=args.samples, noise=args.noise)
     except (UnstableModelError, SimulationDivergedError) as exc:  # the fit was refused
-        raise Failure(
+        raise _Failure(
             f"{exc} ({args.samples} samples are few for the 454 terms per output: try more "
             "--samples, or another --seed)"
         ) from exc

@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 
 from ..job import CLI_NAMES, check_writable, hold_results_folder
-from .common import UsageError, check_seconds, check_seed, load_rig, simulation_band
+from .common import _UsageError, check_seconds, check_seed, load_rig, simulation_band
 
 
 def add_parser(sub, epilog: str) -> None:
@@ -58,19 +58,19 @@ def _check_linearity(args, hold: contextlib.ExitStack) -> int:
     from ..linearity import check_rig_linearity
 
     if not (np.isfinite(args.level) and 0 < args.level <= 0.5):
-        raise UsageError(
+        raise _UsageError(
             f"--level must be a fraction of full scale in (0, 0.5], got {args.level:g}"
         )
     check_seconds(args.seconds)
     check_seed(args.seed)
     if args.out is not None and not args.plot:
-        raise UsageError("--out is the folder of the plot: pass --plot too")
+        raise _UsageError("--out is the folder of the plot: pass --plot too")
     rig = load_rig(args.rig, seed=args.seed)
     band = simulation_band(rig, args.band)
     out = Path(args.out) if args.out else Path("results") / f"{Path(rig.name).stem}-linearity"
     if args.plot:
         if out.exists() and not out.is_dir():
-            raise UsageError(f"--out {out} is a file, not a folder")
+            raise _UsageError(f"--out {out} is a file, not a folder")
         check_writable(out, CLI_NAMES)  # before the runs, not after them
         hold_results_folder(hold, out, CLI_NAMES)  # one writer per folder: refused before runs
     result = check_rig_linearity(  # its bar follows VRIG_PROGRESS (a terminal by default)

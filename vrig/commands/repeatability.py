@@ -10,7 +10,7 @@ import numpy as np
 
 from ..field import pseudo_field
 from ..job import CLI_NAMES, check_writable, hold_results_folder
-from .common import UsageError, check_seconds, check_seed, load_rig, simulation_band
+from .common import _UsageError, check_seconds, check_seed, load_rig, simulation_band
 
 
 def add_parser(sub, epilog: str) -> None:
@@ -48,7 +48,7 @@ def _repeatability(args, hold: contextlib.ExitStack) -> int:
     from ..repeatability import repeatability_function, repeatability_number, signal_to_noise
 
     if not 2 <= args.runs <= 50:
-        raise UsageError(f"--runs must be 2..50 (the text uses 5), got {args.runs}")
+        raise _UsageError(f"--runs must be 2..50 (the text uses 5), got {args.runs}")
     check_seconds(args.seconds)
     check_seed(args.seed)
     rig = load_rig(args.rig, seed=args.seed)
@@ -56,7 +56,7 @@ def _repeatability(args, hold: contextlib.ExitStack) -> int:
     band = simulation_band(rig, text["band"] if args.band is None and text else args.band)
     out = Path(args.out) if args.out else Path("results") / f"{Path(rig.name).stem}-repeatability"
     if out.exists() and not out.is_dir():
-        raise UsageError(f"--out {out} is a file, not a folder")
+        raise _UsageError(f"--out {out} is a file, not a folder")
     check_writable(out, CLI_NAMES)  # before the runs, not after them
     hold_results_folder(hold, out, CLI_NAMES)  # one writer per folder: refused before its runs
 
