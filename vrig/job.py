@@ -52,6 +52,7 @@ __all__ = [
     "check_results_folder",
     "check_space",
     "check_writable",
+    "hold_results_folder",
     "interrupted_line",
     "reconstruct_into",
     "settings_record",
@@ -343,11 +344,11 @@ def _nothing_saved(out: Path, exc: OSError) -> str:
 class ResultsJob:
     """One reconstruction's results folder, from its checks to the end of its save.
 
-    >>> job = ResultsJob("results/run", overwrite=True)           # doctest: +SKIP
-    >>> job.check()                                                # bad input: nothing played
-    >>> with job:                                                  # the lock, to the end
+    >>> job = ResultsJob("results/run", overwrite=True)         # doctest: +SKIP
+    >>> job.check()                                  # bad input: nothing played  # doctest: +SKIP
+    >>> with job:                                    # the lock, to the end       # doctest: +SKIP
     ...     job.check_space(desired, rig, settings.iterations)
-    ...     result = job.run(rig, desired, settings)              # ReconstructionError: saved
+    ...     result = job.run(rig, desired, settings)  # ReconstructionError: saved
     ...     written = job.save(result, rig, field=desired, settings=record)
 
     Parameters
