@@ -111,6 +111,15 @@ def check_results_folder(path: Path, overwrite: bool, names: OptionNames = PYTHO
     it (the shell would be left in a deleted directory), not a mount point and holding none (a
     mounted file system would be emptied: :func:`vrig.files.mount_points`).
 
+    Parameters
+    ----------
+    path : str or Path
+        The results folder.
+    overwrite : bool
+        Whether a non-empty folder may be replaced.
+    names : OptionNames
+        How the message names the caller's options (:data:`CLI_NAMES`, :data:`PYTHON_NAMES`).
+
     Raises
     ------
     ResultsFolderError
@@ -155,6 +164,13 @@ def check_writable(path: Path, names: OptionNames = PYTHON_NAMES) -> None:
 
     Creates what is missing and a temporary file to prove it, then removes both again.
 
+    Parameters
+    ----------
+    path : str or Path
+        The results folder.
+    names : OptionNames
+        How the message names the caller's options (:data:`CLI_NAMES`, :data:`PYTHON_NAMES`).
+
     Raises
     ------
     ResultsFolderError
@@ -190,6 +206,15 @@ def hold_results_folder(
     """Take the lock of the results folder ``out`` (:func:`vrig.files.folder_lock`) until
     ``hold`` closes: a second writer is refused here, before it plays anything. Folders made for
     the lock file are removed again when nothing is saved.
+
+    Parameters
+    ----------
+    hold : contextlib.ExitStack
+        Holds the lock until it closes.
+    out : str or Path
+        The results folder.
+    names : OptionNames
+        How the message names the caller's options (:data:`CLI_NAMES`, :data:`PYTHON_NAMES`).
 
     Raises
     ------
@@ -230,6 +255,21 @@ def check_space(
 ) -> None:
     """Before the run: the disk holding ``out`` has room for the records (identification,
     desired, three per iteration, final) and the plots.
+
+    Parameters
+    ----------
+    out : str or Path
+        The results folder.
+    desired : TimeHistory
+        The desired record (the identification is as long).
+    rig : Rig
+        The rig (its numbers of drives and responses).
+    iterations : int
+        Iterations after IT00.
+    fmt : {"rsp", "csv", "mat", "npz"}
+        The record format.
+    names : OptionNames
+        How the message names the caller's options (:data:`CLI_NAMES`, :data:`PYTHON_NAMES`).
 
     Raises
     ------
@@ -289,8 +329,13 @@ class Interrupts:
 
     @contextlib.contextmanager
     def installed(self, *, reset: bool = True):
-        """The handler, for one command (the main thread only: signals go there); ``reset``
-        forgets the interrupts seen before."""
+        """The handler, for one command (the main thread only: signals go there).
+
+        Parameters
+        ----------
+        reset : bool
+            Forget the interrupts seen before.
+        """
         if reset:
             self.seen, self._defer = False, 0
         if threading.current_thread() is not threading.main_thread():
@@ -311,7 +356,19 @@ class Interrupts:
 def target_check(rig, result) -> dict:
     """:func:`vrig.targets.check_target` of DESRES from the reconstruction's own identification
     records (no rig run) as ``summary.json``'s ``target_check``; a failure is recorded as
-    ``{"error": ...}``, never raised (it must not lose the run)."""
+    ``{"error": ...}``, never raised (it must not lose the run).
+
+    Parameters
+    ----------
+    rig : Rig
+        The rig.
+    result : ReconstructionResult
+        The reconstruction (its desired response, band and identification records).
+
+    Returns
+    -------
+    dict
+    """
     from .targets import check_target
 
     if result.id_drive is None or result.id_response is None:
@@ -410,12 +467,35 @@ class ResultsJob:
         self._hold.close()
 
     def check_space(self, desired, rig, iterations: int) -> None:
-        """The disk has room for the results (:func:`check_space`)."""
+        """The disk has room for the results (:func:`check_space`).
+
+        Parameters
+        ----------
+        desired : TimeHistory
+            The desired record.
+        rig : Rig
+            The rig.
+        iterations : int
+            Iterations after IT00.
+        """
         check_space(self.out, desired, rig, iterations, self.fmt, self.names)
 
     def run(self, rig, desired, settings, *, progress: bool = False, save: dict | None = None):
         """:func:`vrig.reconstruction.reconstruct` with ``settings``; a failure before IT00
-        saves what was made (``save``: :meth:`save`'s keywords) and raises.
+        saves what was made and raises.
+
+        Parameters
+        ----------
+        rig : Rig
+            The rig.
+        desired : TimeHistory
+            The desired response.
+        settings : IterationSettings
+            The resolved settings.
+        progress : bool
+            Progress on stderr.
+        save : dict, optional
+            :meth:`save`'s keywords for a failure before IT00.
 
         Returns
         -------
@@ -452,6 +532,19 @@ class ResultsJob:
         """Write the test folder, plots and ``summary.json`` of ``result`` (also one with no
         iteration played) in one swap, with the target check; a Ctrl-C waits until it is done
         (``self.interrupts.seen``). A full disk: saved again without the plots (a warning).
+
+        Parameters
+        ----------
+        result : ReconstructionResult
+            The reconstruction (also one that played nothing).
+        rig : Rig
+            The rig.
+        field : TimeHistory, optional
+            The record the desired response was made from (FIELD01).
+        records : mapping, optional
+            Further records under QanTiM names (``DESDRV``).
+        settings : mapping, optional
+            ``summary.json``'s ``settings``.
 
         Returns
         -------
@@ -589,7 +682,23 @@ def advice(
 
 def stop_line(result, out: Path, gain: float, names: OptionNames = PYTHON_NAMES) -> str:
     """The line of a reconstruction that stopped after IT00 short of its iterations: why, what
-    to change (:func:`advice`) and where the best iteration is kept."""
+    to change (:func:`advice`) and where the best iteration is kept.
+
+    Parameters
+    ----------
+    result : ReconstructionResult
+        The reconstruction that stopped.
+    out : Path
+        The results folder.
+    gain : float
+        The iteration gain.
+    names : OptionNames
+        How the message names the caller's options (:data:`CLI_NAMES`, :data:`PYTHON_NAMES`).
+
+    Returns
+    -------
+    str
+    """
     text = advice(result.stop_kind, "after IT00", gain, result, names)
     best = result.best_iteration
     return (
@@ -598,7 +707,19 @@ def stop_line(result, out: Path, gain: float, names: OptionNames = PYTHON_NAMES)
 
 
 def interrupted_line(result, out: Path) -> str:
-    """The line of a reconstruction Ctrl-C stopped (its results saved in ``out``)."""
+    """The line of a reconstruction Ctrl-C stopped (its results saved in ``out``).
+
+    Parameters
+    ----------
+    result : ReconstructionResult
+        What was played.
+    out : Path
+        The results folder.
+
+    Returns
+    -------
+    str
+    """
     n = len(result.drives)
     if result.stop_kind != "interrupted":  # Ctrl-C came after the run, during the save
         return f"interrupted while the results were saved: saved whole in {out}/"
@@ -621,7 +742,23 @@ def settings_record(settings, rig, desired, *, command: str = "vrig.reconstruct"
     reconstruct`` records (``argv`` ``None``; ``method`` the name, or the class of a method
     object, and the options given): the values the caller resolved, the update rule and its
     options included (the band, the model decimation and the identification report are
-    ``summary.json``'s own entries)."""
+    ``summary.json``'s own entries).
+
+    Parameters
+    ----------
+    settings : IterationSettings
+        The resolved settings.
+    rig : Rig
+        The rig (its variant).
+    desired : TimeHistory
+        The desired response.
+    command : str
+        What ran the job.
+
+    Returns
+    -------
+    dict
+    """
     method = settings.method
     options = "".join(f" {k} {v}" for k, v in settings.method_options.items())
     record = {
@@ -647,7 +784,31 @@ def reconstruct_into(
     rig, desired, settings, out, *, overwrite=False, fmt="rsp", plots=True, progress=False
 ):
     """:func:`vrig.reconstruct` with ``out`` (see its documentation): the job, from the checks
-    of the folder to the end of its save."""
+    of the folder to the end of its save.
+
+    Parameters
+    ----------
+    rig : Rig
+        The rig.
+    desired : TimeHistory
+        The desired response.
+    settings : IterationSettings
+        The resolved settings.
+    out : str or Path
+        The results folder.
+    overwrite : bool
+        Allow replacing a non-empty folder's records.
+    fmt : {"rsp", "csv", "mat", "npz"}
+        The record format.
+    plots : bool
+        Draw the plots.
+    progress : bool
+        Progress on stderr.
+
+    Returns
+    -------
+    ReconstructionResult
+    """
     job = ResultsJob(out, overwrite=overwrite, fmt=fmt, plots=plots)
     job.check()
     save = {"field": desired, "settings": settings_record(settings, rig, desired)}

@@ -15,7 +15,13 @@ from .common import _UsageError
 
 
 def add_parser(sub) -> None:
-    """Add the `bench` subcommand: passes its arguments on to the benchmark runner."""
+    """Add the `bench` subcommand: passes its arguments on to the benchmark runner.
+
+    Parameters
+    ----------
+    sub : argparse._SubParsersAction
+        The subcommands of the ``vrig`` parser.
+    """
     bench = sub.add_parser(
         "bench",
         help="the reconstruction benchmark runner (= python -m benchmarks; source checkout)",
@@ -33,7 +39,18 @@ def benchmarks_dir() -> Path:
 def run(argv: list[str]) -> int:
     """Forward to the benchmark runner, which lives in the source checkout's ``benchmarks/``
     (found next to the ``vrig`` package, whatever the current directory), run in a child
-    interpreter; returns its exit code."""
+    interpreter.
+
+    Parameters
+    ----------
+    argv : list of str
+        The arguments after ``vrig bench``.
+
+    Returns
+    -------
+    int
+        The runner's exit code.
+    """
     bench = benchmarks_dir()
     if not (bench / "runner" / "cli.py").is_file():
         raise _UsageError(

@@ -8,7 +8,15 @@ from .common import _UsageError, check_seconds, check_seed, load_rig, read_desir
 
 
 def add_parser(sub, epilog: str) -> None:
-    """Add the `check-target` subcommand."""
+    """Add the `check-target` subcommand.
+
+    Parameters
+    ----------
+    sub : argparse._SubParsersAction
+        The subcommands of the ``vrig`` parser.
+    epilog : str
+        The exit-code table every ``--help`` ends with.
+    """
     chk = sub.add_parser(
         "check-target",
         help="can the rig reach a desired response? unreachable fraction per response, needed "
@@ -45,6 +53,18 @@ def add_parser(sub, epilog: str) -> None:
 
 
 def run(args) -> int:
+    """``vrig check-target``: the range report and the target check of ``--desired``.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed arguments.
+
+    Returns
+    -------
+    int
+        The exit code.
+    """
     from ..targets import check_target, range_report
 
     check_seconds(args.seconds)

@@ -28,7 +28,17 @@ class _Failure(Exception):
 
 
 def whole_number(text: str) -> int:
-    """An integer argument, also written as ``2e4``: its range is checked by the command."""
+    """An integer argument, also written as ``2e4``: its range is checked by the command.
+
+    Parameters
+    ----------
+    text : str
+        The argument.
+
+    Returns
+    -------
+    int
+    """
     try:
         value = float(text)
     except ValueError:
@@ -39,7 +49,19 @@ def whole_number(text: str) -> int:
 
 
 def load_rig(name: str, *, seed: int = 0):
-    """The rig ``name`` (a shipped rig or a rig file); an unknown one is a usage error."""
+    """The rig ``name`` (a shipped rig or a rig file); an unknown one is a usage error.
+
+    Parameters
+    ----------
+    name : str
+        A shipped rig's name or a ``.rig.json``/``.xml`` file.
+    seed : int
+        The rig's seed.
+
+    Returns
+    -------
+    Rig
+    """
     from .. import list_rigs, load_rig
 
     if not name.endswith((".json", ".xml")) and name not in list_rigs():
@@ -50,17 +72,43 @@ def load_rig(name: str, *, seed: int = 0):
 
 
 def check_seed(seed: int) -> None:
+    """``--seed`` is an integer >= 0.
+
+    Parameters
+    ----------
+    seed : int
+        The argument.
+    """
     if seed < 0:
         raise _UsageError(f"--seed must be an integer >= 0, got {seed}")
 
 
 def check_seconds(seconds: float | None) -> None:
-    """``--seconds``, when given, lies in 2..:data:`MAX_SECONDS`."""
+    """``--seconds``, when given, lies in 2..:data:`MAX_SECONDS`.
+
+    Parameters
+    ----------
+    seconds : float or None
+        The argument (None: not given).
+    """
     if seconds is not None and not (np.isfinite(seconds) and 2 <= seconds <= MAX_SECONDS):
         raise _UsageError(f"--seconds must be 2..{MAX_SECONDS:g}, got {seconds:g}")
 
 
 def simulation_band(rig, band) -> tuple[float, float]:
+    """``--band`` checked against the rig's Nyquist frequency, else the rig's default band.
+
+    Parameters
+    ----------
+    rig : Rig
+        The rig.
+    band : (float, float) or None
+        The argument (None: not given).
+
+    Returns
+    -------
+    (float, float)
+    """
     if band is None:
         return default_band(rig)
     lo, hi = (float(b) for b in band)
@@ -73,7 +121,20 @@ def simulation_band(rig, band) -> tuple[float, float]:
 
 
 def check_desired(desired, rig):
-    """Match a read desired record to the rig's responses (by name, else by position)."""
+    """Match a read desired record to the rig's responses (by name, else by position).
+
+    Parameters
+    ----------
+    desired : TimeHistory
+        The record read from ``--desired``.
+    rig : Rig
+        The rig.
+
+    Returns
+    -------
+    (TimeHistory, list of str)
+        The record with the rig's responses, and notes on how it was matched.
+    """
     names = [c.name for c in rig.outputs]
     if abs(desired.fs - rig.fs) > 1e-6 * rig.fs:
         raise _UsageError(
@@ -104,7 +165,15 @@ def check_desired(desired, rig):
 
 
 def check_content(desired, rig) -> None:
-    """The desired record (as it will be used) is something the rig can reproduce."""
+    """The desired record (as it will be used) is something the rig can reproduce.
+
+    Parameters
+    ----------
+    desired : TimeHistory
+        The desired record, matched to the rig.
+    rig : Rig
+        The rig.
+    """
     data = np.asarray(desired.data)
     for k, c in enumerate(rig.outputs):
         peak = float(np.max(np.abs(data[:, k])))
@@ -120,8 +189,20 @@ def check_content(desired, rig) -> None:
 
 
 def read_desired(path, rig):
-    """Read a ``--desired`` file and match it to the rig's responses (:func:`check_desired`):
-    (record, notes)."""
+    """Read a ``--desired`` file and match it to the rig's responses (:func:`check_desired`).
+
+    Parameters
+    ----------
+    path : str or Path
+        The file.
+    rig : Rig
+        The rig.
+
+    Returns
+    -------
+    (TimeHistory, list of str)
+        The record and the notes.
+    """
     from .. import io
 
     try:

@@ -8,7 +8,15 @@ SAMPLES = (2000, 100_000)  # = vrig.demo's MIN/MAX_SAMPLES (454 terms per output
 
 
 def add_parser(sub, epilog: str) -> None:
-    """Add the `demo` subcommand: identify and simulate a generated NARX system."""
+    """Add the `demo` subcommand: identify and simulate a generated NARX system.
+
+    Parameters
+    ----------
+    sub : argparse._SubParsersAction
+        The subcommands of the ``vrig`` parser.
+    epilog : str
+        The exit-code table every ``--help`` ends with.
+    """
     demo = sub.add_parser(
         "demo", help="identify and simulate a generated non-linear MIMO system", epilog=epilog
     )
@@ -30,6 +38,18 @@ def add_parser(sub, epilog: str) -> None:
 
 
 def run(args) -> int:
+    """``vrig demo``: :func:`vrig.demo.run_demo` with the checked arguments.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed arguments.
+
+    Returns
+    -------
+    int
+        The exit code.
+    """
     from identification.errors import SimulationDivergedError, UnstableModelError
 
     from ..demo import run_demo

@@ -13,7 +13,15 @@ from .common import _UsageError, check_seconds, check_seed, load_rig, simulation
 
 
 def add_parser(sub, epilog: str) -> None:
-    """Add the `check-linearity` subcommand."""
+    """Add the `check-linearity` subcommand.
+
+    Parameters
+    ----------
+    sub : argparse._SubParsersAction
+        The subcommands of the ``vrig`` parser.
+    epilog : str
+        The exit-code table every ``--help`` ends with.
+    """
     lin = sub.add_parser(
         "check-linearity",
         help="is the rig non-linear? mean-level, scaling, coherence and ARX-vs-NARX tests",
@@ -48,6 +56,18 @@ def add_parser(sub, epilog: str) -> None:
 
 
 def run(args) -> int:
+    """``vrig check-linearity``, holding the lock of ``--out`` when the plot is asked for.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed arguments.
+
+    Returns
+    -------
+    int
+        The exit code.
+    """
     with contextlib.ExitStack() as hold:  # the plot folder's lock, from the checks to the end
         return _check_linearity(args, hold)
 

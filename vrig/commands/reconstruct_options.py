@@ -19,7 +19,15 @@ DEFAULT_GAIN = 0.8  # reconstruct's iteration gain unless the rig's side-car nam
 
 
 def add_parser(sub, epilog: str) -> None:
-    """Add the `reconstruct` subcommand: drive iteration on a rig."""
+    """Add the `reconstruct` subcommand: drive iteration on a rig.
+
+    Parameters
+    ----------
+    sub : argparse._SubParsersAction
+        The subcommands of the ``vrig`` parser.
+    epilog : str
+        The exit-code table every ``--help`` ends with.
+    """
     rec = sub.add_parser(
         "reconstruct",
         help="drive iteration: reproduce a desired response on a rig",
@@ -85,7 +93,13 @@ def add_parser(sub, epilog: str) -> None:
 
 def add_model_arguments(rec) -> None:
     """Add ``reconstruct``'s inverse-model and iteration-strategy options (defaults: the rig
-    side-car's ``reconstruction`` block, :func:`vrig.cli._defaults`)."""
+    side-car's ``reconstruction`` block, :func:`vrig.cli._defaults`).
+
+    Parameters
+    ----------
+    rec : argparse.ArgumentParser
+        The parser of ``vrig reconstruct``.
+    """
     rec.add_argument(
         "--method",
         choices=METHODS,

@@ -14,7 +14,15 @@ from .common import _UsageError, check_seconds, check_seed, load_rig, simulation
 
 
 def add_parser(sub, epilog: str) -> None:
-    """Add the `repeatability` subcommand."""
+    """Add the `repeatability` subcommand.
+
+    Parameters
+    ----------
+    sub : argparse._SubParsersAction
+        The subcommands of the ``vrig`` parser.
+    epilog : str
+        The exit-code table every ``--help`` ends with.
+    """
     rep = sub.add_parser(
         "repeatability",
         help="play one random drive several times: the repeatability number of §3.1 (in the drive "
@@ -37,6 +45,18 @@ def add_parser(sub, epilog: str) -> None:
 
 
 def run(args) -> int:
+    """``vrig repeatability``, holding the lock of ``--out`` from its checks to the end.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed arguments.
+
+    Returns
+    -------
+    int
+        The exit code.
+    """
     with contextlib.ExitStack() as hold:  # the plot folder's lock, from the checks to the end
         return _repeatability(args, hold)
 
