@@ -337,7 +337,7 @@ def _no_run(monkeypatch):
     def refuse(*args, **kwargs):
         raise AssertionError("the rig ran before the bad argument was reported")
 
-    monkeypatch.setattr("vrig.cli.pseudo_field", refuse)
+    monkeypatch.setattr("vrig.commands.repeatability.pseudo_field", refuse)
 
 
 def test_the_help_documents_the_exit_codes(capsys):
@@ -359,14 +359,20 @@ def test_the_help_documents_the_exit_codes(capsys):
 
 
 def test_the_exit_codes_are_one_table_the_constants_and_the_epilog_share():
-    """The module documentation's table, the ExitCode constants and --help list the same codes;
-    every stop kind of a reconstruction has its code."""
+    """The ExitCode members carry their meanings; EXIT_CODE_MEANINGS, --help's epilog and the
+    table of docs/cli.md are made from them (no docstring parsing); every stop kind of a
+    reconstruction has its code."""
     import vrig.cli as cli
+    from vrig.commands.exit_codes import EPILOG, markdown_table
     from vrig.reconstruction.result import STOP_KINDS
 
-    table = [int(line[:7]) for line in cli.__doc__.splitlines() if line[:7].strip().isdigit()]
-    assert table == sorted(int(c) for c in cli.ExitCode)
-    assert list(cli.EXIT_CODE_MEANINGS) == table
+    assert cli.EXIT_CODE_MEANINGS == {int(c): c.meaning for c in cli.ExitCode}
+    assert list(cli.EXIT_CODE_MEANINGS) == [0, 1, 2, 3, 4, 5, 6, 7, 130]
+    assert all(c.meaning and c.meaning in EPILOG for c in cli.ExitCode)
+    assert cli.ExitCode.STOPPED_DIVERGED.meaning.startswith("vrig reconstruct stopped after IT00")
+    docs = (ROOT / "docs" / "cli.md").read_text(encoding="utf-8")
+    rows = [ln for ln in docs.splitlines() if ln.startswith("| ")]
+    assert "\n".join(rows) == markdown_table().replace("\n|---|---|", "")  # the docs' copy
     assert set(cli.STOP_EXIT) == set(STOP_KINDS)
     assert cli.STOP_EXIT["completed"] == cli.STOP_EXIT["converged"] == 0
     assert len({cli.STOP_EXIT[k] for k in ("interlock", "diverged", "unstable")}) == 3
@@ -419,7 +425,10 @@ def _side_car(tmp_path, **changes) -> Path:
 @pytest.mark.parametrize(
     "changes,message",
     [
-        ({"fs": 0}, "fs: 0 is less than or equal to the minimum of 0 (allowed: a finite number > 0)"),
+        (
+            {"fs": 0},
+            "fs: 0 is less than or equal to the minimum of 0 (allowed: a finite number > 0)",
+        ),
         ({"fs": "nan"}, "fs: 'nan' is not of type 'number' (allowed: a finite number > 0)"),
         ({"fs": "fast"}, "fs: 'fast' is not of type 'number' (allowed: a finite number > 0)"),
         ({"bandwidth_hz": [5, 1]}, "bandwidth_hz must be [low, high] with 0 <= low < high"),
@@ -474,7 +483,7 @@ def test_bench_without_a_source_checkout_says_so_in_one_line(monkeypatch, capsys
     """An installed wheel has no benchmarks/ next to the vrig package: one clear line and the
     bad-input exit code 2 (the wheel is simulated by pointing the located folder elsewhere)."""
     missing = tmp_path / "site-packages" / "benchmarks"
-    monkeypatch.setattr("vrig.cli._benchmarks_dir", lambda: missing)
+    monkeypatch.setattr("vrig.commands.bench.benchmarks_dir", lambda: missing)
     assert main(["bench", "list"]) == 2
     line = _one_line(capsys)
     assert line.startswith("vrig bench: vrig bench needs a source checkout")
@@ -688,7 +697,7 @@ def test_ctrl_c_anywhere_exits_130_with_one_line(target, argv, capsys, monkeypat
     monkeypatch.chdir(tmp_path)
     if target == "vrig.reconstruction.reconstruct":
         argv = [*argv, "--seconds", "2", "--out", str(tmp_path / "o")]
-        monkeypatch.setattr("vrig.cli.pseudo_field", lambda rig, band, s, seed: _tiny(rig))
+        monkeypatch.setattr("vrig.field.pseudo_field", lambda rig, band, s, seed: _tiny(rig))
     monkeypatch.setattr(target, interrupt)
     try:
         code = main(argv)
@@ -722,8 +731,8 @@ def test_ctrl_c_during_vrig_bench_exits_130_with_one_line(tmp_path):
         "    return 0\n"
     )
     code = (
-        "import sys, pathlib, vrig.cli\n"
-        f"vrig.cli._benchmarks_dir = lambda: pathlib.Path({str(fake / 'benchmarks')!r})\n"
+        "import sys, pathlib, vrig.cli, vrig.commands.bench\n"
+        f"vrig.commands.bench.benchmarks_dir = lambda: pathlib.Path({str(fake / 'benchmarks')!r})\n"
         "sys.exit(vrig.cli.main(['bench', 'run']))"
     )
     env = {**os.environ, "PYTHONPATH": str(ROOT), "OPENBLAS_NUM_THREADS": "1"}

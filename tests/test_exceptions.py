@@ -130,10 +130,12 @@ def test_identification_does_not_need_vrig_for_its_root():
 
 @pytest.mark.parametrize("qualname", sorted(EXCEPTIONS))
 def test_cli_maps_every_exception_to_exit_1_or_2_never_to_a_bug(qualname, monkeypatch, capsys):
-    """A rig description error or a results folder another writer holds is bad input (2); every
-    other vrig or identification error is a failed run (1) with the usual hint; none is
-    reported as an unexpected error (3); an interrupt is one line and 130."""
+    """A rig description error, a results folder that cannot be used or that another writer
+    holds is bad input (2); results that could not be written are a failed run (1); every other
+    vrig or identification error is a failed run (1) with the usual hint; none is reported as an
+    unexpected error (3); an interrupt is one line and 130."""
     from vrig import cli
+    from vrig.errors import ResultsFolderError, ResultsNotSavedError
 
     cls = EXCEPTIONS[qualname]
     exc = cls.__new__(cls, "boom")  # bypass each class's own constructor arguments
@@ -147,8 +149,10 @@ def test_cli_maps_every_exception_to_exit_1_or_2_never_to_a_bug(qualname, monkey
     err = capsys.readouterr().err
     if qualname in INTERRUPTS:
         assert (code, err) == (130, "vrig rigs: interrupted\n")
-    elif issubclass(cls, (vrig.RigModelError, vrig.FolderLockedError)):
+    elif issubclass(cls, (vrig.RigModelError, vrig.FolderLockedError, ResultsFolderError)):
         assert (code, err) == (2, "vrig rigs: boom\n")
+    elif issubclass(cls, ResultsNotSavedError):  # its message says what was (not) saved
+        assert (code, err) == (1, "vrig rigs: failed: boom\n")
     else:
         hint = " (try a narrower --band, a lower --order or --gain, or a smaller desired response)"
         assert (code, err) == (1, f"vrig rigs: failed: boom{hint}\n")

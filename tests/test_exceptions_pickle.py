@@ -24,6 +24,8 @@ CASES = [
     ve.FileFormatError("a.rsp", "RPC III", "truncated"),
     ve.FolderLockedError("results/run is being written", path="results/run", pid=1234),
     ve.ReconstructionInterrupted("interrupted at IT02", result={"it": 2}),
+    ve.ResultsFolderError("results folder results/run is a file", path="results/run"),
+    ve.ResultsNotSavedError("nothing was saved", path="results/run", result={"it": 1}),
     ie.IdentificationError("plain"),
     ie.InsufficientDataError("too short"),
     ie.MemoryBudgetError("the regression matrix would take 3 GiB"),

@@ -214,6 +214,25 @@ def test_the_cli_saves_the_iterations_played_when_interrupted(plain_csv, tmp_pat
     assert {"FINDRV01", "FINRES01", "IDDRV", "IDRES"} <= set(folder.files())
 
 
+def test_the_python_door_saves_the_iterations_played_when_interrupted(
+    rig, field, tmp_path, monkeypatch
+):
+    """vrig.reconstruct(..., out=): the Ctrl-C comes back as ReconstructionInterrupted after
+    the iterations played were saved, as the CLI saves them before its exit code 130."""
+    out = tmp_path / "interrupted"
+    _interrupt_at(monkeypatch, 2)
+    monkeypatch.setattr("vrig.plots.save_reconstruction_plots", lambda *a, **k: [])
+    with pytest.raises(vrig.ReconstructionInterrupted) as info:
+        vrig.reconstruct(rig, field, method="arx", iterations=5, seed=0, out=out, fmt="npz")
+    assert "kept the 2 iteration(s) played" in str(info.value)
+    folder = TestFolder(out)
+    summary = folder.summary()
+    assert folder.iterations == [0, 1] and summary["iterations_run"] == 1
+    assert summary["stop_kind"] == "interrupted" and summary["target_check"]
+    assert {"FINDRV01", "FINRES01", "IDDRV", "IDRES"} <= set(folder.files())
+    np.testing.assert_array_equal(folder.read("IT01DRV").data, info.value.result.drives[1].data)
+
+
 def test_an_interrupt_something_swallowed_still_exits_130(plain_csv, tmp_path, monkeypatch):
     """A Ctrl-C near the end that a callee catches (e.g. in a finaliser) used to exit 0."""
     import vrig.cli
@@ -309,9 +328,13 @@ def test_ctrl_c_while_vrig_is_imported_is_one_line_and_exit_130(tmp_path):
     package whose import takes long (the real one takes about 2 s): SIGINT lands in it."""
     fake = tmp_path / "fake" / "vrig"
     fake.mkdir(parents=True)
-    (fake / "__init__.py").write_text("import time\nprint('importing', flush=True)\ntime.sleep(60)\n")
+    (fake / "__init__.py").write_text(
+        "import time\nprint('importing', flush=True)\ntime.sleep(60)\n"
+    )
     module, func = _console_script()
-    code = f"import sys; sys.argv = ['vrig', 'rigs']; from {module} import {func}; sys.exit({func}())"
+    code = (
+        f"import sys; sys.argv = ['vrig', 'rigs']; from {module} import {func}; sys.exit({func}())"
+    )
     env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(fake.parent), str(ROOT)])}
     proc = subprocess.Popen(
         [sys.executable, "-c", code], cwd=tmp_path, env=env, text=True,
@@ -363,9 +386,7 @@ def _python_startup_traceback(err: str) -> bool:
     (its imports, the import system finding the console module), no frame in vrig's code
     (``vrig_console.py``, the ``vrig`` and ``identification`` packages)."""
     files = [
-        Path(line.split('"')[1])
-        for line in err.splitlines()
-        if line.lstrip().startswith('File "')
+        Path(line.split('"')[1]) for line in err.splitlines() if line.lstrip().startswith('File "')
     ]
     ours = [
         f for f in files
@@ -591,6 +612,28 @@ def test_a_plot_command_on_a_folder_in_use_is_refused_before_its_runs(
     assert sorted(p.name for p in tmp_path.iterdir()) == ["shared"]  # no lock file, no debris
 
 
+@linux
+def test_the_python_door_on_a_folder_in_use_is_refused_before_it_plays(
+    rig, field, tmp_path, monkeypatch
+):
+    """A second writer through vrig.reconstruct(..., out=) is refused with FolderLockedError
+    naming the holder before it plays the rig, the folder left as it was."""
+    out = tmp_path / "shared"
+    out.mkdir()
+    (out / "FIELD01.rsp").write_bytes(b"a record")
+    before = _snapshot(out)
+
+    def refuse(*args, **kwargs):
+        raise AssertionError("the second writer played the rig")
+
+    monkeypatch.setattr(vrig.rigs.mujoco_rig.MujocoRig, "run", refuse)
+    with _lock_held_by_another_process(out) as (holder, _):
+        with pytest.raises(vrig.FolderLockedError, match=f"vrig process {holder.pid}"):
+            vrig.reconstruct(rig, field, iterations=1, out=out, overwrite=True)
+        assert _snapshot(out) == before
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["shared"]  # no lock file, no debris
+
+
 def _lock_is_free(path: Path, answer) -> None:
     from vrig.errors import FolderLockedError
     from vrig.files import folder_lock
@@ -682,6 +725,40 @@ def test_a_disk_that_fills_while_plotting_keeps_the_records_without_stale_plots(
     assert not list(out.glob("*.png"))  # the old run's plots went with its records
 
 
+def test_the_python_door_on_a_disk_that_fills_while_plotting_keeps_the_records(
+    rig, field, tmp_path, monkeypatch
+):
+    """vrig.reconstruct(..., out=) on a disk that fills while the plots are drawn: the records
+    and the summary are saved without the plots, a RuntimeWarning says so, the result is
+    returned."""
+    out = tmp_path / "run"
+
+    def full(*args, **kwargs):
+        raise OSError(errno.ENOSPC, "No space left on device")
+
+    monkeypatch.setattr("vrig.plots.save_figure", full)
+    with pytest.warns(RuntimeWarning, match="saved the records and summary .* without the plots"):
+        result = vrig.reconstruct(rig, field, iterations=1, seed=0, out=out, fmt="npz")
+    summary = TestFolder(out).summary()
+    assert summary["iterations_run"] == 1 and summary["plots"] == []
+    assert not list(out.glob("*.png")) and len(result.drives) == 2
+    assert {"IDDRV", "IT01DRV", "FINDRV01"} <= set(TestFolder(out).files())
+
+
+@linux
+def test_the_python_door_on_a_full_disk_saves_nothing_and_says_so(
+    rig, field, tmp_path, monkeypatch
+):
+    """Not even the records fit: ResultsNotSavedError (an OSError) with the result attached, no
+    folder and no debris."""
+    out = tmp_path / "fresh"
+    monkeypatch.setattr(os, "fsync", _fsync_full_from(".IDDRV."))
+    with pytest.raises(vrig.errors.ResultsNotSavedError, match="nothing was saved") as info:
+        vrig.reconstruct(rig, field, iterations=1, seed=0, out=out, fmt="npz")
+    assert isinstance(info.value, OSError) and len(info.value.result.drives) == 2
+    assert list(tmp_path.iterdir()) == []
+
+
 def _fsync_full_from(trigger: str):
     """``os.fsync`` of a full disk: fails with ENOSPC from the first file whose name holds
     ``trigger`` on (the disk stays full)."""
@@ -725,6 +802,22 @@ def test_too_little_disk_space_is_refused_before_the_run(plain_csv, tmp_path, mo
     assert code == 2
     (line,) = _lines(err)
     assert "MB free" in line and "need about" in line
+
+
+def test_the_python_door_with_too_little_disk_space_is_refused_before_the_run(
+    rig, field, tmp_path, monkeypatch
+):
+    import shutil
+    from types import SimpleNamespace
+
+    def refuse(*args, **kwargs):
+        raise AssertionError("the rig ran before the lack of space was reported")
+
+    monkeypatch.setattr(vrig.rigs.mujoco_rig.MujocoRig, "run", refuse)
+    monkeypatch.setattr(shutil, "disk_usage", lambda p: SimpleNamespace(free=10**5))
+    with pytest.raises(vrig.errors.ResultsFolderError, match="MB free") as info:
+        vrig.reconstruct(rig, field, iterations=3, out=tmp_path / "o")
+    assert isinstance(info.value, ValueError) and str(tmp_path / "o") in str(info.value)
 
 
 # ---------------------------------------------------------------------------------------------

@@ -20,6 +20,8 @@ __all__ = [
     "FolderLockedError",
     "ReconstructionError",
     "ReconstructionInterrupted",
+    "ResultsFolderError",
+    "ResultsNotSavedError",
     "RigLimitError",
     "RigModelError",
     "RigParameterError",
@@ -205,6 +207,51 @@ class FolderLockedError(VrigError, OSError):
         return _rebuild_reconstruction_error, (type(self), str(self), self.__dict__)
 
 
+class ResultsFolderError(VrigError, ValueError):
+    """A results folder a reconstruction cannot write into, found before anything is played: a
+    file, a non-empty folder without ``overwrite``, the working directory or a folder holding
+    it, a mount point, a folder this process cannot write, or a disk without room for the
+    results (:mod:`vrig.job`).
+
+    Parameters
+    ----------
+    message : str
+        The error message (names the folder).
+    path : str or Path
+        The folder.
+    """
+
+    def __init__(self, message: str, *, path):
+        super().__init__(message)
+        self.path = str(path)
+
+    def __reduce__(self):  # picklable (worker processes)
+        return _rebuild_reconstruction_error, (type(self), str(self), self.__dict__)
+
+
+class ResultsNotSavedError(VrigError, OSError):
+    """The results of a reconstruction could not be written (not even without the plots, on a
+    full disk): nothing was saved, the folder keeps its previous contents (:mod:`vrig.job`).
+
+    Parameters
+    ----------
+    message : str
+        The error message (names the folder and the operating system's reason).
+    path : str or Path
+        The folder.
+    result : ReconstructionResult or None
+        The reconstruction that could not be saved (it can be saved elsewhere:
+        :meth:`vrig.TestFolder.save`).
+    """
+
+    def __init__(self, message: str, *, path, result=None):
+        super().__init__(message)
+        self.path, self.result = str(path), result
+
+    def __reduce__(self):  # picklable (worker processes)
+        return _rebuild_reconstruction_error, (type(self), str(self), self.__dict__)
+
+
 class FileFormatError(VrigError, ValueError):
     """A file is not what its name or reader expects: truncated, corrupt, foreign, of another
     encoding or version, not a regular file, or too large.
@@ -234,8 +281,9 @@ class FileFormatError(VrigError, ValueError):
 
 
 def _rebuild_reconstruction_error(cls, message: str, state: dict):
-    """Unpickle a :class:`ReconstructionError`, :class:`ReconstructionInterrupted` or
-    :class:`FolderLockedError` (``__reduce__``): their constructors take keywords, which
+    """Unpickle a :class:`ReconstructionError`, :class:`ReconstructionInterrupted`,
+    :class:`FolderLockedError`, :class:`ResultsFolderError` or :class:`ResultsNotSavedError`
+    (``__reduce__``): their constructors take keywords, which
     ``pickle`` cannot pass."""
     return cls(message, **state)
 

@@ -46,6 +46,7 @@ __all__ = [
     "default_id_rms",
     "default_split_hz",
     "resolve",
+    "resolved",
 ]
 
 DEFAULT_GAIN = 0.8
@@ -259,6 +260,38 @@ def resolve(rig, settings=None, **options) -> ResolvedSettings:
     sources = {k: sources[k] for k in order if k in sources}
     shown = {k: options_out[k] for k in sources if k in options_out}
     return ResolvedSettings(resolved, sources, spec.method, spec.description, warning, shown)
+
+
+def resolved(rig, settings=None, **options) -> ResolvedSettings:
+    r"""``settings`` as :class:`ResolvedSettings`: as they are when resolved already (and no
+    ``options`` are given), else :func:`resolve`\ d, with the one
+    :class:`~vrig.errors.UnsupportedMethodWarning` of a method the side-car marks
+    ``unsupported`` (the doors that take settings from a caller: :func:`vrig.reconstruct`,
+    :class:`~vrig.reconstruction.DriveIteration`).
+
+    Parameters
+    ----------
+    rig : Rig
+        The rig.
+    settings : IterationSettings or ResolvedSettings, optional
+        What the caller gives.
+    **options
+        Settings by name on top of ``settings``.
+
+    Returns
+    -------
+    ResolvedSettings
+    """
+    if isinstance(settings, ResolvedSettings) and not options:
+        return settings
+    out = resolve(rig, settings, **options)
+    if out.warning:
+        import warnings
+
+        from ..errors import UnsupportedMethodWarning
+
+        warnings.warn(out.warning, UnsupportedMethodWarning, stacklevel=3)
+    return out
 
 
 def _first(*candidates):

@@ -8,20 +8,19 @@ environments drive the same engine a step at a time.
 
 from __future__ import annotations
 
-import warnings
-
 import numpy as np
 from scipy import signal
 from scipy.signal import windows
 
 from identification.errors import SimulationDivergedError
 
-from ..errors import RigLimitError, SimulationInstabilityError, UnsupportedMethodWarning
+from ..errors import RigLimitError, SimulationInstabilityError
 from ..processing import band_gains, decimate, gprepro, identification_band
 from ..progress import status
 from ..rigs.limits import check_drive_limits
 from ..timehistory import TimeHistory
-from .defaults import BUILT_IN, CALLER, DEFAULT_ID_RMS_FRACTION, ResolvedSettings, resolve
+from .defaults import BUILT_IN, CALLER, DEFAULT_ID_RMS_FRACTION
+from .defaults import resolved as resolve_settings
 from .id_drive import identification_run
 from .matching import identify_matched, level_ratios
 from .methods import make_method
@@ -177,12 +176,7 @@ class DriveIteration:
             raise ValueError(
                 f"desired has {desired.n_channels} channels, the rig {len(rig.outputs)} responses"
             )
-        if isinstance(settings, ResolvedSettings) and not options:
-            resolved = settings  # resolved by the caller (it said any warning)
-        else:
-            resolved = resolve(rig, settings, **options)  # the one resolver
-            if resolved.warning:
-                warnings.warn(resolved.warning, UnsupportedMethodWarning, stacklevel=2)
+        resolved = resolve_settings(rig, settings, **options)  # the one resolver
         self.resolved = resolved
         s = self.settings = resolved.settings
         self.rig = rig

@@ -41,6 +41,7 @@ from ..errors import (
 )
 from ..progress import enabled_if
 from ..timehistory import TimeHistory
+from .defaults import resolved
 from .engine import DriveIteration
 from .result import ReconstructionResult, best_iteration
 from .settings import MAX_ITERATIONS, IterationSettings
@@ -54,6 +55,10 @@ def reconstruct(
     settings: IterationSettings | None = None,
     *,
     progress: bool = False,
+    out=None,
+    overwrite: bool = False,
+    fmt: str = "rsp",
+    plots: bool = True,
     **options,
 ) -> ReconstructionResult:
     """Reproduce ``desired`` on ``rig`` by drive iteration.
@@ -62,6 +67,7 @@ def reconstruct(
     >>> result = vrig.reconstruct(rig, desired, method="narx", gain=0.5, order=4)  # doctest: +SKIP
     >>> settings = vrig.IterationSettings(method="arx", iterations=5, id_seed=1, run_seed=2)
     >>> result = vrig.reconstruct(rig, desired, settings)                          # doctest: +SKIP
+    >>> result = vrig.reconstruct(rig, desired, out="results/run")               # doctest: +SKIP
 
     Parameters
     ----------
@@ -77,6 +83,23 @@ def reconstruct(
         Show a progress bar over the iterations and the status of the identification, the fit
         and long rig runs on stderr (:mod:`vrig.progress`; ``False`` leaves an outer
         :func:`vrig.progress.enabled` in force).
+    out : str or Path, optional
+        A results folder: write into it the QanTiM test folder, its plots and ``summary.json``
+        that ``vrig reconstruct --out`` writes (the job of :mod:`vrig.job`). The folder is
+        checked before anything is played (a folder or nothing yet, empty unless
+        ``overwrite``, not the working directory or a folder holding it, not a mount point,
+        writable, with room on its disk for the records); its lock is held from those checks to
+        the end of the save, which swaps the new folder in whole; a disk that fills up during
+        the save gets the records and the summary without the plots (a ``RuntimeWarning`` says
+        so); ``summary.json`` holds the target check of the run's identification records and
+        its ``settings`` every resolved setting (:func:`vrig.job.settings_record`). Default:
+        nothing is written.
+    overwrite : bool
+        With ``out``: allow replacing the records of a non-empty folder.
+    fmt : {"rsp", "csv", "mat", "npz"}
+        With ``out``: the record format (default RPC III ``.drv``/``.rsp``).
+    plots : bool
+        With ``out``: draw the plots into the folder (default).
     **options
         Settings by name on top of ``settings``: ``method`` (``"arx"``, ``"narx"``, ``"split"``,
         ``"frf"``, ``"error-signal"``, ``"rattlesnake:<file.py>:<name>"`` or a method object;
@@ -94,6 +117,9 @@ def reconstruct(
         refused or a rig trip, an unstable simulation, a diverged inverse model, a non-finite
         drive update) stops the loop instead of propagating: ``stopped`` says where and why,
         ``error`` holds the exception and ``rejected_drive`` the drive refused or tripped.
+        With ``out`` the result is saved before it is returned, and a stop short of the
+        iterations (not ``completed`` or ``converged``) issues a ``RuntimeWarning`` with the
+        line ``vrig reconstruct`` prints: why, what to change, where the best iteration is kept.
 
     Raises
     ------
@@ -105,13 +131,35 @@ def reconstruct(
         Nothing could be played: the identification drive tripped the rig even at 1/1024 of
         its amplitude, the inverse model could not be fitted or diverged on DESRES, or IT00DRV was
         refused or tripped. ``exc.result`` holds what was made (identification records, model,
-        the rejected drive); ``exc.cause`` the original error.
+        the rejected drive); ``exc.cause`` the original error. With ``out``, what was made is
+        saved first (``exc.saved``: the files written, ``[]`` when nothing could be) and the
+        message adds what to change and what was kept, as ``vrig reconstruct``'s exit 7 does.
     ReconstructionInterrupted
         Ctrl-C (a :class:`KeyboardInterrupt`): ``exc.result`` holds every iteration played
-        before it (``stop_kind`` ``"interrupted"``), or what was made before IT00.
+        before it (``stop_kind`` ``"interrupted"``), or what was made before IT00. With ``out``
+        it is raised after ``exc.result`` was saved; a Ctrl-C during the save waits until the
+        folder is written whole, then raises (the result attached).
+    ResultsFolderError
+        With ``out``: a folder that cannot be used (a file, not empty without ``overwrite``, the
+        working directory, a mount point, not writable, a disk without room), before anything
+        is played; a :class:`ValueError`, naming the folder.
+    FolderLockedError
+        With ``out``: another writer holds the folder (nothing is played).
+    ResultsNotSavedError
+        With ``out``: the results could not be written, not even without the plots (an
+        :class:`OSError`; ``exc.result`` holds the reconstruction, the folder keeps its
+        previous contents).
     """
     with enabled_if(progress):  # status lines of the identification, rig run bars
-        return _reconstruct(rig, desired, settings, progress, options)
+        if out is None:
+            return _reconstruct(rig, desired, settings, progress, options)
+        from ..job import reconstruct_into  # the job sits above the loop: imported when used
+
+        settings = resolved(rig, settings, **options)  # resolved once: the job records it
+        return reconstruct_into(
+            rig, desired, settings, out, overwrite=overwrite, fmt=fmt, plots=plots,
+            progress=progress,
+        )  # fmt: skip
 
 
 def _reconstruct(rig, desired, settings, progress: bool, options) -> ReconstructionResult:
