@@ -1,4 +1,4 @@
-"""``vrig check-target``: can the rig reach a desired response? (§2.3.2, :mod:`vrig.targets`)"""
+"""``vrig check-target``: can the rig reach a desired response? (§2.3.2, :mod:`vrig.desired.reachability`)"""
 
 from __future__ import annotations
 

@@ -1,7 +1,8 @@
 """Response reconstruction: inverse-model methods and the drive-iteration loop.
 
-``settings`` (:class:`IterationSettings`, one frozen object) → ``engine`` (:class:`DriveIteration`:
-identify, invert, play, correct) → ``iteration`` (:func:`reconstruct`: the loop) →
+``settings`` (:class:`IterationSettings`, one frozen object) resolved by ``defaults`` (the one
+resolver of every door: caller, rig side-car, built-in defaults) → ``engine`` (:class:`DriveIteration`:
+identify - by ``id_drive``, the one identification drive - invert, play, correct) → ``iteration`` (:func:`reconstruct`: the loop) →
 ``result`` (:class:`ReconstructionResult`), scored by ``scores``; the inverse-model methods are in
 ``methods`` (their contract in ``protocol``), built from a name and options by ``vocabulary``
 (:func:`method_spec`); Rattlesnake control laws run as methods through ``rattlesnake``.
