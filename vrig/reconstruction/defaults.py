@@ -90,6 +90,9 @@ class ResolvedSettings:
     warning : str or None
         The rig's side-car marks the method ``unsupported`` (the reference text reports it failing
         there): the one line that says so, quoting it. The method runs all the same.
+    method_options : Mapping[str, Any]
+        The method's model options as built (the given, the side-car's and the class defaults
+        the method took), by name: what :attr:`sources` reports on.
     """
 
     settings: Any

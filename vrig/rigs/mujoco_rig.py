@@ -383,7 +383,33 @@ class MujocoRig:
             else:
                 i_act = actuator(c.actuator)
                 self._slots.append((i_act, i_act))
-        self._air_bound = []  # (AirSpring, tendon id, pressure sensor address or -1)
+        self._air_bound = self._bind_air_springs(m)  # (AirSpring, tendon id, sensor adr or -1)
+        try:
+            # series compliance and Maxwell branches (act_dyn)
+            self._damper_bound = damper.bind(m, self._internal_state_elements())
+        except ValueError as exc:
+            raise RigModelError(f"rig {self._desc.name!r}: {exc}") from None
+        self._sensor_cols = []
+        for o in self._outputs:
+            s = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_SENSOR, o.sensor)
+            if s < 0:
+                raise RigModelError(f"{self.name}: the MJCF has no sensor {o.sensor!r}")
+            if not 0 <= o.component < m.sensor_dim[s]:
+                raise RigModelError(
+                    f"{self.name}: sensor {o.sensor!r} has no component {o.component}"
+                )
+            self._sensor_cols.append(int(m.sensor_adr[s]) + o.component)
+        key = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_KEY, "home")
+        if key >= 0:
+            mujoco.mj_resetDataKeyframe(m, self.data, key)
+        else:
+            mujoco.mj_resetData(m, self.data)
+        self._state0 = np.empty(mujoco.mj_stateSize(m, _STATE))
+        mujoco.mj_getState(m, self.data, self._state0, _STATE)
+
+    def _bind_air_springs(self, m) -> list:
+        """(AirSpring, tendon id, pressure sensor address or -1) per air spring of the rig."""
+        bound = []
         for a in self._air:
             t = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_TENDON, a.tendon)
             if t < 0:
@@ -408,29 +434,8 @@ class MujocoRig:
                         'MJCF <user dim="1" needstage="pos"/> sensor'
                     )
                 adr = int(m.sensor_adr[s])
-            self._air_bound.append((a, t, adr))
-        try:
-            # series compliance and Maxwell branches (act_dyn)
-            self._damper_bound = damper.bind(m, self._internal_state_elements())
-        except ValueError as exc:
-            raise RigModelError(f"rig {self._desc.name!r}: {exc}") from None
-        self._sensor_cols = []
-        for o in self._outputs:
-            s = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_SENSOR, o.sensor)
-            if s < 0:
-                raise RigModelError(f"{self.name}: the MJCF has no sensor {o.sensor!r}")
-            if not 0 <= o.component < m.sensor_dim[s]:
-                raise RigModelError(
-                    f"{self.name}: sensor {o.sensor!r} has no component {o.component}"
-                )
-            self._sensor_cols.append(int(m.sensor_adr[s]) + o.component)
-        key = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_KEY, "home")
-        if key >= 0:
-            mujoco.mj_resetDataKeyframe(m, self.data, key)
-        else:
-            mujoco.mj_resetData(m, self.data)
-        self._state0 = np.empty(mujoco.mj_stateSize(m, _STATE))
-        mujoco.mj_getState(m, self.data, self._state0, _STATE)
+            bound.append((a, t, adr))
+        return bound
 
     def _stability(self) -> tuple[float, list]:
         """The linearised model's explicit-integration stability limit [s] at the home pose and
