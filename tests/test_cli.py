@@ -697,7 +697,7 @@ def test_ctrl_c_anywhere_exits_130_with_one_line(target, argv, capsys, monkeypat
     monkeypatch.chdir(tmp_path)
     if target == "vrig.reconstruction.reconstruct":
         argv = [*argv, "--seconds", "2", "--out", str(tmp_path / "o")]
-        monkeypatch.setattr("vrig.field.pseudo_field", lambda rig, band, s, seed: _tiny(rig))
+        monkeypatch.setattr("vrig.desired.pseudo_field.pseudo_field", lambda rig, band, s, seed: _tiny(rig))
     monkeypatch.setattr(target, interrupt)
     try:
         code = main(argv)

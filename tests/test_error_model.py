@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 from scipy import signal
 
+import vrig
 from identification import (
     Arx,
     ErrorSignalModel,
@@ -165,4 +166,5 @@ def test_inverse_error_signal_reconstruction_method():
     assert isinstance(make_method("error-signal"), InverseErrorSignal)
     plugin = get_method("error-signal")
     assert plugin.linear is False
-    assert isinstance(plugin.make(None, (1.0, 25.0)), InverseErrorSignal)
+    rig = vrig.load_rig("shock-absorber", fidelity="fast")  # factory(rig, band): the rig's method
+    assert isinstance(plugin.make(rig, (1.0, 10.0)), InverseErrorSignal)

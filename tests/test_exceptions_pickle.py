@@ -26,6 +26,7 @@ CASES = [
     ve.ReconstructionInterrupted("interrupted at IT02", result={"it": 2}),
     ve.ResultsFolderError("results folder results/run is a file", path="results/run"),
     ve.ResultsNotSavedError("nothing was saved", path="results/run", result={"it": 1}),
+    ve.UnsupportedMethodWarning("method 'arx' on rig 'r': the reference text reports it failing"),
     ie.IdentificationError("plain"),
     ie.InsufficientDataError("too short"),
     ie.MemoryBudgetError("the regression matrix would take 3 GiB"),

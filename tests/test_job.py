@@ -13,11 +13,11 @@ import io
 import json
 
 import pytest
-from vrig.field import pseudo_field
 
 import vrig
 import vrig.io
 from vrig.cli import main
+from vrig.desired.pseudo_field import pseudo_field
 from vrig.errors import RigLimitError
 from vrig.reconstruction.engine import DriveIteration
 from vrig.testfolder import TestFolder

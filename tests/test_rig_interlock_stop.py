@@ -20,7 +20,7 @@ import numpy as np
 import pytest
 
 import vrig
-from vrig import field
+from vrig.desired import pseudo_field as field
 from vrig.rigs import hydraulics, mujoco_rig
 
 DATA = Path(__file__).parent / "data"

@@ -174,7 +174,7 @@ _TARGETS_BLOCK = 64  # vrig/targets.py::_BLOCK
 
 
 def _targets_spectra(z, fs, nperseg):
-    """PRE-REFACTOR vrig/targets.py::_spectra (83cad8a; still live there, not rewired)."""
+    """PRE-REFACTOR vrig/targets.py::_spectra (83cad8a)."""
     step = nperseg - nperseg // 2  # scipy's noverlap = nperseg // 2
     window = signal.get_window("hann", nperseg)
     segments = np.lib.stride_tricks.sliding_window_view(z, nperseg, axis=0)[::step]
@@ -210,7 +210,7 @@ def _targets_multiple_coherence(x, y, fs, nperseg=256):
 
 
 def _targets_interp_lines(f, M, f_new):
-    """PRE-REFACTOR vrig/targets.py::_interp_lines (83cad8a; still live there, not rewired)."""
+    """PRE-REFACTOR vrig/targets.py::_interp_lines (83cad8a)."""
     flat = M.reshape(M.shape[0], -1)
     out = np.empty((f_new.size, flat.shape[1]), dtype=complex)
     for k in range(flat.shape[1]):  # one column per matrix entry (a few dozen), not per sample

@@ -76,7 +76,7 @@ from .commands.common import read_desired as _read_desired
 from .commands.common import simulation_band as _band
 from .commands.exit_codes import EPILOG as _EXIT_CODES
 from .commands.exit_codes import EXIT_CODE_MEANINGS, STOP_EXIT, ExitCode
-from .field import TARGET_KINDS, desired_response, parse_target
+from .desired.kinds import TARGET_KINDS, desired_response, parse_target
 from .files import file_kind
 from .job import CLI_NAMES, Interrupts, ResultsJob, advice, interrupted_line, stop_line
 
@@ -190,7 +190,7 @@ def _method_stem(method: str) -> str:
 
 def _read_field(args, rig, band):
     """The desired (field) record: ``--desired``, else ``--target`` (a pseudo-field or a
-    service record, :func:`vrig.field.desired_response`).
+    service record, :func:`vrig.desired.kinds.desired_response`).
 
     Returns (field, description, extra records)."""
     target = getattr(args, "target", None)

@@ -354,7 +354,7 @@ class Interrupts:
 # the save
 # ---------------------------------------------------------------------------------------------
 def target_check(rig, result) -> dict:
-    """:func:`vrig.targets.check_target` of DESRES from the reconstruction's own identification
+    """:func:`vrig.desired.reachability.check_target` of DESRES from the reconstruction's own identification
     records (no rig run) as ``summary.json``'s ``target_check``; a failure is recorded as
     ``{"error": ...}``, never raised (it must not lose the run).
 
@@ -369,7 +369,7 @@ def target_check(rig, result) -> dict:
     -------
     dict
     """
-    from .targets import check_target
+    from .desired.reachability import check_target
 
     if result.id_drive is None or result.id_response is None:
         return {"error": "no identification records: the identification drive was not played"}

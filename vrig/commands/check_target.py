@@ -26,7 +26,7 @@ def add_parser(sub, epilog: str) -> None:
         "transducer ranges; per response the fraction of the target no drive can reach (the "
         "residual of the best linear drive) and the rig's incoherence at the target's "
         "frequencies; per drive the peak drive and velocity the target needs against the "
-        "actuator's limits. The definitions: vrig.targets.",
+        "actuator's limits. The definitions: vrig.desired.reachability.",
         epilog=epilog,
     )
     chk.add_argument("--rig", required=True, help="rig name (see `vrig rigs`) or rig file")
@@ -65,7 +65,8 @@ def run(args) -> int:
     int
         The exit code.
     """
-    from ..targets import check_target, range_report
+    from ..desired.range_report import range_report
+    from ..desired.reachability import check_target
 
     check_seconds(args.seconds)
     check_seed(args.seed)

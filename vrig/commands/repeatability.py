@@ -8,7 +8,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..field import pseudo_field
+from ..desired.pseudo_field import pseudo_field
 from ..job import CLI_NAMES, check_writable, hold_results_folder
 from .common import _UsageError, check_seconds, check_seed, load_rig, simulation_band
 

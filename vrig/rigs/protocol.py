@@ -20,7 +20,7 @@ a real rig; the error names the first trip's channel, time and value), and
 unstable in the part it played — that takes precedence over a trip, which is often its symptom
 (:meth:`MujocoRig.run <vrig.rigs.MujocoRig.run>`: the part played is up to the end of the chunk
 in which the first trip happened). Callers that retry at a lower level (the identification
-drive, :func:`vrig.field.pseudo_field`) retry on the first, never on the second.
+drive, :func:`vrig.desired.pseudo_field.pseudo_field`) retry on the first, never on the second.
 
 ``isinstance(obj, Rig)`` checks that the members exist (``typing.runtime_checkable``), not their
 signatures or types. :class:`DescribedRig` adds ``describe()`` (the CLI's ``vrig describe``).
