@@ -738,7 +738,9 @@ def interrupted_line(result, out: Path) -> str:
 # ---------------------------------------------------------------------------------------------
 # the Python door
 # ---------------------------------------------------------------------------------------------
-def settings_record(settings, rig, desired, *, command: str = "vrig.reconstruct") -> dict:
+def settings_record(
+    settings, rig, desired, *, command: str = "vrig.reconstruct", description: str | None = None
+) -> dict:
     """``summary.json``'s ``settings`` of a Python run of ``settings``, in the keys ``vrig
     reconstruct`` records (``argv`` ``None``; ``method`` the name, or the class of a method
     object, and the options given): the values the caller resolved, the update rule and its
@@ -755,6 +757,9 @@ def settings_record(settings, rig, desired, *, command: str = "vrig.reconstruct"
         The desired response.
     command : str
         What ran the job.
+    description : str, optional
+        The method's one-line description (the resolver's, as ``vrig reconstruct`` records it);
+        default: its name and the options given.
 
     Returns
     -------
@@ -766,7 +771,8 @@ def settings_record(settings, rig, desired, *, command: str = "vrig.reconstruct"
         "command": command,
         "argv": None,
         "variant": getattr(rig, "variant", None),
-        "method": (method if isinstance(method, str) else type(method).__name__) + options,
+        "method": description
+        or (method if isinstance(method, str) else type(method).__name__) + options,
         "gain": settings.gain,
         "iterations": settings.iterations,
         "seed": settings.id_seed,
@@ -813,7 +819,11 @@ def reconstruct_into(
     job = ResultsJob(out, overwrite=overwrite, fmt=fmt, plots=plots)
     job.check()
     values = getattr(settings, "settings", settings)  # a ResolvedSettings' IterationSettings
-    save = {"field": desired, "settings": settings_record(values, rig, desired)}
+    described = getattr(settings, "description", None)
+    save = {
+        "field": desired,
+        "settings": settings_record(values, rig, desired, description=described),
+    }
     with job:
         job.check_space(desired, rig, values.iterations)
         try:
