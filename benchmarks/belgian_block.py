@@ -131,7 +131,9 @@ def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--seconds", type=float, default=60.0, help="window length [s] (default 60)")
     p.add_argument("--start", type=float, default=5.0, help="window start in the record [s]")
-    p.add_argument("--iterations", type=int, default=5, help="iterations after IT00 (default 5)")
+    iterations = vrig.IterationSettings.iterations  # vrig reconstruct's
+    p.add_argument("--iterations", type=int, default=iterations,
+                   help=f"iterations after IT00 (default {iterations})")  # fmt: skip
     p.add_argument(
         "--drive-fraction",
         type=float,

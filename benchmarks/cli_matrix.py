@@ -36,7 +36,9 @@ from pathlib import Path
 
 import numpy as np
 
-METHODS = ("arx", "narx", "split", "frf", "error-signal")  # every method of vrig reconstruct
+from vrig.reconstruction.vocabulary import BUILTIN_METHODS
+
+METHODS = BUILTIN_METHODS  # every method of vrig reconstruct
 COLUMNS = ("rig", "method", "exit", "IT00", "best", "best_mean", "worse", "trip", "stop", "time")
 
 

@@ -33,7 +33,6 @@ CASES = (
 )
 OPTIONS = {"split": {"split_hz": 3.0}}
 ENVS = ("vrig/ShockAbsorber-v2", "vrig/ElastomericDamper-v2")
-CLI_METHODS = ("arx", "narx", "split", "frf", "error-signal")
 
 
 def _hash(a) -> str:
@@ -130,6 +129,7 @@ def cli_line(rig_name: str, method: str) -> str:
 def fingerprints(progress=print):
     """Every fingerprint line, in order; ``progress(line)`` is called as each is made."""
     import vrig
+    from vrig.reconstruction.vocabulary import BUILTIN_METHODS
 
     lines = []
     for rig_name, method, strategy in CASES:
@@ -141,7 +141,7 @@ def fingerprints(progress=print):
             lines.append(line)
             progress(line)
     for name in vrig.list_rigs():
-        for method in CLI_METHODS:
+        for method in BUILTIN_METHODS:
             lines.append(cli_line(name, method))
             progress(lines[-1])
     return lines
