@@ -18,7 +18,49 @@ from identification import split_spectra
 
 from .timehistory import TimeHistory
 
-__all__ = ["band_gains", "band_split", "decimate", "f2d", "gprepro", "identification_band"]
+__all__ = [
+    "band_gains",
+    "band_split",
+    "check_band",
+    "decimate",
+    "f2d",
+    "gprepro",
+    "identification_band",
+]
+
+
+def check_band(band, fs: float, name: str = "band") -> tuple[float, float]:
+    """A simulation band checked: two finite numbers with ``0 <= low < high <= fs/2``
+    (Nyquist); the one check of every band a record is processed over.
+
+    Parameters
+    ----------
+    band : (float, float)
+        The band [Hz].
+    fs : float
+        The sample rate [Hz].
+    name : str
+        What the message calls it (``"band"``, ``"bandwidth"``).
+
+    Returns
+    -------
+    (float, float)
+
+    Raises
+    ------
+    ValueError
+        Not two numbers, or outside ``0 <= low < high <= fs/2``.
+    """
+    try:
+        lo, hi = (float(b) for b in band)
+    except (TypeError, ValueError):
+        raise ValueError(f"{name} must be (low, high) in Hz, got {band!r}") from None
+    if not (np.isfinite(lo) and np.isfinite(hi) and 0 <= lo < hi <= fs / 2):
+        raise ValueError(
+            f"{name} must satisfy 0 <= low < high <= fs/2 = {fs / 2:g} Hz (Nyquist), got "
+            f"({lo:g}, {hi:g})"
+        )
+    return lo, hi
 
 
 def _check(th):

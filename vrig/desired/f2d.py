@@ -16,10 +16,10 @@ from fractions import Fraction
 import numpy as np
 from scipy import signal
 
-from ..processing import gprepro
+from ..processing import check_band, gprepro
 from ..reconstruction.defaults import default_band
 from ..timehistory import TimeHistory
-from ._checks import _check_band, _check_th
+from ._checks import _check_th
 from .range_report import range_report
 
 __all__ = ["UNIT_FACTORS", "f2d"]
@@ -152,7 +152,7 @@ def f2d(field: TimeHistory, rig, band=None, *, channels=None, scale=None) -> Tim
     _check_th(field, "field")
     cols = _mapped_columns(field, rig, channels)
     factors = _unit_factors(field, cols, rig, scale)
-    band = _check_band(default_band(rig) if band is None else band, rig.fs)
+    band = check_band(default_band(rig) if band is None else band, rig.fs)
     x = signal.detrend(field.data[:, cols], axis=0, type="linear") * factors
     x = _resample(x, field.fs, float(rig.fs))
     if x.shape[0] < 16:

@@ -67,11 +67,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..processing import gprepro
+from ..processing import check_band, gprepro
 from ..reconstruction.defaults import default_band
 from ..spectra import frf_from_spectra, interpolate_lines, spectral_matrix
 from ..timehistory import TimeHistory
-from ._checks import _check_band, _check_th
+from ._checks import _check_th
 from .range_report import _columns, _pct, range_report
 
 __all__ = [
@@ -577,7 +577,7 @@ def check_target(
         4 per drive channel), a bad band.
     """
     target = _ordered_target(rig, desired)
-    band = _check_band(default_band(rig) if band is None else band, rig.fs)
+    band = check_band(default_band(rig) if band is None else band, rig.fs)
     n_id = target.n_samples if seconds is None else round(seconds * rig.fs)
     m = len(rig.inputs)
     _segment(min(target.n_samples, n_id), rig.fs, band, m)  # before any rig run

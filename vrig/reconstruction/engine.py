@@ -15,7 +15,7 @@ from scipy.signal import windows
 from identification.errors import SimulationDivergedError
 
 from ..errors import RigLimitError, SimulationInstabilityError
-from ..processing import band_gains, decimate, gprepro, identification_band
+from ..processing import band_gains, check_band, decimate, gprepro, identification_band
 from ..progress import status
 from ..rigs.limits import check_drive_limits
 from ..timehistory import TimeHistory
@@ -38,20 +38,6 @@ for a drive the rig refuses, trips on or cannot simulate)."""
 
 def _check_drive(rig, drive: np.ndarray, what: str) -> None:
     check_drive_limits(rig.inputs, drive, fs=rig.fs, what=what)
-
-
-def _check_band(band, fs: float) -> tuple[float, float]:
-    """The simulation band: two finite numbers with 0 <= low < high <= fs/2 (Nyquist)."""
-    try:
-        lo, hi = (float(b) for b in band)
-    except (TypeError, ValueError):
-        raise ValueError(f"bandwidth must be (low, high) in Hz, got {band!r}") from None
-    if not (np.isfinite(lo) and np.isfinite(hi) and 0 <= lo < hi <= fs / 2):
-        raise ValueError(
-            f"bandwidth must satisfy 0 <= low < high <= fs/2 = {fs / 2:g} Hz (Nyquist), got "
-            f"({lo:g}, {hi:g})"
-        )
-    return lo, hi
 
 
 def _check_id_rms(id_rms, full: np.ndarray) -> np.ndarray:
@@ -180,7 +166,7 @@ class DriveIteration:
         self.resolved = resolved
         s = self.settings = resolved.settings
         self.rig = rig
-        self.band = _check_band(s.bandwidth, rig.fs)
+        self.band = check_band(s.bandwidth, rig.fs, "bandwidth")
         self.id_band = identification_band(self.band, fs=rig.fs)
         self.method = resolved.method
         self.decimation = (
