@@ -102,13 +102,13 @@ def _parser() -> argparse.ArgumentParser:
 
     p.add_argument("--version", action="version", version=f"%(prog)s {__version__}")
     sub = p.add_subparsers(dest="command", required=True)
-    demo.add_parser(sub, _EXIT_CODES)
-    info.add_parsers(sub, _EXIT_CODES)
-    reconstruct_options.add_parser(sub, _EXIT_CODES)
-    bench.add_parser(sub)
-    repeatability.add_parser(sub, _EXIT_CODES)
-    linearity.add_parser(sub, _EXIT_CODES)
-    check_target.add_parser(sub, _EXIT_CODES)
+    demo._add_parser(sub, _EXIT_CODES)
+    info._add_parsers(sub, _EXIT_CODES)
+    reconstruct_options._add_parser(sub, _EXIT_CODES)
+    bench._add_parser(sub)
+    repeatability._add_parser(sub, _EXIT_CODES)
+    linearity._add_parser(sub, _EXIT_CODES)
+    check_target._add_parser(sub, _EXIT_CODES)
     return p
 
 
@@ -391,13 +391,13 @@ def _print_result(result, args) -> None:
 
 
 _COMMANDS = {
-    "demo": demo.run,
-    "rigs": info.run_rigs,
-    "describe": info.run_describe,
+    "demo": demo._run,
+    "rigs": info._run_rigs,
+    "describe": info._run_describe,
     "reconstruct": _cmd_reconstruct,
-    "repeatability": repeatability.run,
-    "check-linearity": linearity.run,
-    "check-target": check_target.run,
+    "repeatability": repeatability._run,
+    "check-linearity": linearity._run,
+    "check-target": check_target._run,
 }
 
 _SIGINT = Interrupts()  # Ctrl-C: noted always, raised except while results are written
@@ -466,7 +466,7 @@ def main(argv: list[str] | None = None) -> int:
     try:
         with _SIGINT.installed():
             if raw[:1] == ["bench"]:
-                code = _run("bench", bench.run, raw[1:])
+                code = _run("bench", bench._run, raw[1:])
             else:
                 args = _parser().parse_args(raw)
                 args.argv = raw

@@ -14,7 +14,7 @@ from pathlib import Path
 from .common import _UsageError
 
 
-def add_parser(sub) -> None:
+def _add_parser(sub) -> None:
     """Add the `bench` subcommand: passes its arguments on to the benchmark runner.
 
     Parameters
@@ -36,7 +36,7 @@ def benchmarks_dir() -> Path:
     return Path(__file__).resolve().parents[2] / "benchmarks"
 
 
-def run(argv: list[str]) -> int:
+def _run(argv: list[str]) -> int:
     """Forward to the benchmark runner, which lives in the source checkout's ``benchmarks/``
     (found next to the ``vrig`` package, whatever the current directory), run in a child
     interpreter.

@@ -4,19 +4,21 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from .common import _UsageError, check_seconds, check_seed, load_rig, read_desired, simulation_band
+from .common import (
+    _UsageError,
+    add_band_argument,
+    add_rig_argument,
+    add_seed_argument,
+    check_seconds,
+    check_seed,
+    load_rig,
+    read_desired,
+    simulation_band,
+)
 
 
-def add_parser(sub, epilog: str) -> None:
-    """Add the `check-target` subcommand.
-
-    Parameters
-    ----------
-    sub : argparse._SubParsersAction
-        The subcommands of the ``vrig`` parser.
-    epilog : str
-        The exit-code table every ``--help`` ends with.
-    """
+def _add_parser(sub, epilog: str) -> None:
+    """Add the `check-target` subcommand."""
     chk = sub.add_parser(
         "check-target",
         help="can the rig reach a desired response? unreachable fraction per response, needed "
@@ -29,7 +31,7 @@ def add_parser(sub, epilog: str) -> None:
         "actuator's limits. The definitions: vrig.desired.reachability.",
         epilog=epilog,
     )
-    chk.add_argument("--rig", required=True, help="rig name (see `vrig rigs`) or rig file")
+    add_rig_argument(chk)
     chk.add_argument(
         "--desired",
         required=True,
@@ -37,34 +39,20 @@ def add_parser(sub, epilog: str) -> None:
         help="desired response with the rig's response channels at the rig's sample rate "
         "(formats as for `vrig reconstruct --desired`)",
     )
-    chk.add_argument(
-        "--band",
-        type=float,
-        nargs=2,
-        metavar=("LOW", "HIGH"),
-        help="simulation bandwidth [Hz] (default as for reconstruct)",
+    add_band_argument(
+        chk,
+        "simulation bandwidth [Hz] (default as for reconstruct)",
     )
     chk.add_argument(
         "--seconds",
         type=float,
         help="length of the identification run [s] (default: the desired record's length)",
     )
-    chk.add_argument("--seed", type=int, default=0, help="random seed, an integer >= 0 (default 0)")
+    add_seed_argument(chk)
 
 
-def run(args) -> int:
-    """``vrig check-target``: the range report and the target check of ``--desired``.
-
-    Parameters
-    ----------
-    args : argparse.Namespace
-        The parsed arguments.
-
-    Returns
-    -------
-    int
-        The exit code.
-    """
+def _run(args) -> int:
+    """``vrig check-target``: the range report and the target check of ``--desired``."""
     from ..desired.range_report import range_report
     from ..desired.reachability import check_target
 

@@ -210,3 +210,40 @@ def read_desired(path, rig):
     except Exception as exc:  # whatever a damaged file makes the reader raise: bad input
         raise _UsageError(f"--desired: cannot read {path}: {exc}") from None
     return check_desired(field, rig)
+
+
+def add_rig_argument(parser) -> None:
+    """``--rig``: a shipped rig's name or a user rig's file (every rig command's).
+
+    Parameters
+    ----------
+    parser : argparse.ArgumentParser
+        A subcommand's parser.
+    """
+    parser.add_argument("--rig", required=True, help="rig name (see `vrig rigs`) or rig file")
+
+
+def add_seed_argument(parser) -> None:
+    """``--seed``: the random seed, an integer >= 0, default 0 (every command's).
+
+    Parameters
+    ----------
+    parser : argparse.ArgumentParser
+        A subcommand's parser.
+    """
+    parser.add_argument(
+        "--seed", type=int, default=0, help="random seed, an integer >= 0 (default 0)"
+    )
+
+
+def add_band_argument(parser, help_text: str) -> None:
+    """``--band LOW HIGH`` [Hz] with the command's own default, said in ``help_text``.
+
+    Parameters
+    ----------
+    parser : argparse.ArgumentParser
+        A subcommand's parser.
+    help_text : str
+        The option's help (what the band is and its default).
+    """
+    parser.add_argument("--band", type=float, nargs=2, metavar=("LOW", "HIGH"), help=help_text)

@@ -2,27 +2,17 @@
 
 from __future__ import annotations
 
-from .common import _Failure, _UsageError, check_seed, whole_number
+from .common import _Failure, _UsageError, add_seed_argument, check_seed, whole_number
 
 SAMPLES = (2000, 100_000)  # = vrig.demo's MIN/MAX_SAMPLES (454 terms per output)
 
 
-def add_parser(sub, epilog: str) -> None:
-    """Add the `demo` subcommand: identify and simulate a generated NARX system.
-
-    Parameters
-    ----------
-    sub : argparse._SubParsersAction
-        The subcommands of the ``vrig`` parser.
-    epilog : str
-        The exit-code table every ``--help`` ends with.
-    """
+def _add_parser(sub, epilog: str) -> None:
+    """Add the `demo` subcommand: identify and simulate a generated NARX system."""
     demo = sub.add_parser(
         "demo", help="identify and simulate a generated non-linear MIMO system", epilog=epilog
     )
-    demo.add_argument(
-        "--seed", type=int, default=0, help="random seed, an integer >= 0 (default 0)"
-    )
+    add_seed_argument(demo)
     demo.add_argument(
         "--samples",
         type=whole_number,
@@ -37,19 +27,8 @@ def add_parser(sub, epilog: str) -> None:
     )
 
 
-def run(args) -> int:
-    """``vrig demo``: :func:`vrig.demo.run_demo` with the checked arguments.
-
-    Parameters
-    ----------
-    args : argparse.Namespace
-        The parsed arguments.
-
-    Returns
-    -------
-    int
-        The exit code.
-    """
+def _run(args) -> int:
+    """``vrig demo``: :func:`vrig.demo.run_demo` with the checked arguments."""
     from identification.errors import SimulationDivergedError, UnstableModelError
 
     from ..demo import run_demo

@@ -6,34 +6,15 @@ from __future__ import annotations
 from .common import load_rig
 
 
-def add_parsers(sub, epilog: str) -> None:
-    """Add the `rigs` and `describe` subcommands.
-
-    Parameters
-    ----------
-    sub : argparse._SubParsersAction
-        The subcommands of the ``vrig`` parser.
-    epilog : str
-        The exit-code table every ``--help`` ends with.
-    """
+def _add_parsers(sub, epilog: str) -> None:
+    """Add the `rigs` and `describe` subcommands."""
     sub.add_parser("rigs", help="list the shipped rigs")
     desc = sub.add_parser("describe", help="a rig's channels, limits and parameters", epilog=epilog)
     desc.add_argument("rig", help="rig name (see `vrig rigs`) or a user rig's .rig.json/.xml")
 
 
-def run_rigs(args) -> int:
-    """``vrig rigs``: one line per shipped rig (a broken side-car does not hide the others).
-
-    Parameters
-    ----------
-    args : argparse.Namespace
-        The parsed arguments.
-
-    Returns
-    -------
-    int
-        The exit code.
-    """
+def _run_rigs(args) -> int:
+    """``vrig rigs``: one line per shipped rig (a broken side-car does not hide the others)."""
     from ..rigs import list_rigs, rig_path
     from ..rigs.spec import read_description
 
@@ -54,19 +35,8 @@ def run_rigs(args) -> int:
     return 0
 
 
-def run_describe(args) -> int:
-    """``vrig describe RIG``: the rig's channels, limits and parameters.
-
-    Parameters
-    ----------
-    args : argparse.Namespace
-        The parsed arguments.
-
-    Returns
-    -------
-    int
-        The exit code.
-    """
+def _run_describe(args) -> int:
+    """``vrig describe RIG``: the rig's channels, limits and parameters."""
     rig = load_rig(args.rig)
     print(rig.describe())
     return 0

@@ -9,19 +9,20 @@ from pathlib import Path
 import numpy as np
 
 from ..job import CLI_NAMES, check_writable, hold_results_folder
-from .common import _UsageError, check_seconds, check_seed, load_rig, simulation_band
+from .common import (
+    _UsageError,
+    add_band_argument,
+    add_rig_argument,
+    add_seed_argument,
+    check_seconds,
+    check_seed,
+    load_rig,
+    simulation_band,
+)
 
 
-def add_parser(sub, epilog: str) -> None:
-    """Add the `check-linearity` subcommand.
-
-    Parameters
-    ----------
-    sub : argparse._SubParsersAction
-        The subcommands of the ``vrig`` parser.
-    epilog : str
-        The exit-code table every ``--help`` ends with.
-    """
+def _add_parser(sub, epilog: str) -> None:
+    """Add the `check-linearity` subcommand."""
     lin = sub.add_parser(
         "check-linearity",
         help="is the rig non-linear? mean-level, scaling, coherence and ARX-vs-NARX tests",
@@ -31,7 +32,7 @@ def add_parser(sub, epilog: str) -> None:
         "either way). The rule is in vrig.linearity's documentation.",
         epilog=epilog,
     )
-    lin.add_argument("--rig", required=True, help="rig name (see `vrig rigs`) or rig file")
+    add_rig_argument(lin)
     lin.add_argument(
         "--level",
         type=float,
@@ -42,32 +43,18 @@ def add_parser(sub, epilog: str) -> None:
     lin.add_argument(
         "--seconds", type=float, default=8.0, help="analysed length of each record (default 8 s)"
     )
-    lin.add_argument(
-        "--band",
-        type=float,
-        nargs=2,
-        metavar=("LOW", "HIGH"),
-        help="drive band [Hz] (default: the band of the text's repeatability test of the rig "
+    add_band_argument(
+        lin,
+        "drive band [Hz] (default: the band of the text's repeatability test of the rig "
         "where the side-car gives one, else as for reconstruct)",
     )
-    lin.add_argument("--seed", type=int, default=0, help="random seed, an integer >= 0 (default 0)")
+    add_seed_argument(lin)
     lin.add_argument("--plot", action="store_true", help="write linearity.png into --out")
     lin.add_argument("--out", help="folder of the plot (default ./results/<rig>-linearity)")
 
 
-def run(args) -> int:
-    """``vrig check-linearity``, holding the lock of ``--out`` when the plot is asked for.
-
-    Parameters
-    ----------
-    args : argparse.Namespace
-        The parsed arguments.
-
-    Returns
-    -------
-    int
-        The exit code.
-    """
+def _run(args) -> int:
+    """``vrig check-linearity``, holding the lock of ``--out`` when the plot is asked for."""
     with contextlib.ExitStack() as hold:  # the plot folder's lock, from the checks to the end
         return _check_linearity(args, hold)
 

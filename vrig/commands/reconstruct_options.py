@@ -7,6 +7,7 @@ from __future__ import annotations
 from ..reconstruction.defaults import DEFAULT_GAIN
 from ..reconstruction.settings import STRATEGIES, UPDATES, IterationSettings
 from ..reconstruction.vocabulary import BUILTIN_METHODS, RATTLESNAKE_PREFIX
+from .common import add_band_argument, add_rig_argument, add_seed_argument
 
 
 class _MethodChoices(tuple):
@@ -23,16 +24,8 @@ METHODS = _MethodChoices(BUILTIN_METHODS)
 ITERATIONS = IterationSettings.iterations  # the one default (vrig.reconstruct's too)
 
 
-def add_parser(sub, epilog: str) -> None:
-    """Add the `reconstruct` subcommand: drive iteration on a rig.
-
-    Parameters
-    ----------
-    sub : argparse._SubParsersAction
-        The subcommands of the ``vrig`` parser.
-    epilog : str
-        The exit-code table every ``--help`` ends with.
-    """
+def _add_parser(sub, epilog: str) -> None:
+    """Add the `reconstruct` subcommand: drive iteration on a rig."""
     rec = sub.add_parser(
         "reconstruct",
         help="drive iteration: reproduce a desired response on a rig",
@@ -42,7 +35,7 @@ def add_parser(sub, epilog: str) -> None:
         "response to a road-like random drive (triangular PSD over the simulation band).",
         epilog=epilog,
     )
-    rec.add_argument("--rig", required=True, help="rig name (see `vrig rigs`) or rig file")
+    add_rig_argument(rec)
     add_model_arguments(rec)
     rec.add_argument(
         "--desired",
@@ -71,12 +64,9 @@ def add_parser(sub, epilog: str) -> None:
         help=f"iteration gain in (0, 2] (default: the rig side-car's "
         f"reconstruction.methods.METHOD.gain, else reconstruction.gain, else {DEFAULT_GAIN:g})",
     )
-    rec.add_argument(
-        "--band",
-        type=float,
-        nargs=2,
-        metavar=("LOW", "HIGH"),
-        help="simulation bandwidth [Hz] (default: the rig's test band; shaker 10-60 Hz because "
+    add_band_argument(
+        rec,
+        "simulation bandwidth [Hz] (default: the rig's test band; shaker 10-60 Hz because "
         "its accelerometer is deaf below 10 Hz)",
     )
     rec.add_argument(
@@ -85,7 +75,7 @@ def add_parser(sub, epilog: str) -> None:
         help="length of the generated record (--target, default 30 s); with --desired, use "
         "only the first SECONDS of the file",
     )
-    rec.add_argument("--seed", type=int, default=0, help="random seed, an integer >= 0 (default 0)")
+    add_seed_argument(rec)
     rec.add_argument(
         "--format",
         dest="fmt",

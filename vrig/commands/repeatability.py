@@ -10,53 +10,40 @@ import numpy as np
 
 from ..desired.pseudo_field import pseudo_field
 from ..job import CLI_NAMES, check_writable, hold_results_folder
-from .common import _UsageError, check_seconds, check_seed, load_rig, simulation_band
+from .common import (
+    _UsageError,
+    add_band_argument,
+    add_rig_argument,
+    add_seed_argument,
+    check_seconds,
+    check_seed,
+    load_rig,
+    simulation_band,
+)
 
 
-def add_parser(sub, epilog: str) -> None:
-    """Add the `repeatability` subcommand.
-
-    Parameters
-    ----------
-    sub : argparse._SubParsersAction
-        The subcommands of the ``vrig`` parser.
-    epilog : str
-        The exit-code table every ``--help`` ends with.
-    """
+def _add_parser(sub, epilog: str) -> None:
+    """Add the `repeatability` subcommand."""
     rep = sub.add_parser(
         "repeatability",
         help="play one random drive several times: the repeatability number of §3.1 (in the drive "
         "band), R_f and SNR per channel",
         epilog=epilog,
     )
-    rep.add_argument("--rig", required=True, help="rig name (see `vrig rigs`) or rig file")
+    add_rig_argument(rep)
     rep.add_argument("--runs", type=int, default=5, help="number of runs (default 5, as §3.1)")
     rep.add_argument("--seconds", type=float, default=20.0, help="drive length (default 20 s)")
-    rep.add_argument(
-        "--band",
-        type=float,
-        nargs=2,
-        metavar=("LOW", "HIGH"),
-        help="drive band [Hz] (default: the band of the text's repeatability test of the rig "
+    add_band_argument(
+        rep,
+        "drive band [Hz] (default: the band of the text's repeatability test of the rig "
         "where the side-car gives one, else as for reconstruct)",
     )
-    rep.add_argument("--seed", type=int, default=0, help="random seed, an integer >= 0 (default 0)")
+    add_seed_argument(rep)
     rep.add_argument("--out", help="folder of the plot (default ./results/<rig>-repeatability)")
 
 
-def run(args) -> int:
-    """``vrig repeatability``, holding the lock of ``--out`` from its checks to the end.
-
-    Parameters
-    ----------
-    args : argparse.Namespace
-        The parsed arguments.
-
-    Returns
-    -------
-    int
-        The exit code.
-    """
+def _run(args) -> int:
+    """``vrig repeatability``, holding the lock of ``--out`` from its checks to the end."""
     with contextlib.ExitStack() as hold:  # the plot folder's lock, from the checks to the end
         return _repeatability(args, hold)
 
