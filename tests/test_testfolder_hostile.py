@@ -388,9 +388,11 @@ def _python_startup_traceback(err: str) -> bool:
     files = [
         Path(line.split('"')[1]) for line in err.splitlines() if line.lstrip().startswith('File "')
     ]
+    packages = [ROOT / "vrig", ROOT / "identification"]  # vrig's own code, not any path that
+    # merely has a folder called vrig in it (a checkout or a venv inside one)
     ours = [
         f for f in files
-        if f.name == "vrig_console.py" or {"vrig", "identification"} & set(f.parent.parts)
+        if f.name == "vrig_console.py" or any(f.is_relative_to(p) for p in packages)
     ]  # fmt: skip
     return bool(files) and not ours and err.rstrip().endswith("KeyboardInterrupt")
 
