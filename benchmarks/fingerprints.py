@@ -13,6 +13,10 @@ precision (``repr``) and the SHA-256 (first 16 hex digits) of the identification
 every drive and raw response (the command line's: of the records its test folder holds). Issue 14
 used it to show the architecture changes left every number unchanged; issue 33 that the command
 line's figures stayed while the Python API's moved onto the side-car's defaults.
+
+Make the baseline and the comparison with the same BLAS thread setting (``OPENBLAS_NUM_THREADS``):
+the multichannel rigs' drives differ in their last bits between one thread and several (the
+same code gives 11 lines that differ), while every η0 stays the same.
 """
 
 from __future__ import annotations
