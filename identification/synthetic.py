@@ -1,7 +1,11 @@
-"""Synthetic systems for tests and benchmarks: random stable NARX models (MAKEMOD, §5.6.2)."""
+"""Synthetic systems for tests and benchmarks: random stable NARX models (MAKEMOD, §5.6.2) and
+a closed-loop record of an open-loop unstable process (a ball on a beam)."""
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
+import numba
 import numpy as np
 from scipy import signal
 
@@ -10,7 +14,7 @@ from .errors import IdentificationError, SimulationDivergedError
 from .models import Narx
 from .regression import regression_matrix
 
-__all__ = ["band_limited_noise", "random_narx"]
+__all__ = ["BallAndBeam", "ball_and_beam", "band_limited_noise", "random_narx"]
 
 
 def band_limited_noise(n_samples: int, n_channels: int = 1, *, cutoff: float = 0.25, seed=None):
@@ -155,3 +159,137 @@ def random_narx(
         f"could not generate a stable random NARX model in {max_tries} tries; "
         "lower the order, degree or nonlinearity"
     )
+
+
+#: 5/7 g: a solid ball rolling without slipping on a tilted beam, m/s^2 per unit sin(angle)
+_ROLLING_GAIN = 5.0 / 7.0 * 9.80665
+
+
+@dataclass(frozen=True)
+class BallAndBeam:
+    """A ball-and-beam record taken in closed loop (an open-loop unstable, integrating process).
+
+    A solid ball rolls on a beam whose angle ``alpha`` a servo sets; the ball's position ``x``
+    obeys ``x'' = (5/7) g sin(alpha)`` (rolling without slip, the centripetal term neglected): a
+    double integrator from the angle to the position, unstable in open loop. The servo follows
+    its command with a first-order lag ``servo_lag``. A PD controller on the measured position
+    keeps the ball on the beam: ``alpha_c = kp (r - x_m) - kd v_m + e``, with ``v_m`` the
+    backward difference of the measured position, ``r`` a slow random set point and ``e`` a
+    white excitation of the command. The record is what a lab would log: the measured beam angle
+    (input) and the measured ball position (output), each with white sensor noise.
+
+    Attributes
+    ----------
+    u : ndarray (N, 1)
+        Measured beam angle, rad.
+    y : ndarray (N, 1)
+        Measured ball position, m.
+    position : ndarray (N,)
+        True ball position, m (no sensor noise).
+    ts : float
+        Sample interval, s.
+    input_names, output_names : tuple of str
+    """
+
+    u: np.ndarray
+    y: np.ndarray
+    position: np.ndarray
+    ts: float
+    input_names: tuple = ("beam angle [rad]",)
+    output_names: tuple = ("ball position [m]",)
+
+    @property
+    def fs(self) -> float:
+        """Sample rate, Hz."""
+        return 1.0 / self.ts
+
+
+@numba.njit(cache=True)
+def _ball_and_beam_loop(r, e, n_angle, n_pos, ts, substeps, kp, kd, lag, gain):
+    n = r.size
+    alpha_m = np.empty(n)
+    x_m = np.empty(n)
+    x_true = np.empty(n)
+    x, v, alpha = 0.0, 0.0, 0.0
+    prev = 0.0
+    h = ts / substeps
+    for k in range(n):
+        x_true[k] = x
+        x_m[k] = x + n_pos[k]
+        alpha_m[k] = alpha + n_angle[k]
+        vel = (x_m[k] - prev) / ts if k > 0 else 0.0
+        prev = x_m[k]
+        command = kp * (r[k] - x_m[k]) - kd * vel + e[k]
+        for _ in range(substeps):  # semi-implicit Euler on the held command
+            alpha += h * (command - alpha) / lag
+            v += h * gain * np.sin(alpha)
+            x += h * v
+    return alpha_m, x_m, x_true
+
+
+def ball_and_beam(
+    n_samples: int = 1000,
+    *,
+    seed=None,
+    ts: float = 0.1,
+    kp: float = 0.15,
+    kd: float = 0.2,
+    servo_lag: float = 0.05,
+    set_point_rms: float = 0.15,
+    excitation_rms: float = 0.02,
+    angle_noise: float = 1e-3,
+    position_noise: float = 1e-3,
+) -> BallAndBeam:
+    """A closed-loop record of a ball on a beam (see :class:`BallAndBeam`).
+
+    The loop's characteristic equation (small angles, no servo lag) is
+    ``s^2 + (5/7) g kd s + (5/7) g kp = 0``: with the defaults a natural frequency of
+    1.0 rad/s and damping 0.68, stable in closed loop while the beam alone is a double
+    integrator. Integrated with 20 substeps per sample (the command held over the sample).
+
+    Parameters
+    ----------
+    n_samples : int
+        Samples of the record.
+    seed : int or numpy.random.Generator, optional
+        Seed of the set point, the excitation and the sensor noise.
+    ts : float
+        Sample interval, s (0.1 s: 10 Hz).
+    kp : float
+        Proportional gain, rad per m of position error.
+    kd : float
+        Derivative gain, rad per m/s of measured velocity.
+    servo_lag : float
+        Time constant of the beam-angle servo, s.
+    set_point_rms : float
+        RMS of the random set point, m (band-limited noise, cut-off 0.05 of Nyquist).
+    excitation_rms : float
+        RMS of the white excitation added to the angle command, rad.
+    angle_noise, position_noise : float
+        RMS of the white sensor noise on the logged angle (rad) and position (m).
+    """
+    if (
+        not isinstance(n_samples, (int, np.integer))
+        or isinstance(n_samples, bool)
+        or n_samples < 16
+    ):
+        raise IdentificationError(f"n_samples must be an integer >= 16, got {n_samples!r}")
+    for name, v in (("ts", ts), ("servo_lag", servo_lag), ("kp", kp), ("kd", kd)):
+        if not (isinstance(v, (int, float)) and v > 0 and np.isfinite(v)):
+            raise IdentificationError(f"{name} must be a finite number > 0, got {v!r}")
+    check_allocation(
+        product(n_samples, 8, 8),
+        f"a ball-and-beam record of {n_samples:,} samples",
+        "fewer samples",
+    )
+    rng = np.random.default_rng(seed)
+    r = set_point_rms * band_limited_noise(n_samples, 1, cutoff=0.05, seed=rng)[:, 0]
+    e = excitation_rms * rng.standard_normal(n_samples)
+    na = angle_noise * rng.standard_normal(n_samples)
+    npos = position_noise * rng.standard_normal(n_samples)
+    alpha, x_m, x = _ball_and_beam_loop(
+        r, e, na, npos, float(ts), 20, float(kp), float(kd), float(servo_lag), _ROLLING_GAIN
+    )
+    if not np.all(np.isfinite(x_m)):
+        raise IdentificationError("the closed loop diverged: raise kd or lower kp")
+    return BallAndBeam(alpha[:, None], x_m[:, None], x, float(ts))
