@@ -9,23 +9,37 @@ one, plain least squares on another), and a least-squares model that passes its 
 check can still diverge on other inputs; the search makes both choices from the data.
 
 Validation (documented protocol)
-    The last ``holdout`` fraction of the record is held out (``folds=2``: also the first
-    ``holdout`` fraction, with the model then fitted on the last ``1 - holdout``; the score is the
-    mean of the two folds). The held-out part is cut into ``n_blocks`` contiguous blocks; each
-    block's free run starts from its own first ``init_window`` measured outputs
-    (nonlinear_benchmarks' convention) and is scored on the rest. The score of an output is its
-    root relative squared error over the blocks, ``sqrt(sum e^2 / sum (y - mean y)^2)`` (an NRMSE
-    normalised by the held-out output's standard deviation); a candidate's score is the mean over
-    its outputs.
+    k-fold in time (``folds``; ``"auto"``: 4 folds for a record shorter than 3,000 samples, 2
+    below 8,000, else 1): k held-out windows, each ``holdout`` of the record, spread evenly
+    from its start to its end (one fold: the last window; two: the first and the last), each
+    model fitted on the longer contiguous part outside its window. A window that follows its
+    fit part is scored on a free run started from the measured first ``init_window`` outputs
+    of the *fit part* and run through it (nonlinear_benchmarks' convention for a test record:
+    one long free run, so a model that drifts is seen drifting, as a test record will show
+    it); a window before its fit part is scored on a free run started from its own first
+    ``init_window`` measured outputs. Each window is cut into ``n_blocks`` blocks. The score
+    of an output is its root relative squared error over all blocks,
+    ``sqrt(sum e^2 / sum (y - mean y)^2)`` (the mean per block); a candidate's score is the
+    mean over its outputs, its **spread** the standard deviation of its block scores.
 
 Rejection (a candidate is never returned when)
     its fit fails or its stability contract refuses it; its free run leaves the model's bound
-    (``bound_``, 1000 x the record's peak by default) or becomes non-finite on **any** validation
-    block; or on the identification input scaled by 0.5 and by 2 (from rest: a zero past and
-    the input faded in over its first ``min(200, N / 10)`` samples); or on a
-    white Gaussian input of the same mean, RMS and band as the identification input (band: the
+    (``bound_``, 1000 x the record's peak by default) or becomes non-finite on **any** fold's
+    validation run; or on the identification input scaled by 0.5 and by 2 (from rest: a zero
+    past and the input faded in over its first ``min(200, N / 10)`` samples); or on a white
+    Gaussian input of the same mean, RMS and band as the identification input (band: the
     frequencies holding 99 % of its power, estimated by Welch's method; the noise drawn from
-    ``seed``). Every candidate's row in :attr:`NarxSearch.results_` says why it was rejected.
+    ``seed``). The shortlist (the choice, in rank order) also needs a bounded free run on an
+    input 4 times longer than the training part (at most 200,000 samples) of its spectrum and
+    level (Gaussian noise shaped by its Welch spectrum): a model that is bounded only over the
+    record's length is rejected there. Every candidate's row in :attr:`NarxSearch.results_`
+    says why it was rejected.
+
+Baselines (``baselines=True``, the default)
+    Whatever the grid, the field holds ARX (least squares) and linear output-error
+    (simulation focus) models of every searched order and FROLS terms sized by ``criterion``
+    (SysIdentPy's default method) for every structure: the search's validation score is never
+    worse than theirs, by construction. Their rows say ``(baseline)``.
 
 Search order and time budget
     Stage 1 fits every structure (order x degree x kind x functions) by least squares, with all
@@ -54,17 +68,30 @@ Search order and time budget
     the end. With ``budget=None`` everything is deterministic under ``seed``; with a budget, the
     candidates tried (and a fit cut short) depend on the machine's speed.
 
-Refit
-    The best candidate (ties within 1 %: fewer terms, then the simpler fit — least squares before
-    simulation focus, all terms before FROLS before SEMP) is refitted on the whole record and kept if
-    its free run is bounded on every validation block, on the whole record and on the stress
-    inputs; otherwise (or when the refit would overrun the budget) the model fitted on the training
-    part (the one validated) is returned. ``refit_`` says which. The refit gets the search's
-    deadline too (a refinement past it keeps the best iterate reached).
+Widening
+    With a budget and time left once the grid is done, the search widens around the three
+    best validated candidates, ring after ring: orders one lag either side, unequal output
+    and input lags, selections of half, 1.5 and twice the size (orders within the measured
+    initial window). Their rows say ``(widening)``; :meth:`NarxSearch.report` gives the time
+    used of the budget.
+
+Choice and refit
+    The best candidate is the lowest score; scores within 1 % of it are ties, broken by the
+    spread (the steadiest), then by fewer terms, then by the simpler fit (least squares before
+    simulation focus, all terms before FROLS before SEMP). It is refitted on the whole record,
+    and the refit is **checked** as the candidate was: its free run over the whole record (from
+    its first ``init_window`` measured outputs) must stay bounded and be no worse than the
+    validated model's over the same record beyond the validation's spread (its standard error,
+    at least 1 %), and it must be bounded on the stress inputs and the longer input of the
+    whole record. Otherwise (or when the refit would overrun the budget) the model fitted on
+    fold 1's training part (the one validated) is returned. ``refit_`` says which and why,
+    ``refit_check_`` holds both whole-record errors. The refit gets the search's deadline too
+    (a refinement past it keeps the best iterate reached).
 """
 
 from __future__ import annotations
 
+import dataclasses
 import itertools
 import math
 import time
@@ -118,6 +145,14 @@ _TIE = 1e-2
 #: longer fits in the budget (measured on F-16: a cut-short SEMP ended 2 s past its deadline)
 _FIT_SLACK = 0.05
 _COST_RANK = {"prediction": 0, "simulation": 1, "all": 0, "frols": 1}
+#: the shortlist's stability margin: a free run on an input this many times longer than the
+#: training part (its spectrum and level), at most :data:`_LONG_MAX` samples
+_LONG_FACTOR = 4
+_LONG_MAX = 200_000
+#: ``folds="auto"``: records shorter than the first number get 4 folds, shorter than the second 2,
+#: longer ones 1 (a long record's one held-out quarter already holds thousands of samples; a
+#: short record's quarter is a few hundred, too few to predict a test record's error)
+_AUTO_FOLDS = (3000, 8000)
 
 
 @dataclass(frozen=True)
@@ -255,6 +290,14 @@ class CandidateResult:
         Seconds spent fitting and validating it.
     predicted_time : float
         The fit time predicted before it was tried (seconds; ``nan`` with no budget).
+    block_scores : ndarray (n_folds * n_blocks,)
+        Free-run RRSE of each validation block (mean over the outputs), fold by fold.
+    spread : float
+        Standard deviation of ``block_scores`` (``inf`` unless ok; 0 with one block): how much
+        the score would move on another stretch of record.
+    origin : str
+        Why it is in the field: ``"grid"``, ``"baseline"`` (the linear and FROLS candidates the
+        search always tries, ``baselines=True``) or ``"widening"`` (tried with time left).
     """
 
     candidate: SearchCandidate
@@ -266,6 +309,27 @@ class CandidateResult:
     n_terms: int = 0
     fit_time: float = 0.0
     predicted_time: float = math.nan
+    block_scores: np.ndarray = field(default_factory=lambda: np.array([]))
+    spread: float = math.inf
+    origin: str = "grid"
+
+
+@dataclass(frozen=True, eq=False)
+class _Fold:
+    """One validation fold: the training part ``u``, ``y``; the held-out ``window`` (a, b);
+    ``start``, where its validation free run starts (from the measured outputs there); the
+    scored ``blocks`` (absolute sample ranges inside the window); the ``stress`` inputs."""
+
+    u: np.ndarray
+    y: np.ndarray
+    window: tuple[int, int]
+    start: int
+    blocks: tuple[slice, ...]
+    stress: list
+
+
+def _positive(x: np.ndarray) -> np.ndarray:
+    return np.where(x > 0, x, 1.0)
 
 
 def _tuple(values, name: str) -> tuple:
@@ -402,12 +466,22 @@ class NarxSearch:
         own candidate (validated by free run like every other): on long records an information
         criterion can keep hundreds of terms whose free run is worse than a shorter path's.
     holdout : float
-        Fraction of the record held out for validation, in (0, 0.5].
-    folds : {1, 2}
-        1: the last ``holdout`` is held out; 2: also the first (fitted on the last part).
+        Fraction of the record each validation window holds, in (0, 0.5].
+    folds : int or "auto"
+        Validation windows (k-fold in time): 1, the last ``holdout`` of the record; k >= 2,
+        k windows of that length spread evenly from the record's start to its end (2: the
+        first and the last), each model fitted on the longer contiguous part outside its
+        window. ``"auto"`` (default): 4 folds for a record shorter than 3,000 samples, 2 below
+        8,000, else 1.
     n_blocks : int
-        Contiguous validation blocks the held-out part is cut into (each started from its own
-        measured window).
+        Blocks each validation window is cut into: the score's spread is the standard
+        deviation of the block scores.
+    baselines : bool
+        Always put the baselines in the field (default True): ARX (least squares) and linear
+        output-error (simulation focus) models of every searched order and FROLS terms sized by
+        ``criterion`` of every structure, whatever ``degrees``, ``focus`` and ``selection`` say;
+        so the search's validation score is never worse than the best linear model's or
+        FROLS's (SysIdentPy's default method). False: exactly the grid given.
     init_window : int, optional
         Measured samples that start each validation free run (default: the largest order; at
         least every candidate's largest lag).
@@ -439,8 +513,14 @@ class NarxSearch:
         One row per candidate, in the order they were decided.
     refit_ : str
         ``"whole record"`` or why the training-part model was kept.
+    refit_check_ : dict
+        The refit's check (when it ran): ``refit`` and ``validated``, the free-run RRSE over
+        the whole record of the refit and of the validated model, and ``tolerance``, the
+        validation's spread the refit may exceed it by.
+    n_folds_ : int
+        Validation folds used (``folds``, or what ``"auto"`` chose for the record).
     search_time_ : float
-        Wall time of :meth:`fit`, seconds.
+        Wall time of :meth:`fit`, seconds: the budget used.
 
     Examples
     --------
@@ -463,8 +543,9 @@ class NarxSearch:
         criterion: str = "bic",
         n_terms=None,
         holdout: float = 0.25,
-        folds: int = 1,
+        folds: int | str = "auto",
         n_blocks: int = 2,
+        baselines: bool = True,
         init_window: int | None = None,
         max_terms: int = 600,
         max_candidates: int = 2000,
@@ -488,9 +569,14 @@ class NarxSearch:
         if not (isinstance(holdout, (int, float)) and 0 < holdout <= 0.5):
             raise IdentificationError(f"holdout must be a fraction in (0, 0.5], got {holdout!r}")
         self.holdout = float(holdout)
-        if folds not in (1, 2):
-            raise IdentificationError(f"folds must be 1 or 2, got {folds!r}")
-        self.folds = int(folds)
+        if folds != "auto":
+            folds = _int_grid(folds, "folds", 1)[0] if not isinstance(folds, str) else folds
+        if not (folds == "auto" or isinstance(folds, int)):
+            raise IdentificationError(f"folds must be an integer >= 1 or 'auto', got {folds!r}")
+        self.folds = folds
+        if not isinstance(baselines, (bool, np.bool_)):
+            raise IdentificationError(f"baselines must be True or False, got {baselines!r}")
+        self.baselines = bool(baselines)
         self.n_blocks = _int_grid(n_blocks, "n_blocks", 1)[0]
         self.init_window = (
             None if init_window is None else _int_grid(init_window, "init_window", 1)[0]
@@ -519,12 +605,24 @@ class NarxSearch:
 
     def structures(self) -> list[tuple]:
         """Every structure (order, degree, kind, functions) of the grid, without duplicates."""
-        out = []
+        out = [(n, 1, "full", None) for n in self.orders] if self.baselines else []
         for n, d, kind, funs in itertools.product(
             self.orders, self.degrees, self.kinds, self.functions
         ):
             out.append((n, d, "full" if d == 1 else kind, funs))
         return list(dict.fromkeys(out))
+
+    def _is_baseline(self, c: SearchCandidate) -> bool:
+        """Whether ``c`` is in the field only because of ``baselines``."""
+        if not self.baselines:
+            return False
+        linear = c.degree == 1 and c.functions is None and c.n_terms is None
+        in_grid = (
+            (c.degree in self.degrees and (c.functions in self.functions))
+            and c.focus in self.focus
+            and (c.selection in self.selection or c.options == ("prediction", "all"))
+        )
+        return not in_grid and (linear or c.options == ("prediction", "frols"))
 
     def _stage2_options(self) -> list[tuple[str, str]]:
         cheap = {("prediction", "all"), ("prediction", "frols")}
@@ -563,7 +661,12 @@ class NarxSearch:
                     f"order {o!r} gives {len(nb)} per-input lags, but u has {u.shape[1]} inputs"
                 )
         self._names = (input_names, output_names)
-        for stale in ("best_", "best_result_", "refit_"):  # a refit that fails keeps no old model
+        for stale in (
+            "best_",
+            "best_result_",
+            "refit_",
+            "refit_check_",
+        ):  # a refit that fails keeps no old model
             self.__dict__.pop(stale, None)
         self._t0 = t0
         self._deadline = None if self.budget is None else t0 + self.budget
@@ -581,37 +684,53 @@ class NarxSearch:
                 self._stage2()
                 for c in self._deferred:
                     self._try(c)
+                self._widen()
                 self._choose(u, y)
             finally:  # report() works after a failed search too (it says why each failed)
                 self.search_time_ = time.perf_counter() - t0
         return self
 
+    def _n_folds(self, n_samples: int) -> int:
+        if self.folds != "auto":
+            return self.folds
+        short, medium = _AUTO_FOLDS
+        return 4 if n_samples < short else 2 if n_samples < medium else 1
+
     def _prepare(self, u, y) -> None:
         """Folds, validation blocks and stress inputs; refuses a record too short for them."""
         N = u.shape[0]
         init = self.init_window or max(self._max_lag(), 1)
+        k = self._n_folds(N)
         n_val = round(self.holdout * N)
-        block = n_val // self.n_blocks
-        need = init + max(10, 2 * init)
-        if block < need:
+        need = max(10, 2 * init)  # scored samples per block
+        if (n_val - init) // self.n_blocks < need or N - n_val < need:
             raise InsufficientDataError(
-                f"a record of {N} samples is too short for the validation: its held-out "
-                f"{self.holdout:g} ({n_val} samples) in {self.n_blocks} block(s) gives "
-                f"{block}-sample blocks, but each needs at least {need} ({init} measured "
-                f"initial samples + {need - init} scored). Give a longer record, a larger "
-                "holdout, fewer blocks or smaller orders"
+                f"a record of {N} samples is too short for the validation: a held-out window "
+                f"of {self.holdout:g} of it ({n_val} samples, of which a restarted free run "
+                f"loses {init} measured initial samples) cut into {self.n_blocks} block(s) "
+                f"needs at least {init + self.n_blocks * need} samples ({need} scored per "
+                "block). Give a longer record, a larger holdout, fewer blocks or smaller orders"
             )
         self._init = init
-        folds = [(slice(0, N - n_val), (N - n_val, N))]
-        if self.folds == 2:
-            folds.append((slice(n_val, N), (0, n_val)))
+        if k == 1:
+            starts = [N - n_val]
+        else:  # the last window first: fold 0's model is the one kept when the refit is not
+            starts = sorted({int(a) for a in np.linspace(0, N - n_val, k).round()}, reverse=True)
         self._folds = []
-        for fit, (a, b) in folds:
-            edges = np.linspace(a, b, self.n_blocks + 1).round().astype(int)
-            blocks = [slice(int(s), int(e)) for s, e in itertools.pairwise(edges)]
-            self._folds.append((u[fit], y[fit], blocks, self._stress_inputs(u[fit])))
+        for a in starts:
+            b = a + n_val
+            fit = slice(0, a) if a >= N - b else slice(b, N)
+            start = fit.start if fit.stop == a else a  # continue from the fit part, or restart
+            edges = np.linspace(max(a, start + init), b, self.n_blocks + 1).round().astype(int)
+            blocks = tuple(slice(int(s), int(e)) for s, e in itertools.pairwise(edges))
+            stress = self._stress_inputs(u[fit])
+            self._folds.append(_Fold(u[fit], y[fit], (a, b), start, blocks, stress))
         self._u, self._y = u, y
-        self._rows = N - n_val
+        lengths = [f.u.shape[0] for f in self._folds]
+        self._rows = min(lengths)
+        self._fit_rows = sum(lengths)
+        self._refit_scale = N / self._fit_rows  # a refit's time per fold-fit time
+        self.n_folds_ = len(self._folds)
 
     def _stress_inputs(self, u) -> list[tuple[str, np.ndarray]]:
         """0.5x and 2x the identification input, and white noise of its mean, RMS and band;
@@ -641,11 +760,14 @@ class NarxSearch:
             base = SearchCandidate(*s, "prediction", "all", self.lags)
             size[base] = self._terms(base)
             # FROLS least squares: asked for, or the only fit that can rank a structure too big
-            # for all terms (else stage 2 never sees it)
+            # for all terms (else stage 2 never sees it); sized by the criterion, a baseline
             if asked or (selects and self._too_big(base, size[base])):
                 for k in self.n_terms:
                     c = SearchCandidate(*s, "prediction", "frols", self.lags, k)
                     size[c] = self._terms(c)
+            if self.baselines:  # FROLS sized by the criterion: SysIdentPy's default method
+                c = SearchCandidate(*s, "prediction", "frols", self.lags, None)
+                size.setdefault(c, self._terms(c))
         cands = list(size)
         stop = None if self._deadline is None else self._t0 + _STAGE1_SHARE * self.budget
         self._deferred = []
@@ -660,12 +782,14 @@ class NarxSearch:
         its cheapest remaining option); each option class is first tried on the smallest
         structure, which calibrates its rate cheaply."""
         ranked = self._ranked_structures()
-        if not self._stage2_options() or not ranked:
+        if not ranked or not any(self._entry_candidates(e) for e in ranked):
             return
         lags = self.lags
         size = {e: self._terms(SearchCandidate(*e[:4], "prediction", "all", lags)) for e in ranked}
+        # the linear output-error baselines first (cheap: a few parameters), best-ranked first
+        first = [c for e in ranked for c in self._entry_candidates(e) if self._is_baseline(c)]
         smallest = min(ranked, key=lambda e: (size[e], ranked.index(e)))
-        first = self._entry_candidates(smallest)
+        first += [c for c in self._entry_candidates(smallest) if c not in first]
         for c in first:
             self._try(c)
         queues = [[c for c in self._entry_candidates(e) if c not in first] for e in ranked]
@@ -682,6 +806,9 @@ class NarxSearch:
         selections sized by the criterion), or the selections of a sized entry at that size."""
         *s, k = entry
         opts = self._stage2_options()
+        linear = s[1] == 1 and s[3] is None and k is None
+        if self.baselines and linear and ("simulation", "all") not in opts:
+            opts = [("simulation", "all"), *opts]  # the linear output-error baseline
         if k is not None:
             opts = [o for o in opts if o[1] != "all"]
             sizes = [k]
@@ -704,6 +831,44 @@ class NarxSearch:
         )
         merged = itertools.chain.from_iterable(itertools.zip_longest(by_free_run, by_one_step))
         return list(dict.fromkeys(s for s in merged if s is not None))
+
+    def _widen(self) -> None:
+        """With time left after the grid: the neighbours of the three best validated
+        candidates (orders one lag either side, unequal output and input lags, selections of
+        half, 1.5x and twice the size), ring after ring around the best so far, while a
+        candidate's predicted fit time fits in what is left. Orders stay within the
+        validation's measured initial window. Not with ``budget=None`` (the grid is then the
+        whole search)."""
+        if self._deadline is None:
+            return
+        seen = {r.candidate for r in self.results_}
+        while self._deadline - time.perf_counter() - self._reserve() > 0:
+            ok = sorted((r for r in self.results_ if r.status == "ok"), key=lambda r: r.score)
+            ring = [c for r in ok[:3] for c in self._neighbours(r) if c not in seen]
+            ring = list(dict.fromkeys(ring))
+            if not ring:
+                return
+            for c in ring:
+                seen.add(c)
+                self._try(c, origin="widening")
+
+    def _neighbours(self, r: CandidateResult) -> list[SearchCandidate]:
+        """The widening's neighbours of a validated candidate (see :meth:`_widen`)."""
+        c = r.candidate
+        out = []
+        na, nb = c.lag_orders
+        if not isinstance(nb, tuple):
+            pairs = [(na - 1, nb), (na + 1, nb), (na, nb - 1), (na, nb + 1)]
+            if isinstance(c.order, int):
+                pairs = [(na - 1, nb - 1), (na + 1, nb + 1), *pairs]
+            for a, b in pairs:
+                if min(a, b) >= 0 and max(a, b, 1) <= self._init and (a, b) != (0, 0):
+                    out.append(dataclasses.replace(c, order=a if a == b else (a, b)))
+        if c.selection != "all":
+            k = max(1, r.n_terms // self._y.shape[1])
+            for m in sorted({max(1, k // 2), round(1.5 * k), 2 * k} - {c.n_terms}):
+                out.append(dataclasses.replace(c, n_terms=m))
+        return out
 
     # ------------------------------------------------------------------ one candidate
     def _terms(self, c: SearchCandidate) -> int:
@@ -734,7 +899,7 @@ class NarxSearch:
         if c.selection == "simulation":
             steps = min(terms, DEFAULT_PATH if c.n_terms is None else c.n_terms)
             work += path_work(terms, steps)
-        return self._rows * work * self.folds
+        return self._fit_rows * work
 
     def _predicted(self, c: SearchCandidate, terms: int) -> float:
         """Predicted seconds: the median rate (seconds per work unit) of the candidates of the
@@ -754,9 +919,10 @@ class NarxSearch:
             largest = max(w for w, _ in base)
         return rate * work * math.sqrt(max(1.0, work / largest))
 
-    def _try(self, c: SearchCandidate) -> CandidateResult:
+    def _try(self, c: SearchCandidate, origin: str = "grid") -> CandidateResult:
         terms = self._terms(c)
-        result = CandidateResult(c, "skipped")
+        origin = "baseline" if origin == "grid" and self._is_baseline(c) else origin
+        result = CandidateResult(c, "skipped", origin=origin)
         too_big = self._too_big(c, terms)
         if too_big:
             result.reason = too_big
@@ -805,7 +971,7 @@ class NarxSearch:
         if not ok or self.budget is None:
             return 0.0
         best = min(ok, key=lambda r: r.score)
-        return min(1.2 * best.fit_time / self.folds / (1.0 - self.holdout), 0.25 * self.budget)
+        return min(1.2 * best.fit_time * self._refit_scale, 0.25 * self.budget)
 
     def _record(self, result: CandidateResult) -> CandidateResult:
         self.results_.append(result)
@@ -815,8 +981,8 @@ class NarxSearch:
 
     def _evaluate(self, c: SearchCandidate, result: CandidateResult) -> None:
         """Fit on each fold's training part, validate; fills ``result`` in place."""
-        sq_err, sq_dev, one_step = 0.0, 0.0, []
-        for ufit, yfit, blocks, stress in self._folds:
+        sq_err, sq_dev, one_step = [], [], []
+        for i, fold in enumerate(self._folds):
             model = c.narx(self.criterion, self.options)
             deadline = (
                 None
@@ -824,48 +990,64 @@ class NarxSearch:
                 else self._deadline - self._reserve() - _FIT_SLACK * self.budget
             )
             try:
-                model.fit(ufit, yfit, deadline=deadline)
+                model.fit(fold.u, fold.y, deadline=deadline)
             except (IdentificationError, np.linalg.LinAlgError, FloatingPointError) as exc:
                 result.status, result.reason = "failed", _first_line(exc)
                 if isinstance(exc, UnstableModelError) and hasattr(model, "coef_"):
-                    result.one_step = self._one_step(model, blocks)  # ranks it for stage 2
+                    result.one_step = self._one_step(model, fold.blocks)  # ranks it for stage 2
                 return
             result.n_terms = int(np.sum(model.n_terms_))
-            verdict = self._validate(model, blocks, stress)
+            verdict = self._validate(model, i)
             if isinstance(verdict, str):
                 result.status, result.reason = "rejected", verdict
-                result.one_step = self._one_step(model, blocks)
+                result.one_step = self._one_step(model, fold.blocks)
                 return
             if model.timed_out_:
                 result.reason = "cut short by the budget (the best iterate reached)"
-            sq_err, sq_dev = sq_err + verdict[0], sq_dev + verdict[1]
-            one_step.append(self._one_step(model, blocks))
+            sq_err.append(verdict[0])
+            sq_dev.append(verdict[1])
+            one_step.append(self._one_step(model, fold.blocks))
             self._models.setdefault(c, model)
-        scores = np.sqrt(sq_err / np.where(sq_dev > 0, sq_dev, 1.0))
+        err, dev = np.concatenate(sq_err), np.concatenate(sq_dev)  # (blocks, ny)
+        scores = np.sqrt(err.sum(axis=0) / _positive(dev.sum(axis=0)))
+        blocks = np.mean(np.sqrt(err / _positive(dev)), axis=1)
         result.status, result.scores = "ok", scores
         result.score, result.one_step = float(np.mean(scores)), float(np.mean(one_step))
+        result.block_scores = blocks
+        result.spread = float(np.std(blocks, ddof=1)) if blocks.size > 1 else 0.0
 
-    def _validate(self, model: Narx, blocks, stress):
-        """``(sum e^2, sum (y - mean)^2)`` per output over the blocks, or why it is rejected."""
+    def _validate(self, model: Narx, i: int):
+        """Per block ``(sum e^2, sum (y - mean)^2)`` (arrays (n_blocks, ny)) of fold ``i``'s
+        validation free run, or why the model is rejected. The run starts from the measured
+        first ``init`` outputs of the fold's training part when its window follows that part
+        (and runs through it: the window is scored after as long a free run as the record
+        allows, as a test record will be), else at the window's own start."""
         u, y, init = self._u, self._y, self._init
-        sq_err, sq_dev = 0.0, 0.0
-        for i, b in enumerate(blocks):
-            try:
-                sim = model.simulate(u[b], y0=y[b][:init])
-            except SimulationDivergedError as exc:
-                return (
-                    f"free run diverges on validation block {i + 1} (sample {b.start + exc.sample})"
-                )
-            e = y[b][init:] - sim[init:]
-            sq_err = sq_err + np.sum(e**2, axis=0)
-            yb = y[b][init:]
-            sq_dev = sq_dev + np.sum((yb - yb.mean(axis=0)) ** 2, axis=0)
-        for what, us in stress:
+        fold = self._folds[i]
+        b = fold.window[1]
+        try:
+            sim = model.simulate(u[fold.start : b], y0=y[fold.start : fold.start + init])
+        except SimulationDivergedError as exc:
+            at = fold.start + exc.sample
+            where = (
+                f"before its validation window (from sample {fold.start})"
+                if at < fold.blocks[0].start
+                else "on validation block " + str(1 + sum(bl.start <= at for bl in fold.blocks[1:]))
+            )
+            fold_name = f" of fold {i + 1}" if len(self._folds) > 1 else ""
+            return f"free run diverges {where}{fold_name} (sample {at})"
+        e = np.empty((len(fold.blocks), y.shape[1]))
+        d = np.empty_like(e)
+        for j, bl in enumerate(fold.blocks):
+            yb = y[bl]
+            e[j] = np.sum((yb - sim[bl.start - fold.start : bl.stop - fold.start]) ** 2, axis=0)
+            d[j] = np.sum((yb - yb.mean(axis=0)) ** 2, axis=0)
+        for what, us in fold.stress:
             try:
                 model.simulate(us)
             except SimulationDivergedError as exc:
                 return f"free run diverges on {what} (sample {exc.sample})"
-        return sq_err, sq_dev
+        return e, d
 
     def _one_step(self, model: Narx, blocks) -> float:
         u, y, init = self._u, self._y, self._init
@@ -895,12 +1077,24 @@ class NarxSearch:
                 f"{counts['skipped']} skipped; see results_ / report()). Try lower orders or "
                 "degrees, kind='input-polynomial', a larger budget, or check the record"
             )
-        low = min(r.score for r in ok)
-        tied = [r for r in ok if r.score <= low * (1 + _TIE)]
-        best = min(tied, key=lambda r: (r.n_terms, *_simplicity(r.candidate), r.score))
+        fold = self._folds[0]
+        long_input = self._long_input(fold.u)
+        while True:  # the shortlist's stability margin: the best bounded on a longer input
+            best = _pick(ok)
+            why = _diverges(self._models[best.candidate], long_input)
+            if why is None:
+                break
+            best.status, best.reason = "rejected", why
+            ok.remove(best)
+            if not ok:
+                raise IdentificationError(
+                    "every validated candidate's free run diverges on a longer input of the "
+                    f"record's spectrum and level ({why}); see report(). Try lower orders or "
+                    "degrees, kind='input-polynomial', or check the record"
+                )
         self.best_result_ = best
         fold_model = self._models[best.candidate]
-        predicted = best.fit_time / self.folds / (1.0 - self.holdout)
+        predicted = best.fit_time * self._refit_scale
         if self._deadline is not None and time.perf_counter() + predicted > self._deadline:
             self.best_ = self._named(fold_model)
             self.refit_ = (
@@ -911,23 +1105,61 @@ class NarxSearch:
         with warnings.catch_warnings():
             for w in (StabilityWarning, RankDeficiencyWarning):
                 warnings.simplefilter("ignore", w)
-            self.best_, self.refit_ = self._refit(best.candidate, fold_model, u, y)
+            self.best_, self.refit_ = self._refit(best, fold_model, u, y)
 
-    def _refit(self, c: SearchCandidate, fold_model: Narx, u, y):
-        """The candidate refitted on the whole record if it stays bounded, else ``fold_model``."""
+    def _long_input(self, u: np.ndarray) -> tuple[str, np.ndarray]:
+        """The shortlist's stability margin: Gaussian noise of ``u``'s spectrum (Welch), mean
+        and RMS, :data:`_LONG_FACTOR` times longer (at most :data:`_LONG_MAX` samples), faded
+        in from rest as the stress inputs are."""
+        n = min(_LONG_FACTOR * u.shape[0], max(_LONG_MAX, u.shape[0]))
+        rng = np.random.default_rng([self.seed, 1])
+        x = _spectrum_like(u, n, rng)
+        k = max(min(200, n // 10), 1)
+        x[:k] *= signal.windows.hann(2 * k + 1)[:k, None]
+        return (f"a {n / u.shape[0]:.3g}x longer input of the record's spectrum and level", x)
+
+    def _record_error(self, model: Narx, u, y) -> tuple[float, str | None]:
+        """Free-run RRSE over the whole record (mean over outputs; from its first ``init``
+        measured outputs) and, when it diverges, where."""
+        init = self._init
+        try:
+            sim = model.simulate(u, y0=y[:init])
+        except SimulationDivergedError as exc:
+            return math.inf, f"free run over the whole record diverges (sample {exc.sample})"
+        e = y[init:] - sim[init:]
+        dev = y[init:] - y[init:].mean(axis=0)
+        rrse = np.sqrt(np.sum(e**2, axis=0) / _positive(np.sum(dev**2, axis=0)))
+        return float(np.mean(rrse)), None
+
+    def _refit(self, best: CandidateResult, fold_model: Narx, u, y):
+        """The candidate refitted on the whole record, if it passes the checks its validated
+        model passed and is not worse than it beyond the validation's spread; else
+        ``fold_model``. Returns (model, what was done)."""
         input_names, output_names = self._names
+        c = best.candidate
+        kept = "training-part model kept"
         try:
             model = c.narx(self.criterion, self.options).fit(
                 u, y, input_names=input_names, output_names=output_names, deadline=self._deadline
             )
         except IdentificationError as exc:
-            return self._named(
-                fold_model
-            ), f"training-part model kept: refit failed ({_first_line(exc)})"
-        blocks = [b for _, _, bl, _ in self._folds for b in bl] + [slice(0, u.shape[0])]
-        verdict = self._validate(model, blocks, self._stress_inputs(u))
-        if isinstance(verdict, str):
-            return self._named(fold_model), f"training-part model kept: the refit's {verdict}"
+            return self._named(fold_model), f"{kept}: refit failed ({_first_line(exc)})"
+        refit, where = self._record_error(model, u, y)
+        validated, _ = self._record_error(fold_model, u, y)
+        tolerance = max(best.spread / math.sqrt(max(best.block_scores.size, 1)), _TIE * validated)
+        self.refit_check_ = {"refit": refit, "validated": validated, "tolerance": tolerance}
+        if where is not None:
+            return self._named(fold_model), f"{kept}: the refit's {where}"
+        for what, us in [*self._stress_inputs(u), self._long_input(u)]:
+            why = _diverges(model, (what, us))
+            if why is not None:
+                return self._named(fold_model), f"{kept}: the refit's {why}"
+        if refit > validated + tolerance:
+            return self._named(fold_model), (
+                f"{kept}: the refit's free run over the whole record is worse (RRSE "
+                f"{refit:.3g}) than the validated model's ({validated:.3g}) beyond the "
+                f"validation's spread ({tolerance:.2g})"
+            )
         return model, "whole record"
 
     def _named(self, model: Narx) -> Narx:
@@ -955,31 +1187,51 @@ class NarxSearch:
         if not hasattr(self, "results_"):
             self._check_fitted()
         best = getattr(self, "best_result_", None)
+        check = getattr(self, "refit_check_", None)
+        checked = (
+            f"; whole-record free-run RRSE: refit {check['refit']:.3g}, validated "
+            f"{check['validated']:.3g}"
+            if check and self.refit_ == "whole record"
+            else ""
+        )
         chosen = (
-            f"chosen: {best.candidate.label()} (refit: {self.refit_})"
+            f"chosen: {best.candidate.label()} (refit: {self.refit_}{checked})"
             if hasattr(self, "best_")
             else "no model chosen (none validated)"
         )
         rank = {"ok": 0, "rejected": 1, "failed": 2, "skipped": 3}
         rows = sorted(self.results_, key=lambda r: (rank[r.status], r.score, r.n_terms))
         shown = rows if limit is None else rows[:limit]
+        widened = sum(r.origin == "widening" for r in self.results_)
+        baselines = sum(r.origin == "baseline" for r in self.results_)
+        used = (
+            f"{self.search_time_:.1f} s (no budget)"
+            if self.budget is None
+            else f"{self.search_time_:.1f} s of the {self.budget:g} s budget"
+        )
+        folds = getattr(self, "n_folds_", None)
         head = (
-            f"NarxSearch: {len(self.results_)} candidates in {self.search_time_:.1f} s "
-            f"(budget {'none' if self.budget is None else f'{self.budget:g} s'}); "
-            f"{sum(r.status == 'ok' for r in rows)} validated, {chosen}"
+            f"NarxSearch: {len(self.results_)} candidates ({baselines} baselines, {widened} from "
+            f"widening) in {used}; {sum(r.status == 'ok' for r in rows)} validated"
+            + (f" on {folds} fold(s) x {self.n_blocks} block(s)" if folds else "")
+            + f"; {chosen}"
         )
         lines = [
             head,
-            f"{'':2}{'candidate':<58} {'terms':>6} {'val RRSE':>9} {'1-step':>8} {'s':>6}  status",
+            f"{'':2}{'candidate':<58} {'terms':>6} {'val RRSE':>9} {'spread':>7} {'1-step':>8} "
+            f"{'s':>6}  status",
         ]
         for r in shown:
             mark = "*" if r is best and hasattr(self, "best_") else " "
             score = f"{r.score:.4g}" if math.isfinite(r.score) else "-"
+            spread = f"{r.spread:.2g}" if math.isfinite(r.spread) else "-"
             one = f"{r.one_step:.3g}" if math.isfinite(r.one_step) else "-"
             status = r.status + (f": {r.reason}" if r.reason else "")
+            if r.origin != "grid":
+                status += f" ({r.origin})"
             lines.append(
-                f"{mark} {r.candidate.label():<58} {r.n_terms:>6} {score:>9} {one:>8} "
-                f"{r.fit_time:>6.2f}  {status}"
+                f"{mark} {r.candidate.label():<58} {r.n_terms:>6} {score:>9} {spread:>7} "
+                f"{one:>8} {r.fit_time:>6.2f}  {status}"
             )
         if len(shown) < len(rows):
             lines.append(f"  ... {len(rows) - len(shown)} more")
@@ -1045,5 +1297,45 @@ def _white_like(u: np.ndarray, rng: np.random.Generator) -> np.ndarray:
                 sos = signal.butter(4, hi, output="sos")
             e = signal.sosfilt(sos, e)
         e = e[512:]
+        out[:, j] = mean + std * (e - e.mean()) / e.std()
+    return out
+
+
+def _pick(ok: list[CandidateResult]) -> CandidateResult:
+    """The choice among validated candidates: the lowest score; scores within :data:`_TIE` of
+    it are ties, broken by the spread (the steadiest within 10 % or the tie resolution of the
+    smallest spread), then by fewer terms, then by the simpler fit."""
+    low = min(r.score for r in ok)
+    tied = [r for r in ok if r.score <= low * (1 + _TIE)]
+    calm = min(r.spread for r in tied)
+    steady = [r for r in tied if r.spread <= 1.1 * calm + _TIE * low]
+    return min(steady, key=lambda r: (r.n_terms, *_simplicity(r.candidate), r.score))
+
+
+def _diverges(model: Narx, stress: tuple[str, np.ndarray]) -> str | None:
+    """Why ``model``'s free run from rest on the stress input diverges (None: it is bounded)."""
+    what, u = stress
+    try:
+        model.simulate(u)
+    except SimulationDivergedError as exc:
+        return f"free run diverges on {what} (sample {exc.sample})"
+    return None
+
+
+def _spectrum_like(u: np.ndarray, n: int, rng: np.random.Generator) -> np.ndarray:
+    """``n`` samples of Gaussian noise per channel with ``u``'s mean, RMS about the mean and
+    power spectrum shape (Welch, interpolated onto the longer record's frequency lines)."""
+    N, nu = u.shape
+    out = np.empty((n, nu))
+    freqs = np.fft.rfftfreq(n)
+    for j in range(nu):
+        x = u[:, j]
+        mean, std = float(x.mean()), float(x.std())
+        if std == 0:
+            out[:, j] = mean
+            continue
+        f, p = signal.welch(x - mean, nperseg=min(1024, N))
+        shape = np.sqrt(np.interp(freqs, f, p))
+        e = np.fft.irfft(np.fft.rfft(rng.standard_normal(n)) * shape, n)
         out[:, j] = mean + std * (e - e.mean()) / e.std()
     return out

@@ -93,7 +93,12 @@ def _search_row(report: Report, ds: DataSet, prob: Problem, quick: bool) -> None
     fig = ds.figure()
     tried = len(search.results_)
     ok = sum(r.status == "ok" for r in search.results_)
-    note = f"{tried} candidates, {ok} validated, refit: {search.refit_}"
+    widened = sum(r.origin == "widening" for r in search.results_)
+    note = (
+        f"{tried} candidates ({widened} from widening), {ok} validated on "
+        f"{search.n_folds_} fold(s); budget used {search.search_time_:.1f} of {budget:g} s; "
+        f"refit: {search.refit_}"
+    )
     report.rows.append(
         Row(
             ds.name,
