@@ -78,7 +78,10 @@ Widening
 Choice and refit
     The best candidate is the lowest score; scores within 1 % of it are ties, broken by the
     spread (the steadiest), then by fewer terms, then by the simpler fit (least squares before
-    simulation focus, all terms before FROLS before SEMP). It is refitted on the whole record,
+    simulation focus, all terms before FROLS before SEMP). A candidate the widening found is
+    chosen only if it beats the best of the others by more than that one's spread (the
+    widening looks where the validation scored well: a guard against choosing validation
+    noise). The choice is refitted on the whole record,
     and the refit is **checked** as the candidate was: its free run over the whole record (from
     its first ``init_window`` measured outputs) must stay bounded and be no worse than the
     validated model's over the same record beyond the validation's spread (its standard error,
@@ -1302,9 +1305,24 @@ def _white_like(u: np.ndarray, rng: np.random.Generator) -> np.ndarray:
 
 
 def _pick(ok: list[CandidateResult]) -> CandidateResult:
-    """The choice among validated candidates: the lowest score; scores within :data:`_TIE` of
-    it are ties, broken by the spread (the steadiest within 10 % or the tie resolution of the
-    smallest spread), then by fewer terms, then by the simpler fit."""
+    """The choice among validated candidates (:func:`_best_of`), where a candidate the
+    widening found must beat the best of the others by more than that one's spread: the
+    widening looks where the validation scored well, and what it finds by looking there is
+    chosen only when its advantage is more than the validation's block-to-block variation
+    (measured on the Cascaded Tanks record, 1,024 samples: a widened candidate validating 28 %
+    better tested 21 % worse)."""
+    searched = [r for r in ok if r.origin != "widening"]
+    widened = [r for r in ok if r.origin == "widening"]
+    if not searched or not widened:
+        return _best_of(searched or widened)
+    best, found = _best_of(searched), _best_of(widened)
+    return found if found.score < best.score - best.spread else best
+
+
+def _best_of(ok: list[CandidateResult]) -> CandidateResult:
+    """The lowest score; scores within :data:`_TIE` of it are ties, broken by the spread (the
+    steadiest within 10 % or the tie resolution of the smallest spread), then by fewer terms,
+    then by the simpler fit."""
     low = min(r.score for r in ok)
     tied = [r for r in ok if r.score <= low * (1 + _TIE)]
     calm = min(r.spread for r in tied)
