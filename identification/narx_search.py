@@ -148,6 +148,10 @@ _TIE = 1e-2
 #: longer fits in the budget (measured on F-16: a cut-short SEMP ended 2 s past its deadline)
 _FIT_SLACK = 0.05
 _COST_RANK = {"prediction": 0, "simulation": 1, "all": 0, "frols": 1}
+#: fraction of the budget the reserve keeps for the choice's own free runs (the shortlist's
+#: longer input, the refit's whole-record and stress runs) besides the refit: without it a
+#: search that used its budget to the end kept the training-part model for lack of 0.2 s
+_CHOICE_SHARE = 0.03
 #: the shortlist's stability margin: a free run on an input this many times longer than the
 #: training part (its spectrum and level), at most :data:`_LONG_MAX` samples
 _LONG_FACTOR = 4
@@ -968,13 +972,15 @@ class NarxSearch:
 
     def _reserve(self) -> float:
         """Time kept for the final refit: the best candidate so far's fit time, scaled from its
-        training part to the whole record (plus 20 %), at most a quarter of the budget (a
+        training parts to the whole record (plus 20 %), and :data:`_CHOICE_SHARE` of the budget
+        for the choice's checks, at most a quarter of the budget (a
         refit that does not fit in what is left is skipped: see ``refit_``)."""
         ok = [r for r in getattr(self, "results_", []) if r.status == "ok"]
         if not ok or self.budget is None:
             return 0.0
         best = min(ok, key=lambda r: r.score)
-        return min(1.2 * best.fit_time * self._refit_scale, 0.25 * self.budget)
+        refit = 1.2 * best.fit_time * self._refit_scale
+        return min(refit + _CHOICE_SHARE * self.budget, 0.25 * self.budget)
 
     def _record(self, result: CandidateResult) -> CandidateResult:
         self.results_.append(result)
@@ -1179,8 +1185,9 @@ class NarxSearch:
             raise IdentificationError("this NarxSearch is not fitted yet; call fit(u, y)")
 
     def report(self, *, limit: int | None = None) -> str:
-        """The candidates as a text table, best validation score first, then the rejected,
-        failed and skipped ones with their reasons (also after a search that found no model).
+        """The candidates as a text table: the chosen one first, then by validation score, then
+        the rejected, failed and skipped ones with their reasons (also after a search that
+        found no model).
 
         Parameters
         ----------
@@ -1203,7 +1210,10 @@ class NarxSearch:
             else "no model chosen (none validated)"
         )
         rank = {"ok": 0, "rejected": 1, "failed": 2, "skipped": 3}
-        rows = sorted(self.results_, key=lambda r: (rank[r.status], r.score, r.n_terms))
+        chosen_first = best if hasattr(self, "best_") else None
+        rows = sorted(
+            self.results_, key=lambda r: (r is not chosen_first, rank[r.status], r.score, r.n_terms)
+        )
         shown = rows if limit is None else rows[:limit]
         widened = sum(r.origin == "widening" for r in self.results_)
         baselines = sum(r.origin == "baseline" for r in self.results_)
