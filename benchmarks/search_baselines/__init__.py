@@ -44,7 +44,7 @@ Protocol (the same for every record)
     * NarxSearch: ``identification.NarxSearch(budget=--budget, seed=0).fit(u_train, y_train)``,
       its default grid (orders capped at the measured window); the public sets get their own
       ``DataSet.search.grid`` and init window, as ``benchmarks/public_data`` runs them
-      (``--default-grid``: the default grid there too). The table says which.
+      (``--default-grid``: the default grid there too). The lines under the table say which.
     * FROLS + BIC (:mod:`.baselines`): SysIdentPy 0.9 ``FROLS(order_selection=True,
       info_criteria="bic")``, Polynomial basis, least squares, where sysidentpy is importable
       (``pip install -e .[bench]``); else (or ``--no-sysidentpy``) vrig's ``Narx(na=n, nb=n,

@@ -72,7 +72,8 @@ def search_arguments(rec: Record, budget: float, default_grid: bool) -> tuple[di
     default grid with its orders capped at the record's ``max_lag``."""
     if rec.search_grid is not None and not default_grid:
         kw = dict(rec.search_grid, init_window=rec.init_window)
-        return kw, f"the data set's grid (benchmarks/public_data DataSet.search; {rec.grid_note})"
+        note = rec.grid_note.removeprefix("grid: ")
+        return kw, f"the data set's own (benchmarks/public_data DataSet.search: {note})"
     kw = {} if rec.init_window is None else {"init_window": rec.init_window}
     default = NarxSearch(budget).orders
     orders = tuple(o for o in default if _largest_lag(o) <= rec.max_lag)
@@ -100,7 +101,7 @@ def score_on_test(rec: Record, model: FreeRun) -> tuple[float, float | None, str
 
 def _search_row(rec: Record, budget: float, default_grid: bool, say) -> tuple[Row, dict]:
     kw, grid = search_arguments(rec, budget, default_grid)
-    say(f"NarxSearch ({budget:g} s budget; {grid.split(' (')[0].split(':')[0]}) ...")
+    say(f"NarxSearch ({budget:g} s budget; grid: {grid.split(' (')[0].split(',')[0]}) ...")
     info = {"budget_s": budget, "grid": grid, "arguments": {k: repr(v) for k, v in kw.items()}}
     t0 = time.perf_counter()
     search = NarxSearch(budget, seed=0, **kw)
