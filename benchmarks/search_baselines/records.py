@@ -175,6 +175,7 @@ def split_record(
     cut = round(n * train_fraction)
     test = ScoredPart(u, y, cut, n, init, "init")
     split = f"train 0:{cut}, test {cut}:{n} (free run from its first {init} measured outputs)"
+    split += "" if ts is None else f"; sample interval {ts:g} s"
     return Record(name, key, u[:cut], y[:cut], test, init, split, source, ts=ts)
 
 
