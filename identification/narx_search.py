@@ -64,7 +64,9 @@ Search order and time budget
     longer than predicted is held to the budget by its fit's deadline (``Narx.fit(deadline=...)``:
     the refinement stops iterating, free-run selection plans for the time left), set 5 % of the
     budget before that reserve (a fit cut short still finishes its step and is validated). The budget
-    bounds the wall time of :meth:`NarxSearch.fit`; ``budget=None`` tries every candidate to
+    bounds the wall time of :meth:`NarxSearch.fit` after the compiled kernels' one-time load
+    (``warm_up_time_``: about half a minute with a cold numba cache, once per environment, which
+    would otherwise eat a short budget whole); ``budget=None`` tries every candidate to
     the end. With ``budget=None`` everything is deterministic under ``seed``; with a budget, the
     candidates tried (and a fit cut short) depend on the machine's speed.
 
@@ -527,7 +529,11 @@ class NarxSearch:
     n_folds_ : int
         Validation folds used (``folds``, or what ``"auto"`` chose for the record).
     search_time_ : float
-        Wall time of :meth:`fit`, seconds: the budget used.
+        Wall time of the search, seconds: the budget used (after the compiled kernels' one-time
+        load, ``warm_up_time_``, which the budget does not count: with a cold numba cache it
+        is about half a minute, once per environment).
+    warm_up_time_ : float
+        Seconds spent loading (or compiling) the kernels before the search's clock started.
 
     Examples
     --------
@@ -657,7 +663,6 @@ class NarxSearch:
             when no candidate gives a model whose free runs stay bounded (``results_`` says why
             each was rejected).
         """
-        t0 = time.perf_counter()
         u = as_signal(u, "u")
         y = as_signal(y, "y")
         check_same_length(u, y, "u", "y")
@@ -675,10 +680,13 @@ class NarxSearch:
             "refit_check_",
         ):  # a refit that fails keeps no old model
             self.__dict__.pop(stale, None)
+        self._prepare(u, y)
+        loading = time.perf_counter()
+        _warm_up(u, y)  # before the clock starts: a cold cache compiles for half a minute
+        t0 = time.perf_counter()
+        self.warm_up_time_ = t0 - loading
         self._t0 = t0
         self._deadline = None if self.budget is None else t0 + self.budget
-        self._prepare(u, y)
-        _warm_up(u, y)
         self.results_ = []
         self._rates: dict[tuple, list[tuple[float, float]]] = {}
         self._kept: dict[tuple, int] = {}
@@ -1222,6 +1230,8 @@ class NarxSearch:
             if self.budget is None
             else f"{self.search_time_:.1f} s of the {self.budget:g} s budget"
         )
+        if getattr(self, "warm_up_time_", 0.0) > 1.0:
+            used += f" (after {self.warm_up_time_:.0f} s loading the compiled kernels)"
         folds = getattr(self, "n_folds_", None)
         head = (
             f"NarxSearch: {len(self.results_)} candidates ({baselines} baselines, {widened} from "
