@@ -33,6 +33,7 @@ from matplotlib.figure import Figure
 from scipy import signal
 
 from .files import atomic_write
+from .percent import percent
 from .timehistory import TimeHistory
 
 __all__ = [
@@ -448,7 +449,8 @@ def _drive_axes(ax, drive: TimeHistory, k: int, c, trip) -> None:
     peak = float(np.abs(finite).max()) if finite.size else 0.0
     title = (
         f"{drive.names[k]}: peak {peak:.4g} {unit} = "
-        f"{100 * peak / c.full_scale:.1f} % of full scale ±{c.full_scale:g} {c.unit}"
+        f"{percent(peak / c.full_scale, threshold=1.0, decimals=1)} of full scale "
+        f"±{c.full_scale:g} {c.unit}"
     )
     limits = [(c.full_scale, c.unit, "full scale", _LIMIT_COLOR, "--")]
     ours = trip is not None and getattr(trip, "channel", None) == c.name

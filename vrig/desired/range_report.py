@@ -9,6 +9,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..percent import percent
 from ..timehistory import TimeHistory
 from ._checks import _check_th
 
@@ -51,9 +52,9 @@ class RangeRow:
     def describe(self) -> str:
         """One line: the channel, its peak against the range and the samples beyond it."""
         return (
-            f"{self.name} peaks at {self.peak:.4g} {self.unit}, {100 * self.peak_fraction:.1f} % "
+            f"{self.name} peaks at {self.peak:.4g} {self.unit}, {_pct(self.peak_fraction, 1.0)} "
             f"of the transducer range ±{self.full_scale:g} {self.unit}; "
-            f"{100 * self.fraction_beyond:.2f} % of the samples lie beyond it"
+            f"{_pct(self.fraction_beyond, 0.0, decimals=2)} of the samples lie beyond it"
         )
 
 
@@ -82,8 +83,8 @@ class RangeReport:
                 r.name,
                 f"{r.peak:.4g} {r.unit}",
                 f"±{r.full_scale:.4g} {r.unit}",
-                _pct(r.peak_fraction),
-                _pct(r.fraction_beyond) + ("  EXCEEDS" if r.exceeds else ""),
+                _pct(r.peak_fraction, 1.0),
+                _pct(r.fraction_beyond, 0.0) + ("  EXCEEDS" if r.exceeds else ""),
             ]
             for r in self.rows
         ]
@@ -146,8 +147,17 @@ def range_report(rig, desired: TimeHistory) -> RangeReport:
     return RangeReport(tuple(rows))
 
 
-def _pct(x) -> str:
-    return "-" if x is None or not math.isfinite(x) else f"{100 * x:.1f} %"
+def _pct(x, threshold: float | None = None, *, decimals: int = 1) -> str:
+    """A fraction as ``"12.3 %"`` (``"-"``: none or not finite); with ``threshold`` (a fraction:
+    1.0 the limit, 0.0 none beyond it) never rounded onto or across it
+    (:func:`vrig.percent.percent`)."""
+    if x is None or not math.isfinite(x):
+        return "-"
+    return (
+        f"{100 * x:.{decimals}f} %"
+        if threshold is None
+        else percent(x, threshold=threshold, decimals=decimals)
+    )
 
 
 def _columns(rows: list[list[str]]) -> list[str]:

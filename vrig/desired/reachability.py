@@ -385,7 +385,7 @@ class TargetCheck:
                 else [
                     f"{d.needed_peak_velocity:.4g} {d.unit}/s",
                     f"{d.velocity_limit:.4g} {d.unit}/s",
-                    _pct(d.fraction_of_velocity_limit),
+                    _pct(d.fraction_of_velocity_limit, 1.0),
                 ]
             )
             drives.append(
@@ -393,7 +393,7 @@ class TargetCheck:
                     d.name,
                     f"{d.needed_peak:.4g} {d.unit}",
                     f"{d.limit:.4g} {d.unit} ({d.limit_kind})",
-                    _pct(d.fraction_of_limit),
+                    _pct(d.fraction_of_limit, 1.0),
                     *vel,
                 ]
             )

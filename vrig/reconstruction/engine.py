@@ -15,6 +15,7 @@ from scipy.signal import windows
 from identification.errors import SimulationDivergedError
 
 from ..errors import RigLimitError, SimulationInstabilityError
+from ..percent import percent
 from ..processing import band_gains, check_band, decimate, gprepro, identification_band
 from ..progress import status
 from ..rigs.limits import check_drive_limits
@@ -73,18 +74,61 @@ def _check_content(desired: TimeHistory, desres: TimeHistory, band) -> None:
 
 
 def _describe(method) -> str:
-    """``"ARX(4)"``, ``"NARX(4, degree 2)"``, ``"FRF"``, ... for status lines."""
+    """``"ARX(4)"``, ``"NARX(4, degree 2)"``, ``"FRF"``, ... for status lines: the method as
+    configured (a searched NARX: ``"NARX structure search (degree up to 2)"``); the model a fit
+    chose is :func:`_fitted_structure`'s."""
     name = str(getattr(method, "name", type(method).__name__)).upper()
     order, degree = getattr(method, "order", None), getattr(method, "degree", None)
+    if getattr(method, "search", False) is True:
+        return f"{name} structure search" + (f" (degree up to {degree})" if degree else "")
     if order is None:
         return name
     return f"{name}({order}" + (f", degree {degree}" if degree else "") + ")"
 
 
+def _fitted_structure(method) -> str:
+    """The structure of the model ``method``'s last fit chose: after a structure search the
+    chosen candidate (``"NARX order 3, degree 2 input-polynomial, LS, FROLS, chosen by the
+    structure search"``), else the method as configured (:func:`_describe`; its fit has that
+    structure); a split names its bands'."""
+    low, high = getattr(method, "low", None), getattr(method, "high", None)
+    if low is not None and high is not None:
+        return f"low band {_fitted_structure(low)}, high band {_fitted_structure(high)}"
+    search = getattr(getattr(method, "inverse", None), "search_", None)
+    if search is None:
+        return _describe(method)
+    chosen = search.best_result_.candidate
+    name = "NARX" if chosen.degree > 1 else "ARX"
+    return f"{name} {chosen.label()}, chosen by the structure search"
+
+
+def _term_degree(model) -> int:
+    """The largest number of non-constant factors of any term of a fitted Narx / Arx (1: a
+    linear model, whatever degree its structure allowed: a term selection may keep no product)."""
+    return max(
+        (int(np.max(np.count_nonzero(ch.terms, axis=1), initial=0)) for ch in model.channels_),
+        default=0,
+    )
+
+
+def _fitted_degree(method) -> int:
+    """The polynomial degree of ``method``'s fitted inverse: the largest term degree of its
+    model (an error-signal model's two parts), so a search that chose a linear candidate, or a
+    term selection that kept no product, gives 1; a method without a fitted polynomial model
+    (FRF, before a fit, another kind of method object) its configured ``degree`` (none: 1)."""
+    model = getattr(getattr(method, "inverse", None), "model", None)
+    parts = [getattr(model, "linear", None), getattr(model, "nonlinear", None)]
+    parts = [p for p in (parts if parts[0] is not None else [model]) if p is not None]
+    if parts and all(hasattr(p, "channels_") for p in parts):
+        return max(_term_degree(p) for p in parts)
+    return int(getattr(method, "degree", None) or 1)
+
+
 def _is_polynomial(method) -> bool:
-    """Whether ``method`` (or a band of a split) is a polynomial inverse (degree >= 2)."""
+    """Whether ``method``'s fitted inverse (or a band's of a split) is polynomial: a term of
+    degree >= 2 (:func:`_fitted_degree`; a linear inverse extrapolates linearly)."""
     parts = [getattr(method, "low", None), getattr(method, "high", None), method]
-    return any((getattr(p, "degree", None) or 1) > 1 for p in parts if p is not None)
+    return any(_fitted_degree(p) > 1 for p in parts if p is not None)
 
 
 def _extrapolation_note(method, peak_ratio, names) -> str | None:
@@ -92,16 +136,19 @@ def _extrapolation_note(method, peak_ratio, names) -> str | None:
     the inverse is then evaluated outside the amplitude range it was fitted on, where its
     polynomial terms extrapolate (a quadratic term at 3x the range is 9x), and its drive can
     overshoot - the user's-rig NARX of issue 25 stopped at IT01 on a drive beyond full scale
-    for it, where the linear inverses ran (their extrapolation is linear). None otherwise."""
+    for it, where the linear inverses ran (their extrapolation is linear). None otherwise.
+    ``method`` is the fitted one: the note names the structure the fit chose
+    (:func:`_fitted_structure`) and the peak ratio is never printed as 100 % (:func:`percent`)."""
     ratio = np.asarray(peak_ratio, dtype=float)
     if not _is_polynomial(method) or not np.all(np.isfinite(ratio)) or ratio.min() >= 1.0:
         return None
     k = int(np.argmin(ratio))
     return (
-        f"note: the polynomial inverse ({_describe(method)}) is identified on responses that "
-        f"peak at {100 * ratio[k]:.0f} % of the desired response's peak ({names[k]}): beyond "
-        "that its polynomial extrapolates and its drive may overshoot; identify matched to the "
-        "target (id_match=True, vrig reconstruct --id-match) or at a higher id_rms"
+        f"note: the polynomial inverse ({_fitted_structure(method)}) is identified on responses "
+        f"that peak at {percent(ratio[k], threshold=1.0)} of the desired response's peak "
+        f"({names[k]}): beyond that its polynomial extrapolates and its drive may overshoot; "
+        "identify matched to the target (id_match=True, vrig reconstruct --id-match) or at a "
+        "higher id_rms"
     )
 
 
@@ -245,6 +292,11 @@ class DriveIteration:
             iddrv, idres = self._identify_default()
         self.id_drive, self.id_response = iddrv, idres
         self._fit(iddrv, idres)
+        if not self.settings.id_match:  # after the fit: the note names the model it chose
+            note = _extrapolation_note(self.method, self.id_report["peak_ratio"], self.names_out)
+            if note:
+                self.id_report["extrapolation"] = note
+                status(note)
 
     def _identify_default(self) -> tuple[TimeHistory, TimeHistory]:
         """The default IDDRV and IDRES (see :meth:`identify`; the one identification drive,
@@ -265,10 +317,6 @@ class DriveIteration:
         }
         if attempt:
             self.id_report["reason"] += f", halved {attempt}x after interlock trips ({last_trip})"
-        note = _extrapolation_note(self.method, self.id_report["peak_ratio"], self.names_out)
-        if note:
-            self.id_report["extrapolation"] = note
-            status(note)
         return iddrv, idres
 
     def reidentify(self, drive: TimeHistory, raw: TimeHistory) -> None:

@@ -43,6 +43,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..errors import RigLimitError
+from ..percent import percent
 from ..processing import gprepro
 from ..progress import status
 from ..signals import random_drive, triangular_psd
@@ -272,8 +273,8 @@ def _level(engine, unit: TimeHistory, record: MatchedIdentification):
     scale, runs, notes, outcome = min(1.0, cap), {}, [], ""
     if cap < 1:  # said before anything is played
         notes.append(
-            f"the linear match needs {_percent(peak, rig).max():.3g} % of full scale peak: "
-            f"held at {100 * PEAK_MARGIN:g} %"
+            f"the linear match needs {percent(np.max(peak / full), threshold=PEAK_MARGIN)} of "
+            f"full scale peak: held at {100 * PEAK_MARGIN:g} %"
         )
     for _ in range(MAX_PLAYS):
         play = {
