@@ -188,7 +188,10 @@ class BallAndBeam:
         True ball position, m (no sensor noise).
     ts : float
         Sample interval, s.
-    input_names, output_names : tuple of str
+    input_names : tuple of str
+        The input's name and unit.
+    output_names : tuple of str
+        The output's name and unit.
     """
 
     u: np.ndarray
