@@ -38,8 +38,12 @@ Rejection (a candidate is never returned when)
 Baselines (``baselines=True``, the default)
     Whatever the grid, the field holds ARX (least squares) and linear output-error
     (simulation focus) models of every searched order and FROLS terms sized by ``criterion``
-    (SysIdentPy's default method) for every structure: the search's validation score is never
-    worse than theirs, by construction. Their rows say ``(baseline)``.
+    (SysIdentPy's default method) for every structure; with ``lags="text"`` also SysIdentPy's
+    own candidates, input lags from 1 (ARX and FROLS of degree 1, FROLS of degree 2, and their
+    linear output-error fit, for every searched order): on a record taken in closed loop the
+    current input holds the controller's instantaneous reaction to the output, which a free
+    run cannot use. The search's validation score is never worse than theirs, by
+    construction. Their rows say ``(baseline)``.
 
 Search order and time budget
     Stage 1 fits every structure (order x degree x kind x functions) by least squares, with all
@@ -212,9 +216,9 @@ class SearchCandidate:
 
     @property
     def entry(self) -> tuple:
-        """What stage 2 ranks and refines: the structure and the selection size (``None``: all
-        terms, or sized by the criterion)."""
-        return (*self.structure, self.n_terms)
+        """What stage 2 ranks and refines: the structure, the selection size (``None``: all
+        terms, or sized by the criterion) and the lag convention."""
+        return (*self.structure, self.n_terms, self.lags)
 
     @property
     def options(self) -> tuple[str, str]:
@@ -488,8 +492,9 @@ class NarxSearch:
     baselines : bool
         Always put the baselines in the field (default True): ARX (least squares) and linear
         output-error (simulation focus) models of every searched order and FROLS terms sized by
-        ``criterion`` of every structure, whatever ``degrees``, ``focus`` and ``selection`` say;
-        so the search's validation score is never worse than the best linear model's or
+        ``criterion`` of every structure, whatever ``degrees``, ``focus`` and ``selection`` say,
+        and (``lags="text"``) SysIdentPy's candidates with input lags from 1 (see the module
+        doc); so the search's validation score is never worse than the best linear model's or
         FROLS's (SysIdentPy's default method). False: exactly the grid given.
     init_window : int, optional
         Measured samples that start each validation free run (default: the largest order; at
@@ -625,10 +630,27 @@ class NarxSearch:
             out.append((n, d, "full" if d == 1 else kind, funs))
         return list(dict.fromkeys(out))
 
+    def _other_lag_baselines(self) -> list[SearchCandidate]:
+        """With ``lags="text"`` and ``baselines``: SysIdentPy's own candidates, input lags from
+        1 (no current input), for every searched order: ARX and FROLS of degree 1, FROLS of
+        degree 2 (its default basis). On a record taken in closed loop the current input holds
+        the controller's instantaneous reaction to the output (measured on the closed-loop ball
+        and beam: FROLS without it tested up to 6x better than the searched models with it)."""
+        if not self.baselines or self.lags != "text":
+            return []
+        out = []
+        for n in self.orders:
+            out.append(SearchCandidate(n, 1, "full", None, "prediction", "all", "sysidentpy"))
+            for d in (1, 2):
+                out.append(SearchCandidate(n, d, "full", None, "prediction", "frols", "sysidentpy"))
+        return out
+
     def _is_baseline(self, c: SearchCandidate) -> bool:
         """Whether ``c`` is in the field only because of ``baselines``."""
         if not self.baselines:
             return False
+        if c.lags != self.lags:
+            return True
         linear = c.degree == 1 and c.functions is None and c.n_terms is None
         in_grid = (
             (c.degree in self.degrees and (c.functions in self.functions))
@@ -783,6 +805,8 @@ class NarxSearch:
             if self.baselines:  # FROLS sized by the criterion: SysIdentPy's default method
                 c = SearchCandidate(*s, "prediction", "frols", self.lags, None)
                 size.setdefault(c, self._terms(c))
+        for c in self._other_lag_baselines():
+            size.setdefault(c, self._terms(c))
         cands = list(size)
         stop = None if self._deadline is None else self._t0 + _STAGE1_SHARE * self.budget
         self._deferred = []
@@ -799,8 +823,7 @@ class NarxSearch:
         ranked = self._ranked_structures()
         if not ranked or not any(self._entry_candidates(e) for e in ranked):
             return
-        lags = self.lags
-        size = {e: self._terms(SearchCandidate(*e[:4], "prediction", "all", lags)) for e in ranked}
+        size = {e: self._terms(SearchCandidate(*e[:4], "prediction", "all", e[5])) for e in ranked}
         # the linear output-error baselines first (cheap: a few parameters), best-ranked first
         first = [c for e in ranked for c in self._entry_candidates(e) if self._is_baseline(c)]
         smallest = min(ranked, key=lambda e: (size[e], ranked.index(e)))
@@ -819,17 +842,19 @@ class NarxSearch:
     def _entry_candidates(self, entry: tuple) -> list[SearchCandidate]:
         """Stage 2's candidates of a ranked entry: every expensive option of a structure (its
         selections sized by the criterion), or the selections of a sized entry at that size."""
-        *s, k = entry
+        *s, k, lags = entry
         opts = self._stage2_options()
         linear = s[1] == 1 and s[3] is None and k is None
         if self.baselines and linear and ("simulation", "all") not in opts:
             opts = [("simulation", "all"), *opts]  # the linear output-error baseline
+        if lags != self.lags:  # a baseline of the other lag convention: its linear OE only
+            opts = [("simulation", "all")] if linear else []
         if k is not None:
             opts = [o for o in opts if o[1] != "all"]
             sizes = [k]
         else:
             sizes = [None]
-        return [SearchCandidate(*s, *o, self.lags, n) for o in opts for n in sizes]
+        return [SearchCandidate(*s, *o, lags, n) for o in opts for n in sizes]
 
     def _ranked_structures(self) -> list[tuple]:
         """Structures in the order stage 2 refines them: the best by stage-1 validation score

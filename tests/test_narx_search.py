@@ -305,7 +305,10 @@ def test_per_input_lags_reach_a_late_input():
     ).fit(u, y)  # fmt: skip
     assert search.best_result_.candidate.order == (1, (1, 5))
     assert search.best_result_.score < 1e-6
-    assert "u lags 0..1/0..5" in search.best_result_.candidate.label()
+    assert "u2(t-5)" in search.best_.term_names()[0]  # per-input lags reach it (either convention)
+    text = NarxSearch(budget=None, orders=((1, (1, 5)),), degrees=(1,), focus=("prediction",),
+                      selection=("all",), init_window=5, baselines=False).fit(u, y)  # fmt: skip
+    assert "u lags 0..1/0..5" in text.best_result_.candidate.label()
     with pytest.raises(IdentificationError, match="per-input lags, but u has 2 inputs"):
         NarxSearch(budget=None, orders=((1, (1, 2, 3)),), degrees=(1,)).fit(u, y)
 
@@ -322,7 +325,9 @@ def test_stage_one_leaves_time_for_stage_two(monkeypatch):
     cheap = [r.candidate.options in {("prediction", "all"), ("prediction", "frols")}
              for r in search.results_ if r.origin != "widening"]  # fmt: skip
     assert cheap[0] and not cheap[1]  # one least-squares fit, then stage 2
-    assert sum(cheap) == 2 * 4  # every structure's LS and FROLS fits still tried
+    # every structure's LS and FROLS fits still tried, and per order the baselines without
+    # the current input (ARX, FROLS of degree 1 and 2)
+    assert sum(cheap) == 2 * 4 + 2 * 3
 
 
 # --------------------------------------------------------------- issue 34: checked, predictive
