@@ -558,7 +558,7 @@ def test_a_searched_narx_method_reports_its_search():
     def th(x, name):
         return vrig.TimeHistory(x[:, None], fs, [name], ["m"])
 
-    method = InverseNarx(2, 2, search=True, budget=20.0)
+    method = InverseNarx(2, 2, search=True, budget=5.0)
     assert method.options()["search"] is True
     method.identify(th(d_id, "drive"), th(plant(d_id), "load"))
     report = method.search_report()
@@ -568,7 +568,7 @@ def test_a_searched_narx_method_reports_its_search():
     assert err < 1e-3, (err, method.describe())
     # the searched inverse has the fitted inverse's model class: no constant term, even on a
     # response with a mean (NarxSearch's own default has one)
-    offset = InverseNarx(2, 2, search=True, budget=20.0)
+    offset = InverseNarx(2, 2, search=True, budget=5.0)
     offset.identify(th(d_id, "drive"), th(plant(d_id) + 0.2, "load"))
     assert "1" not in offset.inverse.model.term_names()[0]
     with pytest.raises(ValueError, match="search must be True or False"):
