@@ -257,3 +257,51 @@ def test_the_cli_refuses_a_missing_law_file_as_a_usage_error(tmp_path, capsys):
     err = capsys.readouterr().err
     assert err.startswith("vrig reconstruct: ") and "nowhere.py" in err and "no such file" in err
     assert not (tmp_path / "o").exists()
+
+
+# ----------------------------------------------- issue 35, item 3: the law's options and errors
+_RAISING_LAW = """
+def law(sample_rate, specification_signals, frequency_spacing, transfer_function,
+        noise_response_cpsd, noise_reference_cpsd, sysid_response_cpsd, sysid_reference_cpsd,
+        multiple_coherence, frames, total_frames, output_oversample_factor, extra_parameters,
+        last_excitation_signals, last_response_signals):
+    spacing = sample_rate / frequency_spacing  # the frame length the law was given
+    raise RuntimeError(f"got [{extra_parameters}] nperseg {spacing:g} x{output_oversample_factor}")
+"""
+_RAISING_LINE = 7  # the raise above, counted in the file written below (line 1 is empty)
+
+
+def _cli_run(tmp_path, *extra):
+    from vrig.cli import main
+
+    (tmp_path / "raising.py").write_text(_RAISING_LAW, encoding="utf-8")
+    argv = ["reconstruct", "--rig", "shaker", "--method",
+            f"rattlesnake:{tmp_path / 'raising.py'}:law", "--seconds", "4", "--iterations", "1",
+            "--out", str(tmp_path / "o"), *extra]  # fmt: skip
+    return main(argv)
+
+
+def test_a_law_error_names_the_laws_file_and_line_and_no_option_it_refuses(tmp_path, capsys):
+    """A law that raises: the run fails (exit 1) with the law's own error, its file:line, and
+    no hint about --order (an option a law refuses)."""
+    params = tmp_path / "params.txt"
+    params.write_text("Kp=0.5, rcond=1e-3", encoding="utf-8")
+    code = _cli_run(tmp_path, "--law-parameters", f"@{params}", "--law-nperseg", "128",
+                    "--law-oversample", "2")  # fmt: skip
+    err = capsys.readouterr().err
+    assert code == 7, err  # failed before any iteration: the law computes IT00DRV
+    assert "RuntimeError: got [Kp=0.5, rcond=1e-3] nperseg 128 x2" in err
+    assert f"raising.py:{_RAISING_LINE} in law" in err
+    assert "--order" not in err
+
+
+def test_law_options_are_refused_for_other_methods_and_unreadable_files(tmp_path, capsys):
+    from vrig.cli import main
+
+    argv = ["reconstruct", "--rig", "shaker", "--method", "arx", "--out", str(tmp_path / "a")]
+    assert main([*argv, "--law-parameters", "x"]) == 2
+    assert "--law-parameters applies to --method rattlesnake:FILE.py:NAME only" in (
+        capsys.readouterr().err
+    )
+    assert _cli_run(tmp_path, "--law-parameters", f"@{tmp_path / 'missing.txt'}") == 2
+    assert "cannot read it" in capsys.readouterr().err

@@ -112,6 +112,34 @@ def _parser() -> argparse.ArgumentParser:
     return p
 
 
+_LAW_FLAGS = {
+    "law_parameters": "extra_parameters",
+    "law_nperseg": "nperseg",
+    "law_oversample": "oversample",
+}
+
+
+def _law_options(args) -> dict:
+    """The Rattlesnake law's options given on the command line (``--law-parameters TEXT|@FILE``,
+    ``--law-nperseg``, ``--law-oversample``) as ``RattlesnakeLaw`` keywords; a usage error when
+    they are given to another method or ``@FILE`` cannot be read."""
+    given = {k: getattr(args, k, None) for k in _LAW_FLAGS}
+    given = {k: v for k, v in given.items() if v is not None}
+    if not given:
+        return {}
+    if not str(args.method).startswith("rattlesnake:"):
+        flag = "--" + next(iter(given)).replace("_", "-")
+        raise _UsageError(f"{flag} applies to --method rattlesnake:FILE.py:NAME only")
+    text = given.get("law_parameters")
+    if text is not None and text.startswith("@"):
+        path = Path(text[1:])
+        try:
+            given["law_parameters"] = path.read_text(encoding="utf-8")
+        except (OSError, UnicodeDecodeError) as exc:
+            raise _UsageError(f"--law-parameters @{path}: cannot read it ({exc})") from None
+    return {_LAW_FLAGS[k]: v for k, v in given.items()}
+
+
 def _resolve(args, rig):
     """``reconstruct``'s settings: what the user gave (None where a flag was not given) resolved
     by the one resolver every door uses (:func:`vrig.reconstruction.defaults.resolve`: the rig
@@ -126,6 +154,7 @@ def _resolve(args, rig):
         raise _UsageError(f"--tolerance must be an η0 > 0 [%], got {args.tolerance:g}")
     options = {k: getattr(args, k, None) for k in ("order", "degree", "split_hz", "budget")}
     options["search"] = bool(getattr(args, "search", False))
+    options.update(_law_options(args))
     try:
         given = IterationSettings(
             method=args.method,
@@ -418,6 +447,7 @@ def _run(command: str, func, arg) -> int:
     """Run a command; map every error to one line on stderr and an exit code (module doc)."""
     from .errors import (
         ERRORS,
+        ControlLawError,
         FolderLockedError,
         ResultsFolderError,
         ResultsNotSavedError,
@@ -436,6 +466,8 @@ def _run(command: str, func, arg) -> int:
         return getattr(exc, "code", EXIT_FAILED)
     except ERRORS as exc:  # any other vrig or identification error: the run failed
         hint = " (try a narrower --band, a lower --order or --gain, or a smaller desired response)"
+        if _caused_by(exc, ControlLawError):  # the law's own error: its file and line say it
+            hint = ""
         _say(command, f"failed: {exc}{hint}")
         return EXIT_FAILED
     except OSError as exc:  # e.g. a disk that filled up while the results were written
@@ -482,3 +514,14 @@ def main(argv: list[str] | None = None) -> int:
 
 if __name__ == "__main__":  # pragma: no cover
     sys.exit(main())
+
+
+def _caused_by(exc: BaseException, kind: type) -> bool:
+    """Whether ``exc`` or an exception in its cause chain is a ``kind``."""
+    seen = set()
+    while exc is not None and id(exc) not in seen:
+        if isinstance(exc, kind):
+            return True
+        seen.add(id(exc))
+        exc = exc.__cause__ or exc.__context__
+    return False

@@ -16,6 +16,7 @@ from identification.errors import IdentificationError
 
 __all__ = [
     "ERRORS",
+    "ControlLawError",
     "FileFormatError",
     "FolderLockedError",
     "ReconstructionError",
@@ -116,6 +117,36 @@ class RigParameterError(RigModelError):
     def __init__(self, message: str, key: str = "", value=None, allowed: str = ""):
         super().__init__(message)
         self.key, self.value, self.allowed = key, value, allowed
+
+
+class ControlLawError(VrigError, RuntimeError):
+    """An exception raised inside a user's control law (a Rattlesnake law run as a method).
+
+    The message names the law, the exception and where it was raised in the law's own file
+    (``file:line in function``); the original exception is ``__cause__``. Each parameter is kept
+    as the attribute of the same name.
+
+    Parameters
+    ----------
+    message : str
+        The error message.
+    law : str
+        The law's label (``file.py:name``).
+    where : str
+        ``"path/to/file.py:LINE in FUNCTION"``: the deepest frame of the traceback in the
+        law's file ("" when none is).
+    """
+
+    def __init__(self, message: str, *, law: str = "", where: str = ""):
+        super().__init__(message)
+        self.law, self.where = law, where
+
+    def __reduce__(self):  # picklable (worker processes): the keywords are not in ``args``
+        return _rebuild_control_law_error, (str(self), self.law, self.where)
+
+
+def _rebuild_control_law_error(message: str, law: str, where: str) -> ControlLawError:
+    return ControlLawError(message, law=law, where=where)
 
 
 class ReconstructionError(VrigError, RuntimeError):

@@ -665,6 +665,8 @@ def advice(
     """
     report = getattr(result, "identification", result) or {}
     words = {**asdict(names), "half": f"{gain / 2:g}"}
+    if kind == "law":  # the law's own error: no option of vrig's is to blame
+        return "the control law raised it: fix the law where the message says"
     overshoot = kind in ("refused", "interlock", "diverged") and stage in ("IT00", "after IT00")
     if overshoot and report.get("extrapolation"):
         return (

@@ -30,7 +30,7 @@ class ExitCode(enum.IntEnum):
         1,
         "failed: the rig or the computation of another command (an interlock trip, an unstable "
         "simulation or model); vrig reconstruct: an error of another kind after IT00 (stop kind "
-        "failed); results that could not be written",
+        "failed, or law: a control law raised); results that could not be written",
     )
     BAD_INPUT = (
         2,
@@ -73,6 +73,7 @@ STOP_EXIT = {
     "diverged": ExitCode.STOPPED_DIVERGED,
     "unstable": ExitCode.STOPPED_UNSTABLE,
     "model": ExitCode.STOPPED_UNSTABLE,
+    "law": ExitCode.FAILED,
     "failed": ExitCode.FAILED,
     "interrupted": ExitCode.INTERRUPTED,
 }

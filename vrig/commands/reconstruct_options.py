@@ -135,6 +135,26 @@ def add_model_arguments(rec) -> None:
         help="seconds the --search may take (default 60)",
     )
     rec.add_argument(
+        "--law-parameters",
+        metavar="TEXT|@FILE",
+        help="rattlesnake: the law's extra_parameters (Rattlesnake's free-text box), as TEXT or "
+        "read from @FILE; default empty",
+    )
+    rec.add_argument(
+        "--law-nperseg",
+        type=int,
+        metavar="N",
+        help="rattlesnake: samples per frame of the FRF and CPSDs the law receives "
+        "(frequency_spacing = fs / N; default 512)",
+    )
+    rec.add_argument(
+        "--law-oversample",
+        type=int,
+        metavar="K",
+        help="rattlesnake: the law's output_oversample_factor (vrig keeps every K-th sample of "
+        "its drive; default 1)",
+    )
+    rec.add_argument(
         "--split-hz",
         type=float,
         help="split frequency [Hz] (split; default: the rig side-car's, else the geometric mean "

@@ -34,6 +34,7 @@ from tqdm import tqdm  # plain text bars (vrig.progress: never tqdm.auto)
 from identification.errors import IdentificationError, SimulationDivergedError
 
 from ..errors import (
+    ControlLawError,
     ReconstructionError,
     ReconstructionInterrupted,
     RigLimitError,
@@ -228,8 +229,11 @@ def stop_kind(exc: BaseException) -> str:
         ``"refused"`` (a drive beyond full scale, never sent), ``"interlock"`` (a rig trip),
         ``"unstable"`` (the simulation), ``"diverged"`` (an inverse model's free run),
         ``"model"`` (any other identification error: the model could not be fitted),
+        ``"law"`` (a user's control law raised: :class:`~vrig.errors.ControlLawError`),
         ``"interrupted"`` (Ctrl-C: a :class:`KeyboardInterrupt`) or ``"failed"``.
     """
+    if isinstance(exc, ControlLawError):
+        return "law"
     if isinstance(exc, RigLimitError):
         return "refused" if exc.time != exc.time else "interlock"  # time NaN: never sent
     if isinstance(exc, SimulationInstabilityError):

@@ -64,11 +64,13 @@ from __future__ import annotations
 import hashlib
 import importlib.util
 import inspect
+import traceback
 from collections import OrderedDict
 from pathlib import Path
 
 import numpy as np
 
+from ..errors import ControlLawError
 from ..spectra import frf_h1
 from ..timehistory import TimeHistory
 from .methods import FRF_MIN_SAMPLES
@@ -227,6 +229,7 @@ class RattlesnakeLaw:
         self.extra_parameters, self.nperseg, self.oversample = extra_parameters, nperseg, oversample
         self._law = self._load() if self.source is not None else law
         self.label = self.source or getattr(law, "__qualname__", repr(law))
+        self._file = _law_file(self.source, self._law)
         self.form = _form(self._law, repr(self.label))
         self._live: OrderedDict = OrderedDict()
         self._last = (None, None)
@@ -325,7 +328,17 @@ class RattlesnakeLaw:
             "last_excitation_signals": self._last[0],
             "last_response_signals": self._last[1],
         }
-        return self._checked(self._call(spec, args), spec.shape[1])
+        try:
+            out = self._call(spec, args)
+        except Exception as exc:  # the law's own error, named with its file and line
+            where = _where_in(exc, self._file)
+            raise ControlLawError(
+                f"Rattlesnake control law {self.label!r} raised {type(exc).__name__}: {exc}"
+                + (f" (at {where})" if where else ""),
+                law=self.label,
+                where=where,
+            ) from exc
+        return self._checked(out, spec.shape[1])
 
     def _call(self, spec: np.ndarray, args: dict):
         """The law's output for ``args`` in its form (a generator or object per specification)."""
@@ -409,3 +422,36 @@ class RattlesnakeLaw:
         """Real numbers in the FRF the law is given (2 per complex entry); None before
         :meth:`identify`."""
         return None if self._sysid is None else int(2 * self._sysid["transfer_function"].size)
+
+
+def _law_file(source: str | None, law) -> str | None:
+    """The path of the file the law is written in (None when it cannot be told)."""
+    if source is not None:
+        return source.rpartition(":")[0]
+    try:
+        return inspect.getsourcefile(law)
+    except TypeError:
+        return None
+
+
+def _where_in(exc: BaseException, source) -> str:
+    """``"file:line in function"`` of the deepest traceback frame of ``exc`` in the law's file
+    ``source`` ("" when no frame is)."""
+    if source is None:
+        return ""
+    try:
+        target = Path(source).resolve()
+    except (TypeError, OSError):
+        return ""
+    frames = [f for f in traceback.extract_tb(exc.__traceback__) if _same_file(f.filename, target)]
+    if not frames:
+        return ""
+    f = frames[-1]
+    return f"{f.filename}:{f.lineno} in {f.name}"
+
+
+def _same_file(name: str, target: Path) -> bool:
+    try:
+        return Path(name).resolve() == target
+    except OSError:
+        return False

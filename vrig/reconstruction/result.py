@@ -19,6 +19,7 @@ STOP_KINDS = (
     "diverged",
     "unstable",
     "model",
+    "law",
     "failed",
     "interrupted",
 )
@@ -32,6 +33,8 @@ STOP_KINDS = (
                response, or the drive update was not finite
 ``unstable``   the rig's simulation became unstable (a MuJoCo warning or a non-finite state)
 ``model``      the inverse model could not be (re-)fitted (e.g. an unstable model)
+``law``        a user's control law raised (:class:`~vrig.errors.ControlLawError`: the law's
+               file and line are in ``stopped``)
 ``failed``     any other error
 ``interrupted`` Ctrl-C (``SIGINT``): :func:`vrig.reconstruct` raises
                :class:`~vrig.ReconstructionInterrupted` with the iterations played
