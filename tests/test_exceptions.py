@@ -153,6 +153,8 @@ def test_cli_maps_every_exception_to_exit_1_or_2_never_to_a_bug(qualname, monkey
         assert (code, err) == (2, "vrig rigs: boom\n")
     elif issubclass(cls, ResultsNotSavedError):  # its message says what was (not) saved
         assert (code, err) == (1, "vrig rigs: failed: boom\n")
+    elif issubclass(cls, vrig.errors.ControlLawError):  # the law's error: no vrig option hinted
+        assert (code, err) == (1, "vrig rigs: failed: boom\n")
     else:
         hint = " (try a narrower --band, a lower --order or --gain, or a smaller desired response)"
         assert (code, err) == (1, f"vrig rigs: failed: boom{hint}\n")

@@ -22,6 +22,7 @@ CASES = [
         "failed before IT00", result={"it": 0}, cause=ValueError("why"), stage="identification"
     ),
     ve.FileFormatError("a.rsp", "RPC III", "truncated"),
+    ve.ControlLawError("law raised", law="laws.py:pinv", where="laws.py:12 in pinv"),
     ve.FolderLockedError("results/run is being written", path="results/run", pid=1234),
     ve.ReconstructionInterrupted("interrupted at IT02", result={"it": 2}),
     ve.ResultsFolderError("results folder results/run is a file", path="results/run"),

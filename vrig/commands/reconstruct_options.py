@@ -134,26 +134,7 @@ def add_model_arguments(rec) -> None:
         metavar="S",
         help="seconds the --search may take (default 60)",
     )
-    rec.add_argument(
-        "--law-parameters",
-        metavar="TEXT|@FILE",
-        help="rattlesnake: the law's extra_parameters (Rattlesnake's free-text box), as TEXT or "
-        "read from @FILE; default empty",
-    )
-    rec.add_argument(
-        "--law-nperseg",
-        type=int,
-        metavar="N",
-        help="rattlesnake: samples per frame of the FRF and CPSDs the law receives "
-        "(frequency_spacing = fs / N; default 512)",
-    )
-    rec.add_argument(
-        "--law-oversample",
-        type=int,
-        metavar="K",
-        help="rattlesnake: the law's output_oversample_factor (vrig keeps every K-th sample of "
-        "its drive; default 1)",
-    )
+    add_law_arguments(rec)
     rec.add_argument(
         "--split-hz",
         type=float,
@@ -192,4 +173,36 @@ def add_model_arguments(rec) -> None:
         "level raised until the identification responses reach the desired RMS and peaks "
         "(within the drives' full scale); default: a triangular random drive at 5 %% of full "
         "scale (or the rig side-car's level), which a large, slow, non-Gaussian target outgrows",
+    )
+
+
+def add_law_arguments(rec) -> None:
+    """The Rattlesnake control law's options of ``vrig reconstruct`` (``--law-parameters``,
+    ``--law-nperseg``, ``--law-oversample``: the law's ``extra_parameters``, frame length and
+    ``output_oversample_factor``; refused for other methods by the command).
+
+    Parameters
+    ----------
+    rec : argparse.ArgumentParser
+        The parser of ``vrig reconstruct``.
+    """
+    rec.add_argument(
+        "--law-parameters",
+        metavar="TEXT|@FILE",
+        help="rattlesnake: the law's extra_parameters (Rattlesnake's free-text box), as TEXT or "
+        "read from @FILE; default empty",
+    )
+    rec.add_argument(
+        "--law-nperseg",
+        type=int,
+        metavar="N",
+        help="rattlesnake: samples per frame of the FRF and CPSDs the law receives "
+        "(frequency_spacing = fs / N; default 512)",
+    )
+    rec.add_argument(
+        "--law-oversample",
+        type=int,
+        metavar="K",
+        help="rattlesnake: the law's output_oversample_factor (vrig keeps every K-th sample of "
+        "its drive; default 1)",
     )
