@@ -1084,11 +1084,10 @@ class NarxSearch:
             yb = y[bl]
             e[j] = np.sum((yb - sim[bl.start - fold.start : bl.stop - fold.start]) ** 2, axis=0)
             d[j] = np.sum((yb - yb.mean(axis=0)) ** 2, axis=0)
-        for what, us in fold.stress:
-            try:
-                model.simulate(us)
-            except SimulationDivergedError as exc:
-                return f"free run diverges on {what} (sample {exc.sample})"
+        for stress in fold.stress:
+            why = _diverges(model, stress)
+            if why is not None:
+                return why
         return e, d
 
     def _one_step(self, model: Narx, blocks) -> float:
@@ -1324,15 +1323,12 @@ def _first_line(exc: BaseException) -> str:
 def _white_like(u: np.ndarray, rng: np.random.Generator) -> np.ndarray:
     """Gaussian noise with each channel's mean, RMS about the mean and band (99 % of its power,
     Welch PSD) — the band edges as fractions of Nyquist; a band reaching 0 is a low-pass."""
-    N, nu = u.shape
+    N = u.shape[0]
     out = np.empty_like(u)
-    for j in range(nu):
-        x = u[:, j]
-        mean, std = float(x.mean()), float(x.std())
+    for j, mean, std, f, p in _channel_spectra(u):
         if std == 0:
             out[:, j] = mean
             continue
-        f, p = signal.welch(x - mean, nperseg=min(1024, N))
         cum = np.cumsum(p) / np.sum(p)
         f = f / f[-1]
         lo = float(f[np.searchsorted(cum, 0.005)])
@@ -1388,17 +1384,26 @@ def _diverges(model: Narx, stress: tuple[str, np.ndarray]) -> str | None:
 def _spectrum_like(u: np.ndarray, n: int, rng: np.random.Generator) -> np.ndarray:
     """``n`` samples of Gaussian noise per channel with ``u``'s mean, RMS about the mean and
     power spectrum shape (Welch, interpolated onto the longer record's frequency lines)."""
-    N, nu = u.shape
-    out = np.empty((n, nu))
+    out = np.empty((n, u.shape[1]))
     freqs = np.fft.rfftfreq(n)
-    for j in range(nu):
-        x = u[:, j]
-        mean, std = float(x.mean()), float(x.std())
+    for j, mean, std, f, p in _channel_spectra(u):
         if std == 0:
             out[:, j] = mean
             continue
-        f, p = signal.welch(x - mean, nperseg=min(1024, N))
         shape = np.sqrt(np.interp(freqs, f, p))
         e = np.fft.irfft(np.fft.rfft(rng.standard_normal(n)) * shape, n)
         out[:, j] = mean + std * (e - e.mean()) / e.std()
     return out
+
+
+def _channel_spectra(u: np.ndarray):
+    """Per input channel ``(j, mean, std, f, p)``: its mean, RMS about the mean and Welch PSD
+    (``f`` in cycles per sample; ``f, p`` None for a constant channel)."""
+    for j in range(u.shape[1]):
+        x = u[:, j]
+        mean, std = float(x.mean()), float(x.std())
+        if std == 0:
+            yield j, mean, std, None, None
+            continue
+        f, p = signal.welch(x - mean, nperseg=min(1024, u.shape[0]))
+        yield j, mean, std, f, p

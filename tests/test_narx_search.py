@@ -407,4 +407,3 @@ def test_time_left_widens_the_search_past_the_grid():
     assert widened and search.best_result_.origin == "widening"
     assert set(search.best_.term_names()[0]) == GENERATING_TERMS
     assert "from widening" in search.report().splitlines()[0]
-    assert search.search_time_ < 60
