@@ -20,6 +20,7 @@ from scipy import signal
 
 import vrig
 from vrig.reconstruction import RattlesnakeLaw, method_spec, reconstruct
+from vrig.reconstruction.rattlesnake import FUNCTION_ARGUMENTS as _FUNCTION_ARGS
 from vrig.signals import random_drive, triangular_psd
 
 LAWS = Path(__file__).with_name("rattlesnake_laws.py")
@@ -305,3 +306,29 @@ def test_law_options_are_refused_for_other_methods_and_unreadable_files(tmp_path
     )
     assert _cli_run(tmp_path, "--law-parameters", f"@{tmp_path / 'missing.txt'}") == 2
     assert "cannot read it" in capsys.readouterr().err
+
+
+def test_a_law_that_exits_or_changes_directory_loses_nothing(tmp_path, monkeypatch, case):
+    """User code misbehaving: sys.exit inside a law is the law's error (the run goes on to
+    save its folder, no interpreter exit); a law's os.chdir is undone after each call."""
+    import os
+
+    from vrig.errors import ControlLawError
+
+    args = ", ".join(a for a in _FUNCTION_ARGS)
+    law = tmp_path / "rude.py"
+    law.write_text(
+        f"import os, sys\ndef exits({args}):\n    sys.exit(3)\n"
+        f"def moves({args}):\n    os.chdir({str(tmp_path)!r})\n    raise RuntimeError('moved')\n",
+        encoding="utf-8",
+    )
+    here = tmp_path / "here"
+    here.mkdir()
+    monkeypatch.chdir(here)
+    _, iddrv, idres, _, desired = case
+    for name, match in (("exits", "SystemExit"), ("moves", "moved")):
+        method = method_spec(f"rattlesnake:{law}:{name}").method
+        method.identify(iddrv, idres)
+        with pytest.raises(ControlLawError, match=match):
+            method.drive(desired)
+        assert os.getcwd() == str(here)

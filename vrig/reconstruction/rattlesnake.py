@@ -64,6 +64,7 @@ from __future__ import annotations
 import hashlib
 import importlib.util
 import inspect
+import os
 import traceback
 from collections import OrderedDict
 from pathlib import Path
@@ -328,9 +329,10 @@ class RattlesnakeLaw:
             "last_excitation_signals": self._last[0],
             "last_response_signals": self._last[1],
         }
+        cwd = os.getcwd()
         try:
             out = self._call(spec, args)
-        except Exception as exc:  # the law's own error, named with its file and line
+        except (Exception, SystemExit) as exc:  # the law's own error (or exit), with its line
             where = _where_in(exc, self._file)
             raise ControlLawError(
                 f"Rattlesnake control law {self.label!r} raised {type(exc).__name__}: {exc}"
@@ -338,6 +340,9 @@ class RattlesnakeLaw:
                 law=self.label,
                 where=where,
             ) from exc
+        finally:  # a law that changes directory does not move the run's relative paths
+            if os.getcwd() != cwd:
+                os.chdir(cwd)
         return self._checked(out, spec.shape[1])
 
     def _call(self, spec: np.ndarray, args: dict):
